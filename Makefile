@@ -1,0 +1,27 @@
+# lanterna — the two commands of the README's quick start, and a few helpers.
+#   make demo   render the demo scene to out/ (installs what is missing first)
+#   make test   run the test suite on lavapipe (installs what is missing first)
+
+CARGO ?= cargo
+SETUP_STAMP := .cache/setup-done
+
+.PHONY: demo test setup bench lint fmt
+
+$(SETUP_STAMP): scripts/setup
+	@scripts/setup
+	@mkdir -p .cache && touch $(SETUP_STAMP)
+
+setup: $(SETUP_STAMP)
+
+demo: $(SETUP_STAMP)
+	$(CARGO) run --release -- render scenes/street.gltf --spp 64 -o out/street.exr --png out/street.png
+
+test: $(SETUP_STAMP)
+	$(CARGO) test --release
+
+bench: $(SETUP_STAMP)
+	$(CARGO) run --release -- bench
+
+lint:
+	$(CARGO) fmt --all -- --check
+	$(CARGO) clippy --all-targets -- -D warnings

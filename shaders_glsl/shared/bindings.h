@@ -1,0 +1,37 @@
+// Descriptor bindings of the path-tracing kernel (set 0) and the test kernels.
+// Single source of truth: build.rs turns every #define here into a Rust constant.
+#ifndef LANTERNA_BINDINGS_H
+#define LANTERNA_BINDINGS_H
+
+#define BINDING_TLAS 0
+#define BINDING_PARAMS 1
+#define BINDING_VERTICES 2
+#define BINDING_INDICES 3
+#define BINDING_INSTANCES 4
+#define BINDING_MATERIALS 5
+#define BINDING_TEXTURES 6
+#define BINDING_LIGHT_TRIANGLES 7
+#define BINDING_LIGHT_MODELS 8
+#define BINDING_MODEL_ALIAS 9
+#define BINDING_TRIANGLE_ALIAS 10
+#define BINDING_PUNCTUAL_LIGHTS 11
+#define BINDING_TRIANGLE_LIGHT_INDEX 12
+#define BINDING_FILM 13
+#define BINDING_AOV 14
+#define BINDING_STATS 15
+#define BINDING_GUIDE_SPATIAL 16
+#define BINDING_GUIDE_LEAVES 17
+#define BINDING_GUIDE_SAMPLING 18
+#define BINDING_GUIDE_TRAINING 19
+#define BINDING_OUTLIERS 20
+#define BINDING_COUNT 21
+
+// Upper bound on bindless textures in one scene.
+#define MAX_TEXTURES 8192
+
+// Test kernels use their own small layout: one uniform-free set of storage buffers.
+#define TEST_BINDING_IN 0
+#define TEST_BINDING_OUT 1
+#define TEST_BINDING_AUX 2
+
+#endif

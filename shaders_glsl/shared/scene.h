@@ -1,0 +1,131 @@
+// Scene data as the kernels see it. All buffers use the scalar block layout.
+#ifndef LANTERNA_SCENE_H
+#define LANTERNA_SCENE_H
+
+// One vertex of the global vertex buffer (object space).
+struct Vertex {
+    vec3 position;
+    vec3 normal;
+    vec4 tangent;  // xyz tangent, w handedness; zero when the mesh has none
+    vec2 uv0;
+    vec2 uv1;
+};
+
+// One TLAS instance: a mesh primitive placed by a node. The instance's custom index is
+// its position in the instance buffer.
+struct Instance {
+    uint vertex_offset;       // added to every index of the primitive
+    uint index_offset;        // first index (3 per triangle) in the index buffer
+    uint triangle_count;
+    uint material;
+    uint light_index_offset;  // into the triangle→light map, INVALID_INDEX if not emissive
+    uint light_model;         // INVALID_INDEX if not emissive
+    uint flags;               // INSTANCE_FLAG_*
+    float pad;
+};
+
+// A texture reference with its KHR_texture_transform.
+struct TextureRef {
+    int index;       // bindless texture slot, -1 for none
+    uint uv_set;     // 0 or 1
+    vec2 offset;
+    vec2 scale;
+    float rotation;
+};
+
+// glTF metallic-roughness material (plus KHR_materials_specular / emissive_strength).
+struct Material {
+    vec4 base_color;       // linear RGBA factor
+    vec3 emission;         // emissiveFactor × emissive_strength (linear radiance)
+    float metallic;
+    float roughness;
+    float specular;        // KHR_materials_specular specularFactor (1 by default)
+    vec3 specular_color;   // KHR_materials_specular specularColorFactor
+    float normal_scale;
+    float alpha_cutoff;
+    uint alpha_mode;       // ALPHA_MODE_*
+    uint flags;            // MATERIAL_FLAG_*
+    float ior;
+    TextureRef base_color_tex;
+    TextureRef metallic_roughness_tex;
+    TextureRef normal_tex;
+    TextureRef emissive_tex;
+};
+
+// One emissive triangle in world space.
+struct LightTriangle {
+    vec3 p0;
+    vec3 p1;
+    vec3 p2;
+    vec3 normal;       // unit front-face normal
+    float area;
+    uint material;
+    uint model;        // index of its light model
+    uint two_sided;    // emits from both faces (double-sided material)
+    vec2 uv0;          // emissive texture coordinates at the corners (untransformed)
+    vec2 uv1;
+    vec2 uv2;
+    float power;       // emitted flux (luminance), for the power source
+};
+
+// A light model: one emissive mesh instance, or one punctual light.
+struct LightModel {
+    uint first_triangle;   // into the light triangle buffer
+    uint triangle_count;   // 0 for a punctual light
+    uint punctual;         // punctual light index, INVALID_INDEX for emissive geometry
+    float power;           // emitted flux (luminance)
+};
+
+// Alias-table entry (Walker/Vose). pmf is the entry's own probability.
+struct AliasEntry {
+    float threshold;
+    uint alias;
+    float pmf;
+};
+
+// KHR_lights_punctual light, in world space.
+struct PunctualLight {
+    vec3 position;
+    uint kind;          // PUNCTUAL_*
+    vec3 direction;     // direction the light travels (spot, directional)
+    float range;        // 0 = infinite
+    vec3 intensity;     // colour × intensity (W/sr for point/spot, W/m² for directional)
+    float cos_inner;
+    float cos_outer;
+};
+
+// Per-frame parameters.
+struct FrameParams {
+    mat4 camera_to_world;      // camera looks down -Z, +Y up (glTF)
+    uint camera_type;          // CAMERA_*
+    float tan_half_fov_y;      // perspective
+    vec2 ortho_half_extent;    // orthographic xmag, ymag
+    uint width;
+    uint height;
+    uint max_depth;            // path segments (1 = emitters seen directly)
+    uint rr_depth;             // Russian roulette from this depth on; 0 = off
+    uint seed;
+    uint light_model_count;
+    uint light_triangle_count;
+    uint punctual_count;
+    uint ris_candidates;
+    uint ris_source;           // RIS_SOURCE_*
+    float bsdf_fraction;       // guiding: probability of sampling the BSDF
+    uint guiding_flags;        // GUIDE_FLAG_* (guiding.h)
+    vec3 guide_origin;         // SD-tree cube
+    float guide_size;
+    uint aov_mask;
+    uint debug_pixel;          // y * width + x, INVALID_INDEX when not tracing a pixel
+    uint debug_sample;         // sample index to trace, INVALID_INDEX for all
+    float scene_radius;
+};
+
+// Push constants of one dispatch: a tile of pixels and a range of sample indices.
+struct PushConstants {
+    uvec2 tile_origin;
+    uvec2 tile_size;
+    uint sample_begin;
+    uint sample_count;
+};
+
+#endif
