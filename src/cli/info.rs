@@ -1,0 +1,8 @@
+//! `lanterna info` (not yet implemented).
+
+#[derive(clap::Args)]
+pub struct Args {}
+
+pub fn run(_args: Args) -> anyhow::Result<()> {
+    anyhow::bail!("`lanterna info` is not implemented yet")
+}

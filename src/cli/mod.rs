@@ -1,0 +1,65 @@
+//! Command-line front end: argument parsing, logging, and error reporting. Each
+//! subcommand is one file with an `Args` struct and a `run` function; errors travel as
+//! `anyhow::Error` with context and are printed once, here, with a non-zero exit.
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+mod compare;
+mod info;
+mod merge;
+mod reference;
+mod render;
+mod scene;
+
+#[derive(Parser)]
+#[command(name = "lanterna", version, about = "A GPU path tracer for scenes lit by many lights")]
+struct Cli {
+    /// Log verbosity (error, warn, info, debug, trace); RUST_LOG overrides it.
+    #[arg(long, global = true, default_value = "info")]
+    log: String,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene.
+    Render(render::Args),
+    /// List Vulkan devices and their features, or print a scene's statistics.
+    Info(info::Args),
+    /// Generate or export scenes.
+    #[command(subcommand)]
+    Scene(scene::Command),
+    /// Render a high-spp reference with checkpoints and resume.
+    Reference(reference::Args),
+    /// Merge renders of disjoint sample ranges into one image.
+    Merge(merge::Args),
+    /// Compare methods against a reference: error vs spp and vs time, with figures.
+    Compare(compare::Args),
+}
+
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    env_logger::Builder::new()
+        .parse_filters(&cli.log)
+        .parse_env("RUST_LOG")
+        .format_timestamp(None)
+        .format_target(false)
+        .init();
+    let result = match cli.command {
+        Command::Render(a) => render::run(a),
+        Command::Info(a) => info::run(a),
+        Command::Scene(c) => scene::run(c),
+        Command::Reference(a) => reference::run(a),
+        Command::Merge(a) => merge::run(a),
+        Command::Compare(a) => compare::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
