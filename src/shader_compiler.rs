@@ -91,7 +91,10 @@ pub fn compile_kernel(
         shaderc::Compiler::new().map_err(|e| fail(vec![format!("shaderc unavailable: {e}")]))?;
     let mut options = shaderc::CompileOptions::new()
         .map_err(|e| fail(vec![format!("shaderc options unavailable: {e}")]))?;
-    options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
+    options.set_target_env(
+        shaderc::TargetEnv::Vulkan,
+        shaderc::EnvVersion::Vulkan1_2 as u32,
+    );
     options.set_target_spirv(shaderc::SpirvVersion::V1_5);
     options.set_source_language(shaderc::SourceLanguage::GLSL);
     options.set_warnings_as_errors();

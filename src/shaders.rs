@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 
 #[path = "shader_compiler.rs"]
+#[allow(dead_code)]
 mod shader_compiler;
 pub use shader_compiler::CompileError;
 

@@ -5,6 +5,7 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod common;
 mod compare;
 mod info;
 mod merge;
@@ -13,7 +14,11 @@ mod render;
 mod scene;
 
 #[derive(Parser)]
-#[command(name = "lanterna", version, about = "A GPU path tracer for scenes lit by many lights")]
+#[command(
+    name = "lanterna",
+    version,
+    about = "A GPU path tracer for scenes lit by many lights"
+)]
 struct Cli {
     /// Log verbosity (error, warn, info, debug, trace); RUST_LOG overrides it.
     #[arg(long, global = true, default_value = "info")]

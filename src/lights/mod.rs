@@ -1,1 +1,245 @@
-//! placeholder
+//! The light table NEE samples from.
+//!
+//! Every emissive triangle is a light; a *light model* is one mesh instance whose
+//! material emits, or one punctual light. The paper's source distribution picks a light
+//! model uniformly, then a triangle of it uniformly, then a point on it uniformly; the
+//! `power` source picks models and triangles proportionally to emitted power through
+//! alias tables. Triangles with zero area or zero emission are dropped here, so they are
+//! never sampled, and the triangle→light map lets a BSDF-sampled hit find the
+//! probability with which NEE would have chosen the same point (for MIS).
+
+pub mod alias;
+
+use crate::gpu;
+use crate::scene::{Scene, SceneError};
+use glam::Vec3;
+
+/// GPU-ready light data.
+#[derive(Debug)]
+pub struct LightTable {
+    pub triangles: Vec<gpu::LightTriangle>,
+    pub models: Vec<gpu::LightModel>,
+    /// Alias table over models by power.
+    pub model_alias: Vec<gpu::AliasEntry>,
+    /// Per model, an alias table over its triangles by power, stored at the model's
+    /// `first_triangle` (same indices as `triangles`).
+    pub triangle_alias: Vec<gpu::AliasEntry>,
+    /// For every triangle of every emissive instance: its light-triangle index or
+    /// `INVALID_INDEX` (dropped). Instances point into it with `light_index_offset`.
+    pub triangle_light_index: Vec<u32>,
+    /// Per scene instance: (light_index_offset, light_model), INVALID_INDEX when none.
+    pub instance_lights: Vec<(u32, u32)>,
+    /// Triangles dropped for zero area or zero emission.
+    pub dropped_triangles: u64,
+    /// Sum of model powers (luminance flux, W if units are radiometric).
+    pub total_power: f64,
+}
+
+fn luminance(c: [f32; 3]) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+/// `KHR_texture_transform` applied to a UV — mirrors `texture_uv` in the kernels.
+pub fn transform_uv(t: &gpu::TextureRef, uv: [f32; 2]) -> [f32; 2] {
+    let (s, c) = t.rotation.sin_cos();
+    let (u, v) = (uv[0] * t.scale[0], uv[1] * t.scale[1]);
+    [c * u + s * v + t.offset[0], -s * u + c * v + t.offset[1]]
+}
+
+impl LightTable {
+    pub fn build(scene: &Scene) -> Result<LightTable, SceneError> {
+        let mut triangles = Vec::new();
+        let mut models = Vec::new();
+        let mut triangle_light_index = Vec::new();
+        let mut instance_lights = Vec::with_capacity(scene.instances.len());
+        let mut dropped = 0u64;
+
+        for inst in &scene.instances {
+            let prim = &scene.primitives[inst.primitive as usize];
+            let material = &scene.materials[prim.material as usize];
+            let factor = material.emission;
+            let texture = (material.emissive_tex.index >= 0)
+                .then(|| &scene.textures[material.emissive_tex.index as usize]);
+            let texture_black = texture.is_some_and(|t| t.max_luminance() <= 0.0);
+            if factor.iter().all(|&c| c <= 0.0) || texture_black {
+                if factor.iter().any(|&c| c > 0.0) {
+                    dropped += prim.triangle_count as u64;
+                }
+                instance_lights.push((gpu::INVALID_INDEX, gpu::INVALID_INDEX));
+                continue;
+            }
+            let two_sided = material.flags & gpu::MATERIAL_FLAG_DOUBLE_SIDED != 0;
+            let flipped = inst.transform.determinant() < 0.0;
+            let model_index = models.len() as u32;
+            let first = triangles.len() as u32;
+            let map_offset = triangle_light_index.len() as u32;
+            let mut model_power = 0.0f64;
+            for t in 0..prim.triangle_count {
+                let [p0, p1, p2] = scene.world_triangle(inst, t);
+                let cross = (p1 - p0).cross(p2 - p0);
+                let area = 0.5 * cross.length();
+                let base = (prim.index_offset + 3 * t) as usize;
+                let uv_of = |k: usize| {
+                    let v =
+                        &scene.vertices[(prim.vertex_offset + scene.indices[base + k]) as usize];
+                    if material.emissive_tex.uv_set == 1 {
+                        v.uv1
+                    } else {
+                        v.uv0
+                    }
+                };
+                let uvs = [uv_of(0), uv_of(1), uv_of(2)];
+                let mean_texture = texture.map_or(1.0, |tex| {
+                    let avg = mean_texture_luminance(tex, &material.emissive_tex, uvs);
+                    // Never let an estimate make a triangle unsamplable: the power
+                    // source must stay positive wherever emission may be.
+                    avg.max(1e-3 * tex.max_luminance())
+                });
+                let power = area as f64
+                    * std::f64::consts::PI
+                    * luminance(factor) as f64
+                    * mean_texture as f64
+                    * if two_sided { 2.0 } else { 1.0 };
+                if !(area > 1e-14) || !area.is_finite() || !(power > 0.0) {
+                    dropped += 1;
+                    triangle_light_index.push(gpu::INVALID_INDEX);
+                    continue;
+                }
+                let mut normal = cross / (2.0 * area);
+                if flipped {
+                    normal = -normal;
+                }
+                triangle_light_index.push(triangles.len() as u32);
+                triangles.push(gpu::LightTriangle {
+                    p0: p0.into(),
+                    p1: p1.into(),
+                    p2: p2.into(),
+                    normal: normal.into(),
+                    area,
+                    material: prim.material,
+                    model: model_index,
+                    two_sided: two_sided as u32,
+                    uv0: uvs[0],
+                    uv1: uvs[1],
+                    uv2: uvs[2],
+                    power: power as f32,
+                });
+                model_power += power;
+            }
+            let count = triangles.len() as u32 - first;
+            if count == 0 {
+                triangle_light_index.truncate(map_offset as usize);
+                instance_lights.push((gpu::INVALID_INDEX, gpu::INVALID_INDEX));
+                continue;
+            }
+            models.push(gpu::LightModel {
+                first_triangle: first,
+                triangle_count: count,
+                punctual: gpu::INVALID_INDEX,
+                power: model_power as f32,
+            });
+            instance_lights.push((map_offset, model_index));
+        }
+
+        let radius = 0.5 * scene.extent();
+        for (i, l) in scene.punctual.iter().enumerate() {
+            let lum = luminance(l.intensity) as f64;
+            let power = match l.kind {
+                gpu::PUNCTUAL_POINT => 4.0 * std::f64::consts::PI * lum,
+                gpu::PUNCTUAL_SPOT => {
+                    // Flux of the smooth cone falloff, approximated by its mean cone.
+                    let c = 0.5 * (l.cos_inner + l.cos_outer) as f64;
+                    2.0 * std::f64::consts::PI * (1.0 - c) * lum
+                }
+                _ => std::f64::consts::PI * (radius * radius) as f64 * lum,
+            };
+            if power <= 0.0 {
+                log::warn!("punctual light {i} emits nothing; ignored");
+                continue;
+            }
+            models.push(gpu::LightModel {
+                first_triangle: 0,
+                triangle_count: 0,
+                punctual: i as u32,
+                power: power as f32,
+            });
+        }
+
+        if models.is_empty() {
+            return Err(SceneError::NoLights {
+                path: scene.path.clone(),
+            });
+        }
+        if dropped > 0 {
+            log::info!("dropped {dropped} emissive triangles with zero area or zero emission");
+        }
+
+        let model_weights: Vec<f64> = models.iter().map(|m| m.power as f64).collect();
+        let model_alias = alias::build(&model_weights).ok_or_else(|| SceneError::Invalid {
+            path: scene.path.clone(),
+            message: "light powers are not finite".into(),
+        })?;
+        let mut triangle_alias = vec![gpu::AliasEntry::default(); triangles.len()];
+        for m in models.iter().filter(|m| m.triangle_count > 0) {
+            let range = m.first_triangle as usize..(m.first_triangle + m.triangle_count) as usize;
+            let w: Vec<f64> = triangles[range.clone()]
+                .iter()
+                .map(|t| t.power as f64)
+                .collect();
+            let table = alias::build(&w).ok_or_else(|| SceneError::Invalid {
+                path: scene.path.clone(),
+                message: "emissive triangle powers are not finite".into(),
+            })?;
+            triangle_alias[range].copy_from_slice(&table);
+        }
+        let total_power = model_weights.iter().sum();
+        Ok(LightTable {
+            triangles,
+            models,
+            model_alias,
+            triangle_alias,
+            triangle_light_index,
+            instance_lights,
+            dropped_triangles: dropped,
+            total_power,
+        })
+    }
+
+    /// Number of light models (emissive instances + punctual lights).
+    pub fn model_count(&self) -> usize {
+        self.models.len()
+    }
+}
+
+/// Mean linear luminance of an emissive texture over a triangle, from a fixed stratified
+/// set of barycentric points (deterministic, so power tables do not change run to run).
+fn mean_texture_luminance(
+    tex: &crate::scene::TextureData,
+    tref: &gpu::TextureRef,
+    uvs: [[f32; 2]; 3],
+) -> f32 {
+    const N: usize = 8;
+    let mut sum = 0.0;
+    let mut count = 0;
+    for i in 0..N {
+        for j in 0..N - i {
+            // Centre of a sub-triangle cell in barycentric coordinates.
+            let b1 = (i as f32 + 1.0 / 3.0) / N as f32;
+            let b2 = (j as f32 + 1.0 / 3.0) / N as f32;
+            let b0 = 1.0 - b1 - b2;
+            let uv = [
+                b0 * uvs[0][0] + b1 * uvs[1][0] + b2 * uvs[2][0],
+                b0 * uvs[0][1] + b1 * uvs[1][1] + b2 * uvs[2][1],
+            ];
+            let c = tex.texel(transform_uv(tref, uv));
+            sum += luminance([c[0], c[1], c[2]]);
+            count += 1;
+        }
+    }
+    sum / count as f32
+}
+
+/// Area of the triangle (p0, p1, p2).
+pub fn triangle_area(p: [Vec3; 3]) -> f32 {
+    0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length()
+}

@@ -1,1 +1,556 @@
-//! placeholder
+//! Rendering: the device-side scene, the path-tracing pipelines of each method, and the
+//! loop that dispatches ranges of samples over tiles of the image into an exact film.
+//!
+//! The film accumulates 64-bit fixed-point sums per pixel and channel; each sample is
+//! rounded on its own, so a render split into any ranges of sample indices sums to
+//! exactly the same film as a one-shot render. Dispatches are sized from measured times
+//! so that no single submission runs much longer than half a second.
+
+mod film;
+mod gpu_scene;
+pub mod session;
+mod settings;
+
+pub use film::Film;
+pub use gpu_scene::GpuScene;
+pub use settings::{LightSource, Method, RenderSettings};
+
+use crate::gpu;
+use crate::lights::LightTable;
+use crate::scene::{Camera, Projection, Scene};
+use crate::shaders::ShaderSource;
+use crate::vk::{self, BindingSpec, Buffer, ComputePipeline, DescriptorSet, Device};
+use ash::vk as raw;
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Errors while rendering.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error(transparent)]
+    Vulkan(#[from] vk::VkError),
+    #[error(transparent)]
+    Shader(#[from] crate::shaders::ShaderError),
+    #[error("{0}")]
+    Invalid(String),
+}
+
+pub type Result<T> = std::result::Result<T, RenderError>;
+
+/// Counters the kernel keeps, summed over a render.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct RenderStats {
+    pub samples: u64,
+    pub camera_rays: u64,
+    pub bounce_rays: u64,
+    pub shadow_rays: u64,
+    pub nonfinite_samples: u64,
+    /// GPU time from timestamp queries (0 when the device has none).
+    pub gpu_seconds: f64,
+    /// Wall time spent in the dispatch loop.
+    pub wall_seconds: f64,
+}
+
+impl RenderStats {
+    pub fn rays(&self) -> u64 {
+        self.camera_rays + self.bounce_rays + self.shadow_rays
+    }
+}
+
+/// Specialization of the render kernel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+struct Variant {
+    ris: bool,
+    guiding: bool,
+    training: bool,
+}
+
+/// Buffers bound at the guiding bindings (the SD-tree's flat arrays).
+pub struct GuideBuffers {
+    pub spatial: Buffer,
+    pub leaves: Buffer,
+    pub sampling: Buffer,
+    pub training: Buffer,
+}
+
+impl GuideBuffers {
+    /// Placeholders for methods that do not guide.
+    pub fn empty(device: &Arc<Device>) -> vk::Result<GuideBuffers> {
+        let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
+        Ok(GuideBuffers {
+            spatial: Buffer::zeroed(device, 16, usage, "guide spatial (unused)")?,
+            leaves: Buffer::zeroed(device, 16, usage, "guide leaves (unused)")?,
+            sampling: Buffer::zeroed(device, 16, usage, "guide sampling (unused)")?,
+            training: Buffer::zeroed(device, 16, usage, "guide training (unused)")?,
+        })
+    }
+}
+
+/// A scene ready to render on a device.
+pub struct Renderer {
+    pub device: Arc<Device>,
+    pub gpu_scene: GpuScene,
+    pub settings: RenderSettings,
+    camera: Camera,
+    scene_radius: f32,
+    light_model_count: u32,
+    light_triangle_count: u32,
+    punctual_count: u32,
+    shaders: ShaderSource,
+    pipelines: HashMap<Variant, ComputePipeline>,
+    set: Option<DescriptorSet>,
+    params: Buffer,
+    film: Buffer,
+    stats: Buffer,
+    aov: Buffer,
+    outliers: Buffer,
+    guide: GuideBuffers,
+    /// Current guiding-related params.
+    guide_origin: [f32; 3],
+    guide_size: f32,
+    /// Samples per full-image dispatch that fit the time target, from measurements.
+    seconds_per_sample: Option<f64>,
+    /// Samples accumulated in the film, and the first sample index.
+    film_spp: u64,
+    film_offset: u64,
+}
+
+/// Target duration of one submission (a GPU watchdog and Ctrl-C both want it short).
+const TARGET_SUBMIT_SECONDS: f64 = 0.5;
+
+impl Renderer {
+    pub fn new(
+        device: Arc<Device>,
+        scene: &Scene,
+        lights: &LightTable,
+        camera: Camera,
+        settings: RenderSettings,
+        shaders: ShaderSource,
+    ) -> Result<Renderer> {
+        if settings.width == 0 || settings.height == 0 {
+            return Err(RenderError::Invalid(
+                "image size must be at least 1×1".into(),
+            ));
+        }
+        if settings.max_depth == 0 {
+            return Err(RenderError::Invalid(
+                "--max-depth must be at least 1".into(),
+            ));
+        }
+        if settings.ris_candidates == 0 {
+            return Err(RenderError::Invalid(
+                "--ris-candidates must be at least 1".into(),
+            ));
+        }
+        if !(0.0..=1.0).contains(&settings.bsdf_fraction) {
+            return Err(RenderError::Invalid(
+                "--bsdf-fraction must be within [0, 1]".into(),
+            ));
+        }
+        let gpu_scene = GpuScene::upload(&device, scene, lights)?;
+        let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
+        let pixels = settings.width as u64 * settings.height as u64;
+        let params = Buffer::zeroed(
+            &device,
+            std::mem::size_of::<gpu::FrameParams>() as u64,
+            usage,
+            "frame params",
+        )?;
+        let film = Buffer::zeroed(&device, pixels * 3 * 8, usage, "film")?;
+        let stats = Buffer::zeroed(&device, gpu::STAT_COUNT as u64 * 4, usage, "stats")?;
+        let aov = Buffer::zeroed(&device, 16, usage, "aov (unused)")?;
+        let outliers = Buffer::zeroed(&device, 16, usage, "outliers (unused)")?;
+        let guide = GuideBuffers::empty(&device)?;
+        let lo = scene.bounds_min;
+        let size = (scene.bounds_max - lo).max_element().max(1e-3);
+        let mut r = Renderer {
+            device,
+            gpu_scene,
+            settings,
+            camera,
+            scene_radius: 0.5 * scene.extent(),
+            light_model_count: lights.models.len() as u32,
+            light_triangle_count: lights.triangles.len() as u32,
+            punctual_count: scene.punctual.len() as u32,
+            shaders,
+            pipelines: HashMap::new(),
+            set: None,
+            params,
+            film,
+            stats,
+            aov,
+            outliers,
+            guide,
+            guide_origin: lo.into(),
+            guide_size: size,
+            seconds_per_sample: None,
+            film_spp: 0,
+            film_offset: 0,
+        };
+        r.upload_params()?;
+        Ok(r)
+    }
+
+    fn frame_params(&self) -> gpu::FrameParams {
+        let s = &self.settings;
+        let (camera_type, tan_half_fov_y, ortho) = match self.camera.projection {
+            Projection::Perspective { yfov, .. } => {
+                (gpu::CAMERA_PERSPECTIVE, (0.5 * yfov).tan(), [0.0, 0.0])
+            }
+            Projection::Orthographic { xmag, ymag } => {
+                (gpu::CAMERA_ORTHOGRAPHIC, 0.0, [xmag, ymag])
+            }
+        };
+        let mut flags = 0;
+        if s.record_nee {
+            flags |= gpu::GUIDE_FLAG_RECORD_NEE;
+        }
+        if s.spatial_jitter {
+            flags |= gpu::GUIDE_FLAG_SPATIAL_JITTER;
+        }
+        if s.directional_box {
+            flags |= gpu::GUIDE_FLAG_DIRECTIONAL_BOX;
+        }
+        gpu::FrameParams {
+            camera_to_world: self.camera.rigid_to_world().to_cols_array_2d(),
+            camera_type,
+            tan_half_fov_y,
+            ortho_half_extent: ortho,
+            width: s.width,
+            height: s.height,
+            max_depth: s.max_depth,
+            rr_depth: s.rr_depth,
+            seed: s.seed,
+            light_model_count: self.light_model_count,
+            light_triangle_count: self.light_triangle_count,
+            punctual_count: self.punctual_count,
+            ris_candidates: s.ris_candidates,
+            ris_source: match s.source {
+                LightSource::Uniform => gpu::RIS_SOURCE_UNIFORM,
+                LightSource::Power => gpu::RIS_SOURCE_POWER,
+            },
+            bsdf_fraction: if s.method.uses_guiding() {
+                s.bsdf_fraction
+            } else {
+                1.0
+            },
+            guiding_flags: flags,
+            guide_origin: self.guide_origin,
+            guide_size: self.guide_size,
+            aov_mask: 0,
+            debug_pixel: gpu::INVALID_INDEX,
+            debug_sample: gpu::INVALID_INDEX,
+            scene_radius: self.scene_radius,
+        }
+    }
+
+    fn upload_params(&mut self) -> Result<()> {
+        let p = self.frame_params();
+        self.params.upload(0, bytemuck::bytes_of(&p))?;
+        Ok(())
+    }
+
+    /// Replace the guiding buffers (after a refit); `origin`/`size` give the SD-tree cube.
+    pub fn set_guide_buffers(
+        &mut self,
+        buffers: GuideBuffers,
+        origin: [f32; 3],
+        size: f32,
+    ) -> Result<()> {
+        self.guide = buffers;
+        self.guide_origin = origin;
+        self.guide_size = size;
+        self.set = None;
+        self.upload_params()
+    }
+
+    pub fn guide_buffers(&self) -> &GuideBuffers {
+        &self.guide
+    }
+
+    fn bindings(&self) -> Vec<BindingSpec> {
+        let mut b: Vec<BindingSpec> = [
+            gpu::BINDING_PARAMS,
+            gpu::BINDING_VERTICES,
+            gpu::BINDING_INDICES,
+            gpu::BINDING_INSTANCES,
+            gpu::BINDING_MATERIALS,
+            gpu::BINDING_LIGHT_TRIANGLES,
+            gpu::BINDING_LIGHT_MODELS,
+            gpu::BINDING_MODEL_ALIAS,
+            gpu::BINDING_TRIANGLE_ALIAS,
+            gpu::BINDING_PUNCTUAL_LIGHTS,
+            gpu::BINDING_TRIANGLE_LIGHT_INDEX,
+            gpu::BINDING_FILM,
+            gpu::BINDING_AOV,
+            gpu::BINDING_STATS,
+            gpu::BINDING_GUIDE_SPATIAL,
+            gpu::BINDING_GUIDE_LEAVES,
+            gpu::BINDING_GUIDE_SAMPLING,
+            gpu::BINDING_GUIDE_TRAINING,
+            gpu::BINDING_OUTLIERS,
+        ]
+        .into_iter()
+        .map(BindingSpec::buffer)
+        .collect();
+        b.push(BindingSpec::accel(gpu::BINDING_TLAS));
+        b.push(BindingSpec::images(
+            gpu::BINDING_TEXTURES,
+            self.gpu_scene.textures.len() as u32,
+        ));
+        b
+    }
+
+    fn pipeline(&mut self, v: Variant) -> Result<()> {
+        if self.pipelines.contains_key(&v) {
+            return Ok(());
+        }
+        let spirv = self.shaders.load("render")?;
+        let spec = [
+            if v.ris {
+                gpu::NEE_RIS
+            } else {
+                gpu::NEE_UNIFORM
+            },
+            v.guiding as u32,
+            v.training as u32,
+        ];
+        let started = Instant::now();
+        let name = format!(
+            "render (ris={}, guiding={}, training={})",
+            v.ris, v.guiding, v.training
+        );
+        let p = ComputePipeline::new(
+            &self.device,
+            &spirv,
+            &self.bindings(),
+            std::mem::size_of::<gpu::PushConstants>() as u32,
+            &spec,
+            &name,
+        )?;
+        log::debug!(
+            "compiled {name} in {:.1} s",
+            started.elapsed().as_secs_f64()
+        );
+        self.pipelines.insert(v, p);
+        Ok(())
+    }
+
+    fn descriptor_set(&mut self, v: Variant) -> Result<raw::DescriptorSet> {
+        if let Some(s) = &self.set {
+            return Ok(s.raw);
+        }
+        let pipeline = &self.pipelines[&v];
+        let set = DescriptorSet::new(&self.device, pipeline)?;
+        let g = &self.gpu_scene;
+        set.write_accel(gpu::BINDING_TLAS, &g.tlas);
+        for (binding, buffer) in [
+            (gpu::BINDING_PARAMS, &self.params),
+            (gpu::BINDING_VERTICES, &g.vertices),
+            (gpu::BINDING_INDICES, &g.indices),
+            (gpu::BINDING_INSTANCES, &g.instances),
+            (gpu::BINDING_MATERIALS, &g.materials),
+            (gpu::BINDING_LIGHT_TRIANGLES, &g.light_triangles),
+            (gpu::BINDING_LIGHT_MODELS, &g.light_models),
+            (gpu::BINDING_MODEL_ALIAS, &g.model_alias),
+            (gpu::BINDING_TRIANGLE_ALIAS, &g.triangle_alias),
+            (gpu::BINDING_PUNCTUAL_LIGHTS, &g.punctual),
+            (gpu::BINDING_TRIANGLE_LIGHT_INDEX, &g.triangle_light_index),
+            (gpu::BINDING_FILM, &self.film),
+            (gpu::BINDING_AOV, &self.aov),
+            (gpu::BINDING_STATS, &self.stats),
+            (gpu::BINDING_GUIDE_SPATIAL, &self.guide.spatial),
+            (gpu::BINDING_GUIDE_LEAVES, &self.guide.leaves),
+            (gpu::BINDING_GUIDE_SAMPLING, &self.guide.sampling),
+            (gpu::BINDING_GUIDE_TRAINING, &self.guide.training),
+            (gpu::BINDING_OUTLIERS, &self.outliers),
+        ] {
+            set.write_buffer(binding, buffer);
+        }
+        set.write_images(gpu::BINDING_TEXTURES, &g.texture_descriptors());
+        let raw_set = set.raw;
+        self.set = Some(set);
+        Ok(raw_set)
+    }
+
+    /// Compile the pipeline(s) the current method needs (pipeline creation can take a
+    /// while on lavapipe; call this before timing a render).
+    pub fn prepare(&mut self) -> Result<()> {
+        let mut variants = vec![self.variant(false)];
+        if self.settings.method.uses_guiding() {
+            variants.push(self.variant(true));
+        }
+        for v in variants {
+            self.pipeline(v)?;
+            // Some drivers (lavapipe) compile at the first dispatch: run an empty one.
+            let set = self.descriptor_set(v)?;
+            let push = gpu::PushConstants::default();
+            let pipeline = &self.pipelines[&v];
+            self.device.submit(|cmd| {
+                pipeline.cmd_dispatch(cmd, set, bytemuck::bytes_of(&push), [1, 1, 1])
+            })?;
+        }
+        Ok(())
+    }
+
+    fn variant(&self, training: bool) -> Variant {
+        Variant {
+            ris: self.settings.method.uses_ris(),
+            guiding: self.settings.method.uses_guiding(),
+            training,
+        }
+    }
+
+    /// Clear the film (and its sample count).
+    pub fn clear_film(&mut self) -> Result<()> {
+        self.film.fill_zero()?;
+        self.film_spp = 0;
+        self.film_offset = 0;
+        Ok(())
+    }
+
+    /// Render sample indices [begin, begin + count) into the film. `training` records
+    /// guiding data (guided methods). Stops early, at a chunk boundary, when `cancel` is
+    /// set; returns the number of samples rendered.
+    pub fn render_samples(
+        &mut self,
+        begin: u64,
+        count: u64,
+        training: bool,
+        cancel: &AtomicBool,
+        progress: &mut dyn FnMut(u64),
+        stats: &mut RenderStats,
+    ) -> Result<u64> {
+        self.render_until(begin, Some(count), None, training, cancel, progress, stats)
+    }
+
+    /// Render from sample index `begin` until `count` samples are done or `deadline`
+    /// passes (checked between chunks; every pixel always has the same sample count).
+    #[allow(clippy::too_many_arguments)]
+    pub fn render_until(
+        &mut self,
+        begin: u64,
+        count: Option<u64>,
+        deadline: Option<Instant>,
+        training: bool,
+        cancel: &AtomicBool,
+        progress: &mut dyn FnMut(u64),
+        stats: &mut RenderStats,
+    ) -> Result<u64> {
+        if begin + count.unwrap_or(0) > u32::MAX as u64 {
+            return Err(RenderError::Invalid(
+                "sample indices beyond 2^32 are not supported".into(),
+            ));
+        }
+        let v = self.variant(training);
+        self.pipeline(v)?;
+        let set = self.descriptor_set(v)?;
+        if self.film_spp == 0 {
+            self.film_offset = begin;
+        }
+        let (w, h) = (self.settings.width, self.settings.height);
+        let started = Instant::now();
+        let mut done = 0u64;
+        while count.is_none_or(|c| done < c) {
+            if cancel.load(Ordering::SeqCst) || deadline.is_some_and(|d| Instant::now() >= d) {
+                break;
+            }
+            // Size the chunk: bands of rows × samples per dispatch near the target time.
+            let (bands, spp) = match self.seconds_per_sample {
+                None => (((w as u64 * h as u64) / 65536).max(1) as u32, 1u32),
+                Some(t) if t > TARGET_SUBMIT_SECONDS => {
+                    ((t / TARGET_SUBMIT_SECONDS).ceil() as u32, 1)
+                }
+                Some(t) => (
+                    1,
+                    ((TARGET_SUBMIT_SECONDS / t.max(1e-6)).floor() as u32).clamp(1, 256),
+                ),
+            };
+            let mut spp = spp as u64;
+            if let Some(c) = count {
+                spp = spp.min(c - done);
+            }
+            if let (Some(d), Some(t)) = (deadline, self.seconds_per_sample) {
+                // Do not overshoot the time budget by more than one sample's worth.
+                let left = d.saturating_duration_since(Instant::now()).as_secs_f64();
+                spp = spp.min(((left / t).ceil() as u64).max(1));
+            }
+            let bands = bands.min(h);
+            let band_rows = h.div_ceil(bands);
+            let chunk_started = Instant::now();
+            let pipeline = &self.pipelines[&v];
+            for band in 0..bands {
+                let y0 = band * band_rows;
+                if y0 >= h {
+                    break;
+                }
+                let rows = band_rows.min(h - y0);
+                let push = gpu::PushConstants {
+                    tile_origin: [0, y0],
+                    tile_size: [w, rows],
+                    sample_begin: (begin + done) as u32,
+                    sample_count: spp as u32,
+                };
+                let (_, gpu_time) = self.device.submit_timed(
+                    |cmd| {
+                        pipeline.cmd_dispatch(
+                            cmd,
+                            set,
+                            bytemuck::bytes_of(&push),
+                            [w.div_ceil(8), rows.div_ceil(8), 1],
+                        )
+                    },
+                    true,
+                )?;
+                stats.gpu_seconds += gpu_time.unwrap_or(0.0);
+            }
+            let elapsed = chunk_started.elapsed().as_secs_f64();
+            self.seconds_per_sample = Some(elapsed / spp as f64);
+            done += spp;
+            self.film_spp += spp;
+            progress(done);
+        }
+        self.collect_stats(stats)?;
+        stats.samples += done;
+        stats.wall_seconds += started.elapsed().as_secs_f64();
+        Ok(done)
+    }
+
+    fn collect_stats(&mut self, stats: &mut RenderStats) -> Result<()> {
+        let counters: Vec<u32> = self.stats.read(gpu::STAT_COUNT as usize)?;
+        stats.camera_rays += counters[gpu::STAT_CAMERA_RAYS as usize] as u64;
+        stats.bounce_rays += counters[gpu::STAT_BOUNCE_RAYS as usize] as u64;
+        stats.shadow_rays += counters[gpu::STAT_SHADOW_RAYS as usize] as u64;
+        stats.nonfinite_samples += counters[gpu::STAT_NONFINITE_SAMPLES as usize] as u64;
+        self.stats.fill_zero()?;
+        Ok(())
+    }
+
+    /// Read the film back.
+    pub fn film(&self) -> Result<Film> {
+        let pixels = self.settings.width as usize * self.settings.height as usize;
+        let sums: Vec<u64> = self.film.read(pixels * 3)?;
+        Ok(Film {
+            width: self.settings.width,
+            height: self.settings.height,
+            spp: self.film_spp,
+            sample_offset: self.film_offset,
+            sums,
+        })
+    }
+
+    /// Replace the film's contents (resuming a checkpoint).
+    pub fn load_film(&mut self, film: &Film) -> Result<()> {
+        if film.width != self.settings.width || film.height != self.settings.height {
+            return Err(RenderError::Invalid(
+                "film size does not match the render size".into(),
+            ));
+        }
+        self.film.upload(0, bytemuck::cast_slice(&film.sums))?;
+        self.film_spp = film.spp;
+        self.film_offset = film.sample_offset;
+        Ok(())
+    }
+}

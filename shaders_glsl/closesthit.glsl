@@ -1,0 +1,214 @@
+// Closest-hit part of the path tracer (OptiX-style): what happens at a surface.
+// Turning a hit into a Surface (inc/material.glsl), choosing the next direction from the
+// one-sample MIS mixture of BSDF and guiding distributions, and next-event estimation
+// with either the source distribution directly (`pt`, power-heuristic MIS) or RIS.
+//
+// MIS between NEE and emission found by direction sampling:
+//  * NEE_UNIFORM: classic two-strategy power heuristic; the light density of a point is
+//    its source density converted to solid angle.
+//  * NEE_RIS: the exact density of a RIS-selected light is not available, so instead the
+//    direction sample at this vertex is fed to RIS as one extra candidate (as RTXDI
+//    does). With balance-heuristic resampling weights over all M + 1 candidate slots the
+//    RIS estimate alone accounts for all direct light from emitters that NEE can sample;
+//    emission hit by the direction sample then adds nothing on its own. Every path is
+//    counted exactly once and the resampling weights form a partition of unity.
+#ifndef CLOSESTHIT_GLSL
+#define CLOSESTHIT_GLSL
+
+// ---- direction sampling: BSDF / guiding mixture -----------------------------------------
+
+struct DirectionSampler {
+    float bsdf_fraction;   // probability of sampling the BSDF (1: no guiding here)
+    uint leaf;             // SD-tree leaf of the vertex
+};
+
+struct DirectionSample {
+    vec3 wi;
+    vec3 weight;   // f·cos / pdf
+    float pdf;     // mixture pdf (solid angle)
+    bool valid;
+};
+
+DirectionSampler direction_sampler(Surface s) {
+    DirectionSampler d;
+    d.bsdf_fraction = 1.0;
+    d.leaf = INVALID_INDEX;
+    if (GUIDING) {
+        // Nearly specular lobes are not guided: the BSDF already samples them well.
+        bool nearly_specular = s.bsdf.alpha < GUIDING_MIN_ALPHA
+            && bsdf_specular_probability(s.bsdf, surface_to_local(s, s.wo)) >= 0.9;
+        if (!nearly_specular) {
+            d.leaf = guide_find_leaf(s.p);
+            d.bsdf_fraction = params.bsdf_fraction;
+        }
+    }
+    return d;
+}
+
+float direction_pdf(Surface s, DirectionSampler d, vec3 wi) {
+    float p = d.bsdf_fraction * surface_bsdf_pdf(s, wi);
+    if (d.bsdf_fraction < 1.0) p += (1.0 - d.bsdf_fraction) * guide_pdf(d.leaf, wi);
+    return p;
+}
+
+DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
+    DirectionSample ds;
+    vec4 u = rng_next4(rng);
+    if (u.w < d.bsdf_fraction) {
+        vec3 wi_local;
+        bool ok = bsdf_sample(s.bsdf, surface_to_local(s, s.wo), u.xyz, wi_local);
+        ds.wi = ok ? surface_to_world(s, wi_local) : s.n;
+        if (!ok) {
+            ds.valid = false;
+            ds.pdf = 0.0;
+            ds.weight = vec3(0.0);
+            return ds;
+        }
+    } else {
+        float unused_pdf;
+        ds.wi = guide_sample(d.leaf, u.xy, unused_pdf);
+    }
+    ds.pdf = direction_pdf(s, d, ds.wi);
+    vec3 f = surface_bsdf_eval(s, ds.wi);
+    ds.valid = ds.pdf > 0.0 && max3(f) > 0.0;
+    ds.weight = ds.valid ? f / ds.pdf : vec3(0.0);
+    return ds;
+}
+
+// ---- next-event estimation ----------------------------------------------------------------
+
+// What NEE contributes at a vertex, and what it tells the guiding records.
+struct NeeResult {
+    vec3 contribution;   // radiance toward wo (not multiplied by the path throughput)
+    vec3 record_dir;     // direction of the light sample
+    float record_value;  // mean-RGB incident radiance / pdf along record_dir (0: none)
+    uint chosen_model;   // light model NEE picked (AOV), INVALID_INDEX if none
+};
+
+NeeResult nee_none() {
+    NeeResult r;
+    r.contribution = vec3(0.0);
+    r.record_dir = vec3(0.0);
+    r.record_value = 0.0;
+    r.chosen_model = INVALID_INDEX;
+    return r;
+}
+
+uint light_model_of(LightSample ls) {
+    return ls.tri != INVALID_INDEX ? light_triangles[ls.tri].model : INVALID_INDEX;
+}
+
+bool shadow_test(Surface s, LightSample ls, inout uint shadow_rays) {
+    shadow_rays += 1u;
+    float tmax = ls.dist >= FLT_MAX ? FLT_MAX : ls.dist * (1.0 - 1e-4);
+    return visible(offset_ray(s.p, s.ng), ls.wi, tmax);
+}
+
+// One light sample from the source distribution, MIS-weighted against direction sampling.
+NeeResult nee_single(Surface s, DirectionSampler d, inout Rng rng, inout uint shadow_rays) {
+    NeeResult r = nee_none();
+    LightSample ls = sample_light(s.p, rng_next4(rng));
+    r.chosen_model = light_model_of(ls);
+    if (!(ls.pdf > 0.0) || max3(ls.Le_G) <= 0.0) return r;
+    vec3 f = surface_bsdf_eval(s, ls.wi);
+    if (max3(f) <= 0.0) return r;
+    float w = 1.0;
+    if (ls.area) {
+        float p_light = ls.pdf * ls.dist * ls.dist / max(ls.cos_y, 1e-12);
+        w = power_heuristic(p_light, direction_pdf(s, d, ls.wi));
+    }
+    if (!shadow_test(s, ls, shadow_rays)) return r;
+    vec3 Li_over_pdf = ls.Le_G * (w / ls.pdf);
+    r.contribution = f * Li_over_pdf;
+    if (ls.area) {
+        r.record_dir = ls.wi;
+        r.record_value = (Li_over_pdf.x + Li_over_pdf.y + Li_over_pdf.z) / 3.0;
+    }
+    return r;
+}
+
+// RIS over the scene's lights, implementing the interface of inc/ris.glsl.
+struct RisContext {
+    Surface s;
+    DirectionSampler d;
+};
+
+struct RisCandidate {
+    LightSample ls;
+    vec3 value;        // f·Le_G, cached by ris_target
+    bool from_direction;
+};
+
+RisCandidate ris_draw(RisContext ctx, inout Rng rng) {
+    RisCandidate c;
+    c.ls = sample_light(ctx.s.p, rng_next4(rng));
+    c.value = vec3(0.0);
+    c.from_direction = false;
+    return c;
+}
+
+float ris_target(RisContext ctx, inout RisCandidate c) {
+    if (max3(c.ls.Le_G) <= 0.0) return 0.0;
+    c.value = surface_bsdf_eval(ctx.s, c.ls.wi) * c.ls.Le_G;
+    return luminance(c.value);
+}
+
+// Source densities of all candidate slots at c, in the candidate's measure: area for
+// area lights (direction pdf converted with cosθy/d²), pmf for punctual lights (which
+// direction sampling cannot produce).
+float ris_denominator(RisContext ctx, RisCandidate c, uint M) {
+    float q_light = c.from_direction ? light_source_pdf(c.ls.tri) : c.ls.pdf;
+    float q_direction = 0.0;
+    if (c.ls.area)
+        q_direction = direction_pdf(ctx.s, ctx.d, c.ls.wi) * c.ls.cos_y / max(c.ls.dist * c.ls.dist, 1e-20);
+    return float(M) * q_light + q_direction;
+}
+
+#include "inc/ris.glsl"
+
+// RIS-selected light. `ds` is this vertex's direction sample and `next` the surface it
+// hit (valid when hit_next); an emitter there joins as the extra candidate.
+NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_next, Surface next, float next_t,
+                  inout Rng rng, inout uint shadow_rays) {
+    NeeResult r = nee_none();
+    RisContext ctx = RisContext(s, d);
+    RisCandidate extra;
+    bool has_extra = ds.valid && hit_next && max3(next.emission) > 0.0;
+    if (has_extra) {
+        extra.ls.wi = ds.wi;
+        extra.ls.dist = next_t;
+        extra.ls.cos_y = abs(dot(next.ng, ds.wi));
+        extra.ls.Le_G = next.emission * extra.ls.cos_y / max(next_t * next_t, 1e-20);
+        extra.ls.pdf = light_source_pdf(next.light_tri);
+        extra.ls.area = true;
+        extra.ls.tri = next.light_tri;
+        extra.ls.p = next.p;
+        extra.value = vec3(0.0);
+        extra.from_direction = true;
+    }
+    RisResult res = ris_resample(ctx, params.ris_candidates, rng, has_extra, extra);
+    if (!res.found) return r;
+    r.chosen_model = res.extra_chosen ? instances[next.instance].light_model : light_model_of(res.y.ls);
+    // The extra candidate's visibility is known: its ray hit it.
+    if (!res.extra_chosen && !shadow_test(s, res.y.ls, shadow_rays)) return r;
+    r.contribution = res.y.value * res.W;
+    if (res.y.ls.area) {
+        vec3 Li_over_pdf = res.y.ls.Le_G * res.W;
+        r.record_dir = res.y.ls.wi;
+        r.record_value = (Li_over_pdf.x + Li_over_pdf.y + Li_over_pdf.z) / 3.0;
+    }
+    return r;
+}
+
+// MIS weight of emission reached by direction sampling from a vertex whose direction
+// pdf was `dir_pdf` (see the header comment).
+float emission_weight(Surface next, vec3 wi, float t, float dir_pdf) {
+    if (NEE_MODE == NEE_RIS) return 0.0;
+    float q = light_source_pdf(next.light_tri);
+    if (q <= 0.0) return 1.0;
+    float cos_y = abs(dot(next.ng, wi));
+    float p_light = q * t * t / max(cos_y, 1e-12);
+    return power_heuristic(dir_pdf, p_light);
+}
+
+#endif

@@ -1,0 +1,28 @@
+// Triangle data access: vertex indices, interpolated attributes, texture coordinates.
+#ifndef INC_GEOMETRY_GLSL
+#define INC_GEOMETRY_GLSL
+
+uvec3 triangle_vertices(Instance inst, uint primitive) {
+    uint base = inst.index_offset + 3u * primitive;
+    return uvec3(indices[base], indices[base + 1u], indices[base + 2u]) + inst.vertex_offset;
+}
+
+vec2 interpolate_uv(uvec3 v, vec3 w, uint set) {
+    if (set == 1u)
+        return w.x * vertices[v.x].uv1 + w.y * vertices[v.y].uv1 + w.z * vertices[v.z].uv1;
+    return w.x * vertices[v.x].uv0 + w.y * vertices[v.y].uv0 + w.z * vertices[v.z].uv0;
+}
+
+// KHR_texture_transform: offset · rotation · scale applied to a UV.
+vec2 texture_uv(TextureRef t, vec2 uv) {
+    float s = sin(t.rotation);
+    float c = cos(t.rotation);
+    vec2 p = uv * t.scale;
+    return vec2(c * p.x + s * p.y, -s * p.x + c * p.y) + t.offset;
+}
+
+vec4 sample_texture(TextureRef t, vec2 uv) {
+    return textureLod(textures[nonuniformEXT(uint(t.index))], texture_uv(t, uv), 0.0);
+}
+
+#endif

@@ -1,0 +1,127 @@
+// Light sampling from the source distribution q: a light model (uniformly, or by power
+// through an alias table), then one of its triangles (uniformly, or by power), then a
+// uniform point on it — or the punctual light the model stands for. Also the density q
+// of a given light point (for MIS), and emitted radiance at a light point.
+#ifndef INC_LIGHTS_GLSL
+#define INC_LIGHTS_GLSL
+
+// A light point seen from a shading point x.
+struct LightSample {
+    vec3 wi;        // unit direction x → light
+    float dist;     // distance (FLT_MAX for directional)
+    vec3 Le_G;      // emitted radiance × geometry without cos at x: Le·|cosθy|/d² (area),
+                    // I/d² (point, spot), E (directional)
+    float pdf;      // source density: per area (area lights) or pmf (punctual)
+    float cos_y;    // |cosθ| at the light (area lights), 1 otherwise
+    bool area;      // area light (MIS applies); false for delta lights
+    uint tri;       // light triangle, INVALID_INDEX for punctual
+    vec3 p;         // the light point (area and positional lights)
+};
+
+uint alias_sample(uint begin, uint count, float u, bool models) {
+    float scaled = u * float(count);
+    uint i = min(uint(scaled), count - 1u);
+    float frac = scaled - float(i);
+    // Two reads rather than a ?: over two buffers: glslang types that select badly.
+    float threshold;
+    uint alias;
+    if (models) {
+        threshold = model_alias[begin + i].threshold;
+        alias = model_alias[begin + i].alias;
+    } else {
+        threshold = triangle_alias[begin + i].threshold;
+        alias = triangle_alias[begin + i].alias;
+    }
+    return frac < threshold ? i : alias;
+}
+
+float model_pmf(uint model) {
+    if (params.ris_source == RIS_SOURCE_POWER) return model_alias[model].pmf;
+    return 1.0 / float(params.light_model_count);
+}
+
+float triangle_pmf(uint tri, LightModel m) {
+    if (params.ris_source == RIS_SOURCE_POWER) return triangle_alias[tri].pmf;
+    return 1.0 / float(m.triangle_count);
+}
+
+// Source density (per unit area) of a point on light triangle `tri`.
+float light_source_pdf(uint tri) {
+    if (tri == INVALID_INDEX) return 0.0;
+    LightTriangle lt = light_triangles[tri];
+    return model_pmf(lt.model) * triangle_pmf(tri, light_models[lt.model]) / lt.area;
+}
+
+// Radiance leaving light triangle `lt` at barycentrics (b1, b2) in direction `dir`.
+vec3 light_triangle_radiance(LightTriangle lt, vec2 b, vec3 dir) {
+    if (lt.two_sided == 0u && dot(lt.normal, dir) <= 0.0) return vec3(0.0);
+    Material m = materials[lt.material];
+    vec3 e = m.emission;
+    if (m.emissive_tex.index >= 0) {
+        vec2 uv = (1.0 - b.x - b.y) * lt.uv0 + b.x * lt.uv1 + b.y * lt.uv2;
+        e *= sample_texture(m.emissive_tex, uv).rgb;
+    }
+    return e;
+}
+
+LightSample sample_punctual(uint index, vec3 x) {
+    PunctualLight l = punctual_lights[index];
+    LightSample s;
+    s.area = false;
+    s.tri = INVALID_INDEX;
+    s.cos_y = 1.0;
+    if (l.kind == PUNCTUAL_DIRECTIONAL) {
+        s.wi = -l.direction;
+        s.dist = FLT_MAX;
+        s.Le_G = l.intensity;
+        s.p = x + s.wi * 2.0 * params.scene_radius;
+    } else {
+        vec3 d = l.position - x;
+        float d2 = max(dot(d, d), 1e-12);
+        s.dist = sqrt(d2);
+        s.wi = d / s.dist;
+        s.p = l.position;
+        float falloff = 1.0;
+        if (l.kind == PUNCTUAL_SPOT) {
+            float c = dot(-s.wi, l.direction);
+            float t = clamp((c - l.cos_outer) / max(l.cos_inner - l.cos_outer, 1e-4), 0.0, 1.0);
+            falloff = t * t;
+        }
+        s.Le_G = l.intensity * falloff / d2;
+    }
+    return s;
+}
+
+// Draw a light point for shading point x with four uniform numbers.
+LightSample sample_light(vec3 x, vec4 u) {
+    uint count = params.light_model_count;
+    uint model = params.ris_source == RIS_SOURCE_POWER ? alias_sample(0u, count, u.x, true)
+                                                       : min(uint(u.x * float(count)), count - 1u);
+    LightModel m = light_models[model];
+    float pm = model_pmf(model);
+    if (m.punctual != INVALID_INDEX) {
+        LightSample s = sample_punctual(m.punctual, x);
+        s.pdf = pm;
+        return s;
+    }
+    uint local = params.ris_source == RIS_SOURCE_POWER ? alias_sample(m.first_triangle, m.triangle_count, u.y, false)
+                                                       : min(uint(u.y * float(m.triangle_count)), m.triangle_count - 1u);
+    uint tri = m.first_triangle + local;
+    LightTriangle lt = light_triangles[tri];
+    vec2 b = square_to_triangle(u.zw);
+    vec3 p = (1.0 - b.x - b.y) * lt.p0 + b.x * lt.p1 + b.y * lt.p2;
+    LightSample s;
+    s.area = true;
+    s.tri = tri;
+    s.p = p;
+    vec3 d = p - x;
+    float d2 = dot(d, d);
+    s.dist = sqrt(d2);
+    s.wi = d / max(s.dist, 1e-20);
+    s.cos_y = abs(dot(lt.normal, s.wi));
+    s.Le_G = d2 > 0.0 ? light_triangle_radiance(lt, b, -s.wi) * s.cos_y / d2 : vec3(0.0);
+    s.pdf = pm * triangle_pmf(tri, m) / lt.area;
+    return s;
+}
+
+#endif

@@ -1,0 +1,144 @@
+// Surface interaction at a hit: position, geometric and shading frames (vertex normals,
+// normal maps), material parameters from factors and textures, and emitted radiance.
+#ifndef INC_MATERIAL_GLSL
+#define INC_MATERIAL_GLSL
+
+struct Surface {
+    vec3 p;            // world position
+    vec3 ng;           // geometric normal, on the side of wo
+    vec3 n;            // shading normal, on the side of wo
+    vec3 t;            // shading tangent
+    vec3 b;            // shading bitangent
+    vec3 wo;           // unit direction toward the previous vertex
+    bool front;        // the ray hit the triangle's front face
+    uint instance;
+    uint primitive;
+    uint material;
+    vec2 uv0;
+    vec2 uv1;
+    BsdfParams bsdf;
+    float roughness;   // perceptual roughness (AOVs)
+    vec3 emission;     // radiance emitted toward wo
+    uint light_tri;    // light triangle index, INVALID_INDEX if not a sampled light
+};
+
+vec3 material_emission(Material m, vec2 uv0, vec2 uv1) {
+    vec3 e = m.emission;
+    if (m.emissive_tex.index >= 0 && max3(e) > 0.0)
+        e *= sample_texture(m.emissive_tex, m.emissive_tex.uv_set == 1u ? uv1 : uv0).rgb;
+    return e;
+}
+
+mat3 inverse_transpose3(mat3 m) {
+    return transpose(inverse(m));
+}
+
+Surface make_surface(Hit h, vec3 ray_dir) {
+    Surface s;
+    Instance inst = instances[h.instance];
+    uvec3 vi = triangle_vertices(inst, h.primitive);
+    vec3 w = vec3(1.0 - h.bary.x - h.bary.y, h.bary.x, h.bary.y);
+    Vertex v0 = vertices[vi.x];
+    Vertex v1 = vertices[vi.y];
+    Vertex v2 = vertices[vi.z];
+    vec3 p0 = h.to_world * vec4(v0.position, 1.0);
+    vec3 p1 = h.to_world * vec4(v1.position, 1.0);
+    vec3 p2 = h.to_world * vec4(v2.position, 1.0);
+    s.p = w.x * p0 + w.y * p1 + w.z * p2;
+    vec3 ng = normalize(cross(p1 - p0, p2 - p0));
+    if ((inst.flags & INSTANCE_FLAG_FLIPPED) != 0u) ng = -ng;
+    s.wo = -ray_dir;
+    s.front = dot(ng, s.wo) > 0.0;
+    s.instance = h.instance;
+    s.primitive = h.primitive;
+    s.material = inst.material;
+    s.uv0 = w.x * v0.uv0 + w.y * v1.uv0 + w.z * v2.uv0;
+    s.uv1 = w.x * v0.uv1 + w.y * v1.uv1 + w.z * v2.uv1;
+    Material m = materials[inst.material];
+
+    // Shading normal: interpolated vertex normals (zero = flat), then the normal map.
+    mat3 normal_to_world = inverse_transpose3(mat3(h.to_world));
+    vec3 nv = w.x * v0.normal + w.y * v1.normal + w.z * v2.normal;
+    vec3 n = dot(nv, nv) > 1e-12 ? normalize(normal_to_world * nv) : ng;
+    if (dot(n, ng) < 0.0) n = -n;  // authored normals agree with the winding
+    if (m.normal_tex.index >= 0) {
+        vec2 uvn = m.normal_tex.uv_set == 1u ? s.uv1 : s.uv0;
+        vec3 tn = sample_texture(m.normal_tex, uvn).xyz * 2.0 - 1.0;
+        tn.xy *= m.normal_scale;
+        vec4 tv = w.x * v0.tangent + w.y * v1.tangent + w.z * v2.tangent;
+        vec3 tangent;
+        float sign_b;
+        if (dot(tv.xyz, tv.xyz) > 1e-12) {
+            tangent = mat3(h.to_world) * tv.xyz;
+            sign_b = tv.w < 0.0 ? -1.0 : 1.0;
+        } else {
+            // No TANGENT attribute: derive one from the UV parameterisation.
+            vec2 uva = m.normal_tex.uv_set == 1u ? v0.uv1 : v0.uv0;
+            vec2 uvb = m.normal_tex.uv_set == 1u ? v1.uv1 : v1.uv0;
+            vec2 uvc = m.normal_tex.uv_set == 1u ? v2.uv1 : v2.uv0;
+            vec2 d1 = uvb - uva;
+            vec2 d2 = uvc - uva;
+            float det = d1.x * d2.y - d1.y * d2.x;
+            tangent = abs(det) > 1e-20 ? ((p1 - p0) * d2.y - (p2 - p0) * d1.y) / det : vec3(0.0);
+            sign_b = det < 0.0 ? -1.0 : 1.0;
+        }
+        tangent = tangent - n * dot(n, tangent);
+        if (dot(tangent, tangent) > 1e-20) {
+            tangent = normalize(tangent);
+            vec3 bitangent = cross(n, tangent) * sign_b;
+            vec3 mapped = normalize(tangent * tn.x + bitangent * tn.y + n * max(tn.z, 1e-4));
+            if (all_finite(mapped)) n = mapped;
+        }
+    }
+    // Two-sided BSDF: work on the side the ray came from.
+    if (!s.front) {
+        ng = -ng;
+        n = -n;
+    }
+    if (dot(n, ng) <= 1e-4) n = ng;
+    s.ng = ng;
+    s.n = n;
+    make_basis(n, s.t, s.b);
+
+    // Material.
+    vec4 base = m.base_color;
+    if (m.base_color_tex.index >= 0)
+        base *= sample_texture(m.base_color_tex, m.base_color_tex.uv_set == 1u ? s.uv1 : s.uv0);
+    float metallic = m.metallic;
+    float roughness = m.roughness;
+    if (m.metallic_roughness_tex.index >= 0) {
+        vec4 mr = sample_texture(m.metallic_roughness_tex, m.metallic_roughness_tex.uv_set == 1u ? s.uv1 : s.uv0);
+        roughness *= mr.g;
+        metallic *= mr.b;
+    }
+    s.roughness = roughness;
+    s.bsdf.base_color = clamp(base.rgb, 0.0, 1.0);
+    s.bsdf.metallic = clamp(metallic, 0.0, 1.0);
+    s.bsdf.alpha = max(roughness * roughness, MIN_GGX_ALPHA);
+    s.bsdf.specular = m.specular;
+    float f0 = sqr((m.ior - 1.0) / (m.ior + 1.0));
+    s.bsdf.f0_dielectric = min(f0 * m.specular_color, vec3(1.0)) * m.specular;
+
+    // Emission: front face only unless the material is double-sided.
+    bool emits = s.front || (m.flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;
+    s.emission = emits ? material_emission(m, s.uv0, s.uv1) : vec3(0.0);
+    s.light_tri = inst.light_index_offset == INVALID_INDEX ? INVALID_INDEX
+                                                           : triangle_light_index[inst.light_index_offset + h.primitive];
+    return s;
+}
+
+vec3 surface_to_local(Surface s, vec3 v) { return to_local(v, s.t, s.b, s.n); }
+vec3 surface_to_world(Surface s, vec3 v) { return to_world(v, s.t, s.b, s.n); }
+
+// f·cos for world directions, zero when wi is below the geometric surface.
+vec3 surface_bsdf_eval(Surface s, vec3 wi) {
+    if (dot(wi, s.ng) <= 0.0) return vec3(0.0);
+    return bsdf_eval(s.bsdf, surface_to_local(s, s.wo), surface_to_local(s, wi));
+}
+
+float surface_bsdf_pdf(Surface s, vec3 wi) {
+    if (dot(wi, s.ng) <= 0.0) return 0.0;
+    return bsdf_pdf(s.bsdf, surface_to_local(s, s.wo), surface_to_local(s, wi));
+}
+
+#endif

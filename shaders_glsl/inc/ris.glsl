@@ -1,0 +1,58 @@
+// Resampled importance sampling (Talbot et al. 2005) in one streaming pass, generalised
+// to candidates from several strategies (Lin et al. 2022's GRIS with balance-heuristic
+// resampling weights).
+//
+// Written against a small interface that the including file defines first:
+//   struct RisContext;                         the shading point
+//   struct RisCandidate;                       a candidate (payload kept by the reservoir)
+//   RisCandidate ris_draw(RisContext ctx, inout Rng rng);       one draw from the source q
+//   float ris_target(RisContext ctx, inout RisCandidate c);     target p̂(c) ≥ 0
+//   float ris_denominator(RisContext ctx, RisCandidate c, uint M);
+//        Σ over candidate slots of their source densities at c: M·q(c) for M light
+//        candidates, plus q_extra(c) when an extra candidate takes part.
+// A candidate's resampling weight is w = p̂ / denominator; the selected y gets the
+// contribution weight W = Σw / p̂(y), so f(y)·W is an unbiased estimate of ∫f. With no
+// extra candidate this is the paper's w = p̂/q and W = (Σw/M)/p̂(y).
+#ifndef INC_RIS_GLSL
+#define INC_RIS_GLSL
+
+struct RisResult {
+    RisCandidate y;     // the kept candidate
+    float p_hat;        // p̂(y)
+    float W;            // contribution weight Σw / p̂(y) (0 when nothing was kept)
+    bool found;
+    bool extra_chosen;  // the extra candidate was kept
+};
+
+RisResult ris_resample(RisContext ctx, uint M, inout Rng rng, bool has_extra, RisCandidate extra) {
+    Reservoir r = reservoir_empty();
+    RisResult res;
+    res.found = false;
+    res.extra_chosen = false;
+    res.p_hat = 0.0;
+    uint slots = M;
+    for (uint i = 0u; i < M; ++i) {
+        RisCandidate c = ris_draw(ctx, rng);
+        float p = ris_target(ctx, c);
+        float w = p > 0.0 ? p / ris_denominator(ctx, c, slots) : 0.0;
+        if (reservoir_update(r, w, rng_next(rng))) {
+            res.y = c;
+            res.p_hat = p;
+            res.found = true;
+        }
+    }
+    if (has_extra) {
+        float p = ris_target(ctx, extra);
+        float w = p > 0.0 ? p / ris_denominator(ctx, extra, slots) : 0.0;
+        if (reservoir_update(r, w, rng_next(rng))) {
+            res.y = extra;
+            res.p_hat = p;
+            res.found = true;
+            res.extra_chosen = true;
+        }
+    }
+    res.W = res.found && res.p_hat > 0.0 ? r.w_sum / res.p_hat : 0.0;
+    return res;
+}
+
+#endif

@@ -1,0 +1,27 @@
+// The scene's buffers and textures as the path-tracing kernel binds them (set 0).
+#ifndef INC_SCENE_DATA_GLSL
+#define INC_SCENE_DATA_GLSL
+
+#extension GL_EXT_ray_query : require
+
+layout(set = 0, binding = BINDING_TLAS) uniform accelerationStructureEXT tlas;
+layout(set = 0, binding = BINDING_PARAMS, scalar) readonly buffer ParamsBuffer { FrameParams params; };
+layout(set = 0, binding = BINDING_VERTICES, scalar) readonly buffer VertexBuffer { Vertex vertices[]; };
+layout(set = 0, binding = BINDING_INDICES, scalar) readonly buffer IndexBuffer { uint indices[]; };
+layout(set = 0, binding = BINDING_INSTANCES, scalar) readonly buffer InstanceBuffer { Instance instances[]; };
+layout(set = 0, binding = BINDING_MATERIALS, scalar) readonly buffer MaterialBuffer { Material materials[]; };
+layout(set = 0, binding = BINDING_TEXTURES) uniform sampler2D textures[];
+layout(set = 0, binding = BINDING_LIGHT_TRIANGLES, scalar) readonly buffer LightTriangleBuffer { LightTriangle light_triangles[]; };
+layout(set = 0, binding = BINDING_LIGHT_MODELS, scalar) readonly buffer LightModelBuffer { LightModel light_models[]; };
+layout(set = 0, binding = BINDING_MODEL_ALIAS, scalar) readonly buffer ModelAliasBuffer { AliasEntry model_alias[]; };
+layout(set = 0, binding = BINDING_TRIANGLE_ALIAS, scalar) readonly buffer TriangleAliasBuffer { AliasEntry triangle_alias[]; };
+layout(set = 0, binding = BINDING_PUNCTUAL_LIGHTS, scalar) readonly buffer PunctualBuffer { PunctualLight punctual_lights[]; };
+layout(set = 0, binding = BINDING_TRIANGLE_LIGHT_INDEX, scalar) readonly buffer TriangleLightIndexBuffer { uint triangle_light_index[]; };
+layout(set = 0, binding = BINDING_FILM, scalar) buffer FilmBuffer { uint64_t film[]; };
+layout(set = 0, binding = BINDING_AOV, scalar) buffer AovBuffer { float aov[]; };
+layout(set = 0, binding = BINDING_STATS, scalar) buffer StatsBuffer { uint stats[]; };
+layout(set = 0, binding = BINDING_OUTLIERS, scalar) buffer OutlierBuffer { float outliers[]; };
+
+layout(push_constant, scalar) uniform Push { PushConstants pc; };
+
+#endif

@@ -1,0 +1,92 @@
+// Ray queries: the closest hit and visibility, with alpha-masked (MASK) and stochastic
+// (BLEND) geometry resolved in the candidate loop, for camera, bounce and shadow rays.
+#ifndef INC_TRACE_GLSL
+#define INC_TRACE_GLSL
+
+struct Hit {
+    bool valid;
+    uint instance;
+    uint primitive;
+    vec2 bary;        // barycentrics of vertices 1 and 2
+    float t;
+    mat4x3 to_world;  // object to world
+};
+
+// Does a candidate hit on non-opaque geometry count? MASK compares alpha with the
+// cutoff; BLEND keeps the hit with probability alpha, decided by a hash of the ray and
+// the triangle so that the decision is deterministic.
+bool alpha_passes(uint instance, uint primitive, vec2 bary, uvec4 ray_key) {
+    Instance inst = instances[instance];
+    Material m = materials[inst.material];
+    if (m.alpha_mode == ALPHA_MODE_OPAQUE) return true;
+    float alpha = m.base_color.a;
+    if (m.base_color_tex.index >= 0) {
+        uvec3 v = triangle_vertices(inst, primitive);
+        vec3 w = vec3(1.0 - bary.x - bary.y, bary.x, bary.y);
+        alpha *= sample_texture(m.base_color_tex, interpolate_uv(v, w, m.base_color_tex.uv_set)).a;
+    }
+    if (m.alpha_mode == ALPHA_MODE_MASK) return alpha >= m.alpha_cutoff;
+    return hash_to_float(ray_key ^ uvec4(instance, primitive, floatBitsToUint(bary.x), 0x9e3779b9u)) < alpha;
+}
+
+uvec4 ray_key(vec3 o, vec3 d) {
+    return uvec4(floatBitsToUint(o.x) ^ floatBitsToUint(d.z), floatBitsToUint(o.y) ^ floatBitsToUint(d.x),
+                 floatBitsToUint(o.z) ^ floatBitsToUint(d.y), 0u);
+}
+
+Hit trace_closest(vec3 origin, vec3 dir, float tmax) {
+    rayQueryEXT rq;
+    rayQueryInitializeEXT(rq, tlas, gl_RayFlagsNoneEXT, 0xffu, origin, 0.0, dir, tmax);
+    uvec4 key = ray_key(origin, dir);
+    while (rayQueryProceedEXT(rq)) {
+        if (rayQueryGetIntersectionTypeEXT(rq, false) == gl_RayQueryCandidateIntersectionTriangleEXT) {
+            uint inst = rayQueryGetIntersectionInstanceCustomIndexEXT(rq, false);
+            uint prim = rayQueryGetIntersectionPrimitiveIndexEXT(rq, false);
+            vec2 bary = rayQueryGetIntersectionBarycentricsEXT(rq, false);
+            if (alpha_passes(inst, prim, bary, key)) rayQueryConfirmIntersectionEXT(rq);
+        }
+    }
+    Hit h;
+    h.valid = rayQueryGetIntersectionTypeEXT(rq, true) == gl_RayQueryCommittedIntersectionTriangleEXT;
+    if (h.valid) {
+        h.instance = rayQueryGetIntersectionInstanceCustomIndexEXT(rq, true);
+        h.primitive = rayQueryGetIntersectionPrimitiveIndexEXT(rq, true);
+        h.bary = rayQueryGetIntersectionBarycentricsEXT(rq, true);
+        h.t = rayQueryGetIntersectionTEXT(rq, true);
+        h.to_world = rayQueryGetIntersectionObjectToWorldEXT(rq, true);
+    }
+    return h;
+}
+
+// True when nothing blocks the segment origin → origin + dir·tmax.
+bool visible(vec3 origin, vec3 dir, float tmax) {
+    rayQueryEXT rq;
+    rayQueryInitializeEXT(rq, tlas, gl_RayFlagsTerminateOnFirstHitEXT, 0xffu, origin, 0.0, dir, tmax);
+    uvec4 key = ray_key(origin, dir);
+    while (rayQueryProceedEXT(rq)) {
+        if (rayQueryGetIntersectionTypeEXT(rq, false) == gl_RayQueryCandidateIntersectionTriangleEXT) {
+            uint inst = rayQueryGetIntersectionInstanceCustomIndexEXT(rq, false);
+            uint prim = rayQueryGetIntersectionPrimitiveIndexEXT(rq, false);
+            vec2 bary = rayQueryGetIntersectionBarycentricsEXT(rq, false);
+            if (alpha_passes(inst, prim, bary, key)) rayQueryConfirmIntersectionEXT(rq);
+        }
+    }
+    return rayQueryGetIntersectionTypeEXT(rq, true) == gl_RayQueryCommittedIntersectionNoneEXT;
+}
+
+// Offset a ray origin off the surface along the geometric normal, scaled to the
+// position's magnitude (Wächter & Binder, Ray Tracing Gems ch. 6).
+vec3 offset_ray(vec3 p, vec3 n) {
+    const float origin = 1.0 / 32.0;
+    const float float_scale = 1.0 / 65536.0;
+    const float int_scale = 256.0;
+    ivec3 of_i = ivec3(int_scale * n);
+    vec3 p_i = vec3(intBitsToFloat(floatBitsToInt(p.x) + ((p.x < 0.0) ? -of_i.x : of_i.x)),
+                    intBitsToFloat(floatBitsToInt(p.y) + ((p.y < 0.0) ? -of_i.y : of_i.y)),
+                    intBitsToFloat(floatBitsToInt(p.z) + ((p.z < 0.0) ? -of_i.z : of_i.z)));
+    return vec3(abs(p.x) < origin ? p.x + float_scale * n.x : p_i.x,
+                abs(p.y) < origin ? p.y + float_scale * n.y : p_i.y,
+                abs(p.z) < origin ? p.z + float_scale * n.z : p_i.z);
+}
+
+#endif

@@ -1,0 +1,166 @@
+// Raygen part of the path tracer (OptiX-style): camera rays, the path loop, film
+// accumulation, and the records that train the SD-tree.
+//
+// Depth counts path segments like Mitsuba's max_depth: the camera ray is segment 1
+// (emitters seen directly), NEE and direction sampling at the vertex ending segment k
+// create paths of k + 1 segments, which is allowed while k < max_depth.
+#ifndef RAYGEN_GLSL
+#define RAYGEN_GLSL
+
+#define MAX_RECORDED_VERTICES 16
+
+struct RayCounts {
+    uint camera;
+    uint bounce;
+    uint shadow;
+};
+
+// What a path remembers of each vertex to estimate the incident radiance along the
+// sampled direction once the path is done (guiding records).
+struct VertexRecord {
+    vec3 p;
+    vec3 wi;
+    float pdf;        // mixture pdf of wi (0: no direction record)
+    vec3 weight;      // f·cos/pdf (with Russian roulette folded in)
+    vec3 nee;         // NEE contribution at this vertex
+    vec3 emitted;     // emission arriving along wi that this vertex's record counts
+    vec3 nee_dir;
+    float nee_value;  // NEE record value (0: none)
+};
+
+void camera_ray(uvec2 pixel, vec2 jitter, out vec3 origin, out vec3 dir) {
+    vec2 ndc = (vec2(pixel) + jitter) / vec2(params.width, params.height) * 2.0 - 1.0;
+    ndc.y = -ndc.y;
+    float aspect = float(params.width) / float(params.height);
+    vec3 o = vec3(0.0);
+    vec3 d;
+    if (params.camera_type == CAMERA_ORTHOGRAPHIC) {
+        o = vec3(ndc * params.ortho_half_extent, 0.0);
+        d = vec3(0.0, 0.0, -1.0);
+    } else {
+        d = normalize(vec3(ndc.x * params.tan_half_fov_y * aspect, ndc.y * params.tan_half_fov_y, -1.0));
+    }
+    origin = (params.camera_to_world * vec4(o, 1.0)).xyz;
+    dir = normalize(mat3(params.camera_to_world) * d);
+}
+
+void record_path(VertexRecord rec[MAX_RECORDED_VERTICES], uint count, inout Rng rng) {
+    // Incident radiance along each vertex's direction, from the back of the path:
+    // L_in(k) = emitted(k) + nee(k+1) + weight(k+1) · L_in(k+1).
+    vec3 l_in = vec3(0.0);
+    for (int k = int(count) - 1; k >= 0; --k) {
+        if (k + 1 < int(count)) l_in = rec[k].emitted + rec[k + 1].nee + rec[k + 1].weight * l_in;
+        else l_in = rec[k].emitted;
+        if (rec[k].pdf > 0.0) {
+            float value = (l_in.x + l_in.y + l_in.z) / (3.0 * rec[k].pdf);
+            guide_record(rec[k].p, rec[k].wi, value, 1.0, vec3(rng_next2(rng), rng_next(rng)));
+        }
+        if ((params.guiding_flags & GUIDE_FLAG_RECORD_NEE) != 0u && rec[k].nee_value > 0.0)
+            guide_record(rec[k].p, rec[k].nee_dir, rec[k].nee_value, 0.0, vec3(rng_next2(rng), rng_next(rng)));
+    }
+}
+
+vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays) {
+    vec3 origin, dir;
+    camera_ray(pixel, rng_next2(rng), origin, dir);
+    rays.camera += 1u;
+    Hit hit = trace_closest(origin, dir, FLT_MAX);
+    if (!hit.valid) return vec3(0.0);
+    Surface s = make_surface(hit, dir);
+    vec3 L = s.emission;
+    vec3 beta = vec3(1.0);
+
+    VertexRecord rec[MAX_RECORDED_VERTICES];
+    uint recorded = 0u;
+    bool record_nee = (params.guiding_flags & GUIDE_FLAG_RECORD_NEE) != 0u;
+
+    for (uint depth = 1u; depth < params.max_depth; ++depth) {
+        DirectionSampler d = direction_sampler(s);
+        DirectionSample ds = sample_direction(s, d, rng);
+        bool hit_next = false;
+        Hit next;
+        Surface ns;
+        if (ds.valid) {
+            rays.bounce += 1u;
+            next = trace_closest(offset_ray(s.p, s.ng), ds.wi, FLT_MAX);
+            hit_next = next.valid;
+            if (hit_next) ns = make_surface(next, ds.wi);
+        }
+
+        NeeResult nee = NEE_MODE == NEE_RIS ? nee_ris(s, d, ds, hit_next, ns, next.t, rng, rays.shadow)
+                                            : nee_single(s, d, rng, rays.shadow);
+        L += beta * nee.contribution;
+
+        vec3 emitted = vec3(0.0);
+        vec3 emitted_recorded = vec3(0.0);
+        if (hit_next && max3(ns.emission) > 0.0) {
+            float w = emission_weight(ns, ds.wi, next.t, ds.pdf);
+            emitted = ns.emission * w;
+            // Without NEE records, direct light reaches the guide through hits alone.
+            emitted_recorded = record_nee ? emitted : ns.emission;
+        }
+        L += beta * ds.weight * emitted;
+
+        // Russian roulette (off unless rr_depth > 0).
+        vec3 weight = ds.weight;
+        bool alive = ds.valid && hit_next;
+        if (alive && params.rr_depth > 0u && depth >= params.rr_depth) {
+            float q = min(max3(beta * weight), 0.95);
+            if (rng_next(rng) >= q) alive = false;
+            else weight /= q;
+        }
+
+        if (TRAINING && recorded < MAX_RECORDED_VERTICES) {
+            VertexRecord r;
+            r.p = s.p;
+            r.wi = ds.wi;
+            r.pdf = ds.valid ? ds.pdf : 0.0;
+            r.weight = weight;
+            r.nee = nee.contribution;
+            r.emitted = emitted_recorded;
+            r.nee_dir = nee.record_dir;
+            r.nee_value = nee.record_value;
+            rec[recorded++] = r;
+        }
+        if (!alive) break;
+        beta *= weight;
+        s = ns;
+    }
+    if (TRAINING) record_path(rec, recorded, rng);
+    return L;
+}
+
+void main() {
+    uvec2 local = gl_GlobalInvocationID.xy;
+    if (local.x >= pc.tile_size.x || local.y >= pc.tile_size.y) return;
+    uvec2 pixel = pc.tile_origin + local;
+    if (pixel.x >= params.width || pixel.y >= params.height) return;
+    uint pixel_index = pixel.y * params.width + pixel.x;
+
+    RayCounts rays = RayCounts(0u, 0u, 0u);
+    uint nonfinite = 0u;
+    u64vec3 sum = u64vec3(0ul);
+    for (uint i = 0u; i < pc.sample_count; ++i) {
+        uint sample_index = pc.sample_begin + i;
+        Rng rng = rng_init(pixel_index, sample_index, params.seed);
+        vec3 L = trace_path(pixel, rng, rays);
+        if (!all_finite(L) || any(lessThan(L, vec3(0.0)))) {
+            nonfinite += 1u;
+            continue;
+        }
+        // Fixed point: each sample is rounded alone, so sums do not depend on how the
+        // samples were split into dispatches.
+        sum += u64vec3(min(L, vec3(1e9)) * FILM_FIXED_SCALE + 0.5);
+    }
+    uint base = 3u * pixel_index;
+    film[base + 0u] += sum.x;
+    film[base + 1u] += sum.y;
+    film[base + 2u] += sum.z;
+
+    atomicAdd(stats[STAT_CAMERA_RAYS], rays.camera);
+    atomicAdd(stats[STAT_BOUNCE_RAYS], rays.bounce);
+    atomicAdd(stats[STAT_SHADOW_RAYS], rays.shadow);
+    if (nonfinite > 0u) atomicAdd(stats[STAT_NONFINITE_SAMPLES], nonfinite);
+}
+
+#endif

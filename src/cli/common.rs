@@ -1,0 +1,185 @@
+//! Argument groups shared by the commands that render (render, reference, compare,
+//! bench), and the setup they all do from them.
+
+use anyhow::{Context, Result};
+use lanterna::render::session::{self, DeviceOptions, LoadedScene};
+use lanterna::render::{LightSource, Method, RenderSettings};
+use lanterna::scene::{Camera, CameraOverride};
+use lanterna::shaders::ShaderSource;
+use lanterna::vk::DeviceSelector;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// The scene and the view.
+#[derive(clap::Args, Clone, Debug)]
+pub struct SceneArgs {
+    /// glTF 2.0 scene (.gltf or .glb).
+    pub scene: PathBuf,
+    /// Camera of the file to use, by index or name (default: the first).
+    #[arg(long)]
+    pub camera: Option<String>,
+    /// View from EYE to TARGET, as `ex,ey,ez,tx,ty,tz`, replacing the file's camera.
+    #[arg(long, value_name = "EYE,TARGET", value_parser = parse_look_at)]
+    pub look_at: Option<[f32; 6]>,
+    /// Vertical field of view in degrees (overrides the camera's).
+    #[arg(long)]
+    pub fov: Option<f32>,
+    /// Image width (default 512, or derived from --height and the camera's aspect).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height (default: from the width and the camera's aspect ratio).
+    #[arg(long)]
+    pub height: Option<u32>,
+}
+
+fn parse_look_at(s: &str) -> Result<[f32; 6], String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("`{p}`: {e}")))
+        .collect::<Result<_, _>>()?;
+    v.try_into()
+        .map_err(|_| "expected six numbers: ex,ey,ez,tx,ty,tz".to_string())
+        .and_then(|a: [f32; 6]| {
+            if a.iter().all(|x| x.is_finite()) {
+                Ok(a)
+            } else {
+                Err("numbers must be finite".into())
+            }
+        })
+}
+
+/// The device and the kernels.
+#[derive(clap::Args, Clone, Debug)]
+pub struct DeviceArgs {
+    /// Vulkan device by index or name substring (see `lanterna info`); default: the best
+    /// capable one, hardware GPUs before lavapipe.
+    #[arg(long, default_value = "auto")]
+    pub device: DeviceSelector,
+    /// Turn on Vulkan validation layers (also LANTERNA_VALIDATION=1).
+    #[arg(long)]
+    pub validation: bool,
+    /// Compile the GLSL kernels from this directory at run time instead of using the
+    /// SPIR-V built into the binary (for shader debugging).
+    #[arg(long, value_name = "DIR")]
+    pub shader_dir: Option<PathBuf>,
+}
+
+impl DeviceArgs {
+    pub fn options(&self) -> DeviceOptions {
+        DeviceOptions {
+            selector: self.device.clone(),
+            validation: self.validation,
+            debug_printf: false,
+        }
+    }
+
+    pub fn shaders(&self) -> ShaderSource {
+        match &self.shader_dir {
+            Some(d) => ShaderSource::Directory(d.clone()),
+            None => ShaderSource::Builtin,
+        }
+    }
+}
+
+/// The estimator.
+#[derive(clap::Args, Clone, Debug)]
+pub struct MethodArgs {
+    /// pt: NEE from the light source distribution; ris: NEE by streaming RIS; guided:
+    /// SD-tree path guiding with pt's NEE; guided-ris: guiding trained by RIS NEE.
+    #[arg(long, default_value = "pt")]
+    pub method: Method,
+    /// Maximum path length in segments, counted like Mitsuba's max_depth: 1 renders only
+    /// emitters seen directly, 2 adds direct lighting, 3 one bounce of indirect light, …
+    #[arg(long, default_value_t = 4)]
+    pub max_depth: u32,
+    /// Russian roulette from this path segment on (0 = off).
+    #[arg(long, default_value_t = 0)]
+    pub rr_depth: u32,
+    /// Seed of the random numbers (the image is a deterministic function of it).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u32,
+    /// Light source distribution for NEE and RIS candidates.
+    #[arg(long, alias = "ris-source", value_enum, default_value = "uniform")]
+    pub source: LightSource,
+    /// RIS candidates per NEE (M).
+    #[arg(long, default_value_t = 32)]
+    pub ris_candidates: u32,
+    /// Guiding: probability of sampling the BSDF instead of the SD-tree.
+    #[arg(long, default_value_t = 0.5)]
+    pub bsdf_fraction: f32,
+    /// Guiding: share of the budget (spp, or time with --time) spent training.
+    #[arg(long, default_value_t = 0.3)]
+    pub train_fraction: f32,
+    /// Guiding: do not record NEE contributions in the SD-tree (guiding then learns
+    /// direct light from direction-sampled hits alone).
+    #[arg(long)]
+    pub no_record_nee: bool,
+}
+
+impl MethodArgs {
+    pub fn settings(&self, width: u32, height: u32) -> RenderSettings {
+        RenderSettings {
+            method: self.method,
+            width,
+            height,
+            max_depth: self.max_depth,
+            rr_depth: self.rr_depth,
+            seed: self.seed,
+            source: self.source,
+            ris_candidates: self.ris_candidates,
+            bsdf_fraction: self.bsdf_fraction,
+            record_nee: !self.no_record_nee,
+            ..RenderSettings::default()
+        }
+    }
+}
+
+/// Load the scene and choose the view.
+pub fn load(args: &SceneArgs) -> Result<(LoadedScene, Camera, u32, u32)> {
+    let loaded = session::load_scene(&args.scene)?;
+    let o = CameraOverride {
+        look_at: args.look_at.map(|v| {
+            (
+                glam::Vec3::new(v[0], v[1], v[2]),
+                glam::Vec3::new(v[3], v[4], v[5]),
+            )
+        }),
+        up: None,
+        fov_degrees: args.fov,
+    };
+    let camera = session::choose_camera(&loaded.scene, args.camera.as_deref(), &o)?;
+    let (w, h) = session::resolution(&camera, args.width, args.height);
+    if w == 0 || h == 0 || w as u64 * h as u64 > 1 << 28 {
+        anyhow::bail!("image size {w}×{h} is out of range");
+    }
+    Ok((loaded, camera, w, h))
+}
+
+static CANCELLED: AtomicBool = AtomicBool::new(false);
+
+/// Ctrl-C stops the render at the next chunk boundary (the image is still written); a
+/// second Ctrl-C exits at once.
+pub fn cancel_flag() -> &'static AtomicBool {
+    static INSTALLED: std::sync::Once = std::sync::Once::new();
+    INSTALLED.call_once(|| {
+        let _ = ctrlc::set_handler(|| {
+            if CANCELLED.swap(true, Ordering::SeqCst) {
+                eprintln!("\ninterrupted twice: exiting without writing");
+                std::process::exit(130);
+            }
+            eprintln!(
+                "\ninterrupted: finishing the current chunk and writing what has been rendered"
+            );
+        });
+    });
+    &CANCELLED
+}
+
+/// Make sure an output's directory exists.
+pub fn ensure_parent(path: &std::path::Path) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create directory {}", dir.display()))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,489 @@
+//! glTF 2.0 → [`Scene`]: buffers and images loaded one by one (so that an error names
+//! the file or URI at fault), the node hierarchy flattened into instances, primitives
+//! deduplicated into one BLAS each, materials converted, cameras and punctual lights
+//! placed in world space.
+
+use super::camera::{Camera, Projection};
+use super::material::{self, TextureRegistry};
+use super::{Instance, MeshPrimitive, Scene, SceneError};
+use crate::gpu;
+use glam::{Mat4, Vec3};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Loader options.
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {}
+
+pub fn load(path: &Path, _options: &LoadOptions) -> Result<Scene, SceneError> {
+    let started = std::time::Instant::now();
+    let invalid = |message: String| SceneError::Invalid {
+        path: path.to_path_buf(),
+        message,
+    };
+    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let gltf::Gltf { document, mut blob } =
+        gltf::Gltf::from_slice(&bytes).map_err(|e| SceneError::Gltf {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+    let base = path.parent().unwrap_or(Path::new("."));
+
+    // Buffers, one at a time so a failure names the buffer.
+    let mut buffers = Vec::new();
+    for b in document.buffers() {
+        let what = match b.source() {
+            gltf::buffer::Source::Bin => "the GLB binary chunk".to_string(),
+            gltf::buffer::Source::Uri(u) if u.starts_with("data:") => {
+                format!("buffer {} (data URI)", b.index())
+            }
+            gltf::buffer::Source::Uri(u) => {
+                format!("buffer {} (`{}`)", b.index(), base.join(u).display())
+            }
+        };
+        let data = gltf::buffer::Data::from_source_and_blob(b.source(), Some(base), &mut blob)
+            .map_err(|e| invalid(format!("cannot load {what}: {e}")))?;
+        if data.len() < b.length() {
+            return Err(invalid(format!(
+                "{what} has {} bytes but declares {}",
+                data.len(),
+                b.length()
+            )));
+        }
+        buffers.push(data);
+    }
+
+    // Images that materials use (decoded lazily: unused images are skipped).
+    let mut used_images = vec![false; document.images().len()];
+    for m in document.materials() {
+        let pbr = m.pbr_metallic_roughness();
+        let mut mark = |t: Option<gltf::Texture<'_>>| {
+            if let Some(t) = t {
+                used_images[t.source().index()] = true;
+            }
+        };
+        mark(pbr.base_color_texture().map(|i| i.texture()));
+        mark(pbr.metallic_roughness_texture().map(|i| i.texture()));
+        mark(m.normal_texture().map(|i| i.texture()));
+        mark(m.emissive_texture().map(|i| i.texture()));
+        if let Some(sg) = m.pbr_specular_glossiness() {
+            mark(sg.diffuse_texture().map(|i| i.texture()));
+        }
+    }
+    let mut images = Vec::new();
+    for img in document.images() {
+        if !used_images[img.index()] {
+            images.push(None);
+            continue;
+        }
+        let what = match img.source() {
+            gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
+                format!("image {} (data URI)", img.index())
+            }
+            gltf::image::Source::Uri { uri, .. } => {
+                format!("image {} (`{}`)", img.index(), base.join(uri).display())
+            }
+            gltf::image::Source::View { .. } => format!("image {} (buffer view)", img.index()),
+        };
+        let data = gltf::image::Data::from_source(img.source(), Some(base), &buffers)
+            .map_err(|e| invalid(format!("cannot load {what}: {e}")))?;
+        images.push(Some(data));
+    }
+
+    // Materials.
+    let mut registry = TextureRegistry {
+        images: &images,
+        slots: HashMap::new(),
+        textures: Vec::new(),
+        warnings: Vec::new(),
+    };
+    let mut materials = Vec::new();
+    let mut material_names = Vec::new();
+    for m in document.materials() {
+        materials.push(material::convert(&m, &mut registry).map_err(invalid)?);
+        material_names.push(
+            m.name()
+                .map(str::to_string)
+                .unwrap_or_else(|| format!("material {}", m.index().unwrap_or(0))),
+        );
+    }
+    let default_material = materials.len() as u32;
+    materials.push(material::default_material());
+    material_names.push("default".into());
+
+    // Flatten the node hierarchy of the default scene.
+    let roots: Vec<gltf::Node<'_>> = match document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    {
+        Some(s) => s.nodes().collect(),
+        None => {
+            let mut is_child = vec![false; document.nodes().len()];
+            for n in document.nodes() {
+                for c in n.children() {
+                    is_child[c.index()] = true;
+                }
+            }
+            document.nodes().filter(|n| !is_child[n.index()]).collect()
+        }
+    };
+    let mut stack: Vec<(gltf::Node<'_>, Mat4, usize)> =
+        roots.into_iter().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+
+    let mut vertices = Vec::new();
+    let mut indices = Vec::new();
+    let mut primitives: Vec<MeshPrimitive> = Vec::new();
+    let mut primitive_ids: HashMap<(usize, usize), Option<u32>> = HashMap::new();
+    let mut instances = Vec::new();
+    let mut cameras = Vec::new();
+    let mut punctual = Vec::new();
+    let mut warnings = std::mem::take(&mut registry.warnings);
+    let textures = std::mem::take(&mut registry.textures);
+
+    while let Some((node, parent, depth)) = stack.pop() {
+        if depth > 256 {
+            return Err(invalid(
+                "node hierarchy deeper than 256 levels (a cycle?)".into(),
+            ));
+        }
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let world = parent * local;
+        if !world.is_finite() {
+            return Err(invalid(format!(
+                "node {} has a non-finite transform",
+                node_name(&node)
+            )));
+        }
+        for c in node.children() {
+            stack.push((c, world, depth + 1));
+        }
+        if let Some(cam) = node.camera() {
+            let projection = match cam.projection() {
+                gltf::camera::Projection::Perspective(p) => Projection::Perspective {
+                    yfov: p.yfov(),
+                    aspect: p.aspect_ratio(),
+                },
+                gltf::camera::Projection::Orthographic(o) => Projection::Orthographic {
+                    xmag: o.xmag().abs(),
+                    ymag: o.ymag().abs(),
+                },
+            };
+            cameras.push((
+                node.index(),
+                Camera {
+                    name: cam
+                        .name()
+                        .or(node.name())
+                        .map(str::to_string)
+                        .unwrap_or_else(|| format!("camera {}", cam.index())),
+                    to_world: world,
+                    projection,
+                },
+            ));
+        }
+        if let Some(light) = node.light() {
+            punctual.push(convert_light(&light, &world, &node_name(&node)).map_err(&invalid)?);
+        }
+        let Some(mesh) = node.mesh() else { continue };
+        let det = world.determinant();
+        if det.abs() < 1e-20 {
+            warnings.push(format!(
+                "node {} has a singular transform; skipped",
+                node_name(&node)
+            ));
+            continue;
+        }
+        for prim in mesh.primitives() {
+            let key = (mesh.index(), prim.index());
+            let id = match primitive_ids.get(&key) {
+                Some(id) => *id,
+                None => {
+                    let id = load_primitive(
+                        &mesh,
+                        &prim,
+                        &buffers,
+                        default_material,
+                        &materials,
+                        &mut vertices,
+                        &mut indices,
+                        &mut warnings,
+                    )
+                    .map_err(&invalid)?
+                    .map(|p| {
+                        primitives.push(p);
+                        (primitives.len() - 1) as u32
+                    });
+                    primitive_ids.insert(key, id);
+                    id
+                }
+            };
+            if let Some(id) = id {
+                instances.push(Instance {
+                    primitive: id,
+                    transform: world,
+                    node_name: node_name(&node),
+                });
+            }
+        }
+    }
+    // Traversal order is a stack; keep files' declaration order for stable indices.
+    cameras.sort_by_key(|(node, _)| *node);
+    let cameras: Vec<Camera> = cameras.into_iter().map(|(_, c)| c).collect();
+
+    if instances.is_empty() {
+        return Err(SceneError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+
+    // World bounds.
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for inst in &instances {
+        let p = &primitives[inst.primitive as usize];
+        for v in &vertices[p.vertex_offset as usize..(p.vertex_offset + p.vertex_count) as usize] {
+            let w = inst.transform.transform_point3(Vec3::from(v.position));
+            lo = lo.min(w);
+            hi = hi.max(w);
+        }
+    }
+
+    for w in &warnings {
+        log::warn!("{}: {w}", path.display());
+    }
+    let extras = document
+        .as_json()
+        .asset
+        .extras
+        .as_ref()
+        .and_then(|raw| serde_json::from_str(raw.get()).ok());
+    let mut scene = Scene {
+        path: path.to_path_buf(),
+        vertices,
+        indices,
+        primitives,
+        instances,
+        materials,
+        material_names,
+        textures,
+        cameras,
+        punctual,
+        bounds_min: lo,
+        bounds_max: hi,
+        hash: String::new(),
+        extras,
+    };
+    scene.hash = content_hash(&scene);
+    log::info!(
+        "loaded {} in {:.2} s: {} triangles, {} instances, {} materials, {} textures",
+        path.display(),
+        started.elapsed().as_secs_f64(),
+        scene.triangle_count(),
+        scene.instances.len(),
+        scene.materials.len() - 1,
+        scene.textures.len()
+    );
+    Ok(scene)
+}
+
+fn node_name(node: &gltf::Node<'_>) -> String {
+    match node.name() {
+        Some(n) => format!("`{n}`"),
+        None => format!("#{}", node.index()),
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn load_primitive(
+    mesh: &gltf::Mesh<'_>,
+    prim: &gltf::Primitive<'_>,
+    buffers: &[gltf::buffer::Data],
+    default_material: u32,
+    materials: &[gpu::Material],
+    vertices: &mut Vec<gpu::Vertex>,
+    indices: &mut Vec<u32>,
+    warnings: &mut Vec<String>,
+) -> Result<Option<MeshPrimitive>, String> {
+    use gltf::mesh::Mode;
+    let name = format!(
+        "mesh {} primitive {}",
+        mesh.name()
+            .map(|n| format!("`{n}`"))
+            .unwrap_or_else(|| format!("#{}", mesh.index())),
+        prim.index()
+    );
+    match prim.mode() {
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan => {}
+        other => {
+            warnings.push(format!("{name}: mode {other:?} is not triangles; skipped"));
+            return Ok(None);
+        }
+    }
+    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let positions: Vec<[f32; 3]> = reader
+        .read_positions()
+        .ok_or_else(|| format!("{name} has no POSITION attribute"))?
+        .collect();
+    if positions.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(format!("{name} has non-finite vertex positions"));
+    }
+    let n = positions.len();
+    let normals: Vec<[f32; 3]> = reader
+        .read_normals()
+        .map(|r| r.collect())
+        .unwrap_or_else(|| vec![[0.0; 3]; n]);
+    let tangents: Vec<[f32; 4]> = reader
+        .read_tangents()
+        .map(|r| r.collect())
+        .unwrap_or_else(|| vec![[0.0; 4]; n]);
+    let uv = |set: u32| -> Vec<[f32; 2]> {
+        reader
+            .read_tex_coords(set)
+            .map(|r| r.into_f32().collect())
+            .unwrap_or_else(|| vec![[0.0; 2]; n])
+    };
+    let (uv0, uv1) = (uv(0), uv(1));
+    if [normals.len(), tangents.len(), uv0.len(), uv1.len()]
+        .iter()
+        .any(|&l| l != n)
+    {
+        return Err(format!("{name} has attributes of different lengths"));
+    }
+    if reader.read_colors(0).is_some() {
+        warnings.push(format!("{name}: COLOR_0 vertex colours are ignored"));
+    }
+    let raw_indices: Vec<u32> = match reader.read_indices() {
+        Some(r) => r.into_u32().collect(),
+        None => (0..n as u32).collect(),
+    };
+    let tri: Vec<u32> = match prim.mode() {
+        Mode::Triangles => raw_indices,
+        Mode::TriangleStrip => (2..raw_indices.len())
+            .flat_map(|i| {
+                let (a, b, c) = (raw_indices[i - 2], raw_indices[i - 1], raw_indices[i]);
+                if i % 2 == 0 {
+                    [a, b, c]
+                } else {
+                    [b, a, c]
+                }
+            })
+            .collect(),
+        _ => (2..raw_indices.len())
+            .flat_map(|i| [raw_indices[0], raw_indices[i - 1], raw_indices[i]])
+            .collect(),
+    };
+    let tri_count = tri.len() / 3;
+    if tri_count == 0 {
+        warnings.push(format!("{name} has no triangles; skipped"));
+        return Ok(None);
+    }
+    if let Some(bad) = tri.iter().find(|&&i| i as usize >= n) {
+        return Err(format!("{name} has index {bad} but only {n} vertices"));
+    }
+    let material = prim
+        .material()
+        .index()
+        .map_or(default_material, |i| i as u32);
+    let opaque = materials[material as usize].alpha_mode == gpu::ALPHA_MODE_OPAQUE;
+
+    let vertex_offset = vertices.len() as u32;
+    let index_offset = indices.len() as u32;
+    vertices.extend((0..n).map(|i| {
+        // Zero normals mean "use the geometric normal" (glTF: flat shading when absent).
+        let nrm = normals[i];
+        let len = (nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]).sqrt();
+        let normal = if len.is_finite() && len > 1e-12 {
+            nrm.map(|c| c / len)
+        } else {
+            [0.0; 3]
+        };
+        gpu::Vertex {
+            position: positions[i],
+            normal,
+            tangent: if tangents[i].iter().all(|c| c.is_finite()) {
+                tangents[i]
+            } else {
+                [0.0; 4]
+            },
+            uv0: uv0[i],
+            uv1: uv1[i],
+        }
+    }));
+    indices.extend_from_slice(&tri[..tri_count * 3]);
+    Ok(Some(MeshPrimitive {
+        vertex_offset,
+        vertex_count: n as u32,
+        index_offset,
+        triangle_count: tri_count as u32,
+        material,
+        opaque,
+        name,
+    }))
+}
+
+fn convert_light(
+    light: &gltf::khr_lights_punctual::Light<'_>,
+    world: &Mat4,
+    node: &str,
+) -> Result<gpu::PunctualLight, String> {
+    use gltf::khr_lights_punctual::Kind;
+    let color = light.color();
+    let intensity = light.intensity();
+    if !intensity.is_finite() || intensity < 0.0 || color.iter().any(|c| !c.is_finite() || *c < 0.0)
+    {
+        return Err(format!(
+            "light on node {node} has a non-finite or negative intensity/colour"
+        ));
+    }
+    let position = world.transform_point3(Vec3::ZERO);
+    let direction = world
+        .transform_vector3(Vec3::NEG_Z)
+        .normalize_or(Vec3::NEG_Z);
+    let (kind, cos_inner, cos_outer) = match light.kind() {
+        Kind::Point => (gpu::PUNCTUAL_POINT, 1.0, 1.0),
+        Kind::Directional => (gpu::PUNCTUAL_DIRECTIONAL, 1.0, 1.0),
+        Kind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } => {
+            let outer = outer_cone_angle.clamp(0.0, std::f32::consts::FRAC_PI_2);
+            let inner = inner_cone_angle.clamp(0.0, outer);
+            (gpu::PUNCTUAL_SPOT, inner.cos(), outer.cos())
+        }
+    };
+    Ok(gpu::PunctualLight {
+        position: position.into(),
+        kind,
+        direction: direction.into(),
+        range: light.range().unwrap_or(0.0),
+        intensity: color.map(|c| c * intensity),
+        cos_inner,
+        cos_outer,
+    })
+}
+
+/// FNV-1a over the loaded content: geometry, placement and materials.
+fn content_hash(scene: &Scene) -> String {
+    let mut h: u64 = 0xcbf29ce484222325;
+    let mut eat = |bytes: &[u8]| {
+        for &b in bytes {
+            h ^= b as u64;
+            h = h.wrapping_mul(0x100000001b3);
+        }
+    };
+    eat(bytemuck::cast_slice(&scene.vertices));
+    eat(bytemuck::cast_slice(&scene.indices));
+    eat(bytemuck::cast_slice(&scene.materials));
+    for i in &scene.instances {
+        eat(&i.primitive.to_le_bytes());
+        eat(bytemuck::cast_slice(&i.transform.to_cols_array()));
+    }
+    eat(bytemuck::cast_slice(&scene.punctual));
+    for t in &scene.textures {
+        eat(&t.rgba);
+    }
+    format!("{h:016x}")
+}

@@ -1,0 +1,302 @@
+//! glTF materials → the kernels' `Material`: metallic-roughness with
+//! KHR_materials_specular / emissive_strength / ior / texture_transform, and
+//! KHR_materials_pbrSpecularGlossiness converted to metallic-roughness.
+
+use super::texture::{to_rgba8, TextureData, TextureKey};
+use crate::gpu;
+use crate::vk::{SamplerDesc, TextureFormat, WrapMode};
+use std::collections::HashMap;
+
+/// Collects the textures materials reference and assigns bindless slots.
+pub struct TextureRegistry<'a> {
+    pub images: &'a [Option<gltf::image::Data>],
+    pub slots: HashMap<TextureKey, u32>,
+    pub textures: Vec<TextureData>,
+    pub warnings: Vec<String>,
+}
+
+fn sampler_desc(s: gltf::texture::Sampler<'_>) -> SamplerDesc {
+    use gltf::texture::{MagFilter, WrappingMode as W};
+    let wrap = |w: W| match w {
+        W::Repeat => WrapMode::Repeat,
+        W::MirroredRepeat => WrapMode::MirroredRepeat,
+        W::ClampToEdge => WrapMode::ClampToEdge,
+    };
+    SamplerDesc {
+        wrap_u: wrap(s.wrap_s()),
+        wrap_v: wrap(s.wrap_t()),
+        nearest: s.mag_filter() == Some(MagFilter::Nearest),
+    }
+}
+
+impl TextureRegistry<'_> {
+    /// A texture reference for `texture` read from UV set `tex_coord` with an optional
+    /// KHR_texture_transform (raw JSON, so that every texture slot type is handled alike).
+    fn reference(
+        &mut self,
+        texture: gltf::Texture<'_>,
+        tex_coord: u32,
+        transform: Option<&serde_json::Value>,
+        format: TextureFormat,
+    ) -> gpu::TextureRef {
+        let image = texture.source().index();
+        let key = TextureKey {
+            image,
+            format,
+            sampler: sampler_desc(texture.sampler()),
+        };
+        let slot = match self.slots.get(&key) {
+            Some(&s) => Some(s),
+            None => match self
+                .images
+                .get(image)
+                .and_then(|d| d.as_ref())
+                .and_then(|d| to_rgba8(d).map(|p| (d, p)))
+            {
+                Some((data, rgba)) => {
+                    let slot = self.textures.len() as u32;
+                    self.textures.push(TextureData {
+                        name: texture
+                            .source()
+                            .name()
+                            .map(str::to_string)
+                            .unwrap_or_else(|| format!("image {image}")),
+                        width: data.width,
+                        height: data.height,
+                        rgba,
+                        format,
+                        sampler: key.sampler,
+                    });
+                    self.slots.insert(key, slot);
+                    Some(slot)
+                }
+                None => None,
+            },
+        };
+        let mut r = gpu::TextureRef {
+            index: slot.map_or(-1, |s| s as i32),
+            uv_set: tex_coord,
+            offset: [0.0, 0.0],
+            scale: [1.0, 1.0],
+            rotation: 0.0,
+        };
+        if let Some(t) = transform {
+            let pair = |v: Option<&serde_json::Value>, d: [f32; 2]| {
+                v.and_then(|v| v.as_array())
+                    .filter(|a| a.len() == 2)
+                    .map(|a| {
+                        [
+                            a[0].as_f64().unwrap_or(d[0] as f64) as f32,
+                            a[1].as_f64().unwrap_or(d[1] as f64) as f32,
+                        ]
+                    })
+                    .unwrap_or(d)
+            };
+            r.offset = pair(t.get("offset"), [0.0, 0.0]);
+            r.scale = pair(t.get("scale"), [1.0, 1.0]);
+            r.rotation = t.get("rotation").and_then(|v| v.as_f64()).unwrap_or(0.0) as f32;
+            if let Some(tc) = t.get("texCoord").and_then(|v| v.as_u64()) {
+                r.uv_set = tc as u32;
+            }
+        }
+        if r.uv_set > 1 {
+            self.warnings.push(format!(
+                "texture uses TEXCOORD_{}; only sets 0 and 1 are supported, using 0",
+                r.uv_set
+            ));
+            r.uv_set = 0;
+        }
+        r
+    }
+
+    fn info(
+        &mut self,
+        info: Option<gltf::texture::Info<'_>>,
+        format: TextureFormat,
+    ) -> gpu::TextureRef {
+        match info {
+            Some(i) => {
+                let transform = i.extension_value("KHR_texture_transform").cloned();
+                self.reference(i.texture(), i.tex_coord(), transform.as_ref(), format)
+            }
+            None => no_texture(),
+        }
+    }
+}
+
+fn no_texture() -> gpu::TextureRef {
+    gpu::TextureRef {
+        index: -1,
+        uv_set: 0,
+        offset: [0.0, 0.0],
+        scale: [1.0, 1.0],
+        rotation: 0.0,
+    }
+}
+
+/// glTF's default material (used by primitives without one).
+pub fn default_material() -> gpu::Material {
+    gpu::Material {
+        base_color: [1.0; 4],
+        emission: [0.0; 3],
+        metallic: 1.0,
+        roughness: 1.0,
+        specular: 1.0,
+        specular_color: [1.0; 3],
+        normal_scale: 1.0,
+        alpha_cutoff: 0.5,
+        alpha_mode: gpu::ALPHA_MODE_OPAQUE,
+        flags: 0,
+        ior: 1.5,
+        base_color_tex: no_texture(),
+        metallic_roughness_tex: no_texture(),
+        normal_tex: no_texture(),
+        emissive_tex: no_texture(),
+    }
+}
+
+/// Convert one glTF material.
+pub fn convert(
+    m: &gltf::Material<'_>,
+    reg: &mut TextureRegistry<'_>,
+) -> Result<gpu::Material, String> {
+    let name = m
+        .name()
+        .map(str::to_string)
+        .unwrap_or_else(|| format!("#{}", m.index().unwrap_or(0)));
+    let mut out = default_material();
+    let pbr = m.pbr_metallic_roughness();
+    out.base_color = pbr.base_color_factor();
+    out.metallic = pbr.metallic_factor();
+    out.roughness = pbr.roughness_factor();
+    out.base_color_tex = reg.info(pbr.base_color_texture(), TextureFormat::Srgb);
+    out.metallic_roughness_tex = reg.info(pbr.metallic_roughness_texture(), TextureFormat::Linear);
+
+    if let Some(sg) = m.pbr_specular_glossiness() {
+        let (base, metallic) =
+            specular_glossiness_to_metallic(sg.diffuse_factor(), sg.specular_factor());
+        out.base_color = base;
+        out.metallic = metallic;
+        out.roughness = 1.0 - sg.glossiness_factor();
+        out.base_color_tex = reg.info(sg.diffuse_texture(), TextureFormat::Srgb);
+        out.metallic_roughness_tex = no_texture();
+        let mut note = format!(
+            "material `{name}` uses KHR_materials_pbrSpecularGlossiness: converted to metallic-roughness"
+        );
+        if sg.specular_glossiness_texture().is_some() {
+            note.push_str(" (its specular-glossiness texture is ignored; factors only)");
+        }
+        reg.warnings.push(note);
+    }
+
+    if let Some(spec) = m.specular() {
+        out.specular = spec.specular_factor();
+        out.specular_color = spec.specular_color_factor();
+        if spec.specular_texture().is_some() || spec.specular_color_texture().is_some() {
+            reg.warnings.push(format!(
+                "material `{name}`: KHR_materials_specular textures are ignored (factors used)"
+            ));
+        }
+    }
+    if let Some(ior) = m
+        .extension_value("KHR_materials_ior")
+        .and_then(|v| v.get("ior"))
+        .and_then(|v| v.as_f64())
+    {
+        out.ior = ior as f32;
+    }
+
+    if let Some(n) = m.normal_texture() {
+        let transform = n.extension_value("KHR_texture_transform").cloned();
+        out.normal_tex = reg.reference(
+            n.texture(),
+            n.tex_coord(),
+            transform.as_ref(),
+            TextureFormat::Linear,
+        );
+        out.normal_scale = n.scale();
+    }
+
+    let strength = m.emissive_strength();
+    let factor = m.emissive_factor();
+    if strength.is_none() && factor.iter().any(|&c| c > 1.0) {
+        reg.warnings.push(format!(
+            "material `{name}`: emissiveFactor {factor:?} exceeds 1 without KHR_materials_emissive_strength \
+             (not glTF-conformant); accepted as given"
+        ));
+    }
+    let strength = strength.unwrap_or(1.0);
+    out.emission = factor.map(|c| c * strength);
+    out.emissive_tex = reg.info(m.emissive_texture(), TextureFormat::Srgb);
+
+    out.alpha_cutoff = m.alpha_cutoff().unwrap_or(0.5);
+    out.alpha_mode = match m.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => gpu::ALPHA_MODE_OPAQUE,
+        gltf::material::AlphaMode::Mask => gpu::ALPHA_MODE_MASK,
+        gltf::material::AlphaMode::Blend => gpu::ALPHA_MODE_BLEND,
+    };
+    if m.double_sided() {
+        out.flags |= gpu::MATERIAL_FLAG_DOUBLE_SIDED;
+    }
+
+    // Reject values that would poison the image.
+    let scalars = [
+        out.metallic,
+        out.roughness,
+        out.specular,
+        out.normal_scale,
+        out.alpha_cutoff,
+        out.ior,
+    ];
+    let finite = out
+        .base_color
+        .iter()
+        .chain(&out.emission)
+        .chain(&out.specular_color)
+        .chain(&scalars)
+        .all(|v| v.is_finite());
+    if !finite {
+        return Err(format!(
+            "material `{name}` has a non-finite (NaN or infinite) factor"
+        ));
+    }
+    if out.emission.iter().any(|&c| c < 0.0) || out.base_color.iter().any(|&c| c < 0.0) {
+        return Err(format!(
+            "material `{name}` has a negative colour or emission factor"
+        ));
+    }
+    out.metallic = out.metallic.clamp(0.0, 1.0);
+    out.roughness = out.roughness.clamp(0.0, 1.0);
+    out.specular = out.specular.max(0.0);
+    Ok(out)
+}
+
+/// The usual specular-glossiness → metallic-roughness conversion: solve for the metallic
+/// value that reproduces the specular reflectance given a dielectric F0 of 0.04, then
+/// blend the base colour between the diffuse- and specular-derived estimates.
+fn specular_glossiness_to_metallic(diffuse: [f32; 4], specular: [f32; 3]) -> ([f32; 4], f32) {
+    const DIELECTRIC: f32 = 0.04;
+    let brightness =
+        |c: [f32; 3]| (0.299 * c[0] * c[0] + 0.587 * c[1] * c[1] + 0.114 * c[2] * c[2]).sqrt();
+    let d = [diffuse[0], diffuse[1], diffuse[2]];
+    let max_spec = specular[0].max(specular[1]).max(specular[2]);
+    let pd = brightness(d);
+    let ps = brightness(specular);
+    let metallic = if ps < DIELECTRIC {
+        0.0
+    } else {
+        let a = DIELECTRIC;
+        let b = pd * (1.0 - max_spec) / (1.0 - DIELECTRIC) + ps - 2.0 * DIELECTRIC;
+        let c = DIELECTRIC - ps;
+        let disc = (b * b - 4.0 * a * c).max(0.0);
+        ((-b + disc.sqrt()) / (2.0 * a)).clamp(0.0, 1.0)
+    };
+    let from_diffuse =
+        d.map(|c| c * (1.0 - max_spec) / (1.0 - DIELECTRIC) / (1.0 - metallic).max(1e-4));
+    let from_specular = specular.map(|c| (c - DIELECTRIC * (1.0 - metallic)) / metallic.max(1e-4));
+    let t = metallic * metallic;
+    let base = std::array::from_fn::<f32, 3, _>(|i| {
+        (from_diffuse[i] + (from_specular[i] - from_diffuse[i]) * t).clamp(0.0, 1.0)
+    });
+    ([base[0], base[1], base[2], diffuse[3]], metallic)
+}

@@ -1,0 +1,114 @@
+//! Scene statistics for `lanterna info SCENE`.
+
+use super::Scene;
+use crate::lights::LightTable;
+use std::fmt;
+
+/// What a scene holds and roughly what it will take on the device.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SceneStats {
+    pub triangles: u64,
+    pub unique_triangles: u64,
+    pub vertices: u64,
+    pub instances: u64,
+    pub primitives: u64,
+    pub materials: u64,
+    pub textures: u64,
+    pub cameras: u64,
+    pub light_models: u64,
+    pub emissive_triangles: u64,
+    pub dropped_emissive_triangles: u64,
+    pub punctual_lights: u64,
+    pub total_power: f64,
+    pub bounds_min: [f32; 3],
+    pub bounds_max: [f32; 3],
+    /// Estimated device memory in bytes: buffers, textures and acceleration structures.
+    pub device_bytes: u64,
+}
+
+impl SceneStats {
+    pub fn new(scene: &Scene, lights: &LightTable) -> SceneStats {
+        let size = |n: usize, each: usize| (n * each) as u64;
+        let unique_triangles: u64 = scene
+            .primitives
+            .iter()
+            .map(|p| p.triangle_count as u64)
+            .sum();
+        let buffers = size(
+            scene.vertices.len(),
+            std::mem::size_of::<crate::gpu::Vertex>(),
+        ) + size(scene.indices.len(), 4)
+            + size(
+                scene.instances.len(),
+                std::mem::size_of::<crate::gpu::Instance>() + 64,
+            )
+            + size(
+                scene.materials.len(),
+                std::mem::size_of::<crate::gpu::Material>(),
+            )
+            + size(
+                lights.triangles.len(),
+                std::mem::size_of::<crate::gpu::LightTriangle>() + 12,
+            )
+            + size(lights.triangle_light_index.len(), 4);
+        let textures: u64 = scene.textures.iter().map(|t| t.rgba.len() as u64).sum();
+        // BVH nodes and leaves: a conservative ~64 bytes per triangle plus instances.
+        let accel = unique_triangles * 64 + scene.instances.len() as u64 * 128;
+        SceneStats {
+            triangles: scene.triangle_count(),
+            unique_triangles,
+            vertices: scene.vertices.len() as u64,
+            instances: scene.instances.len() as u64,
+            primitives: scene.primitives.len() as u64,
+            materials: scene.materials.len() as u64 - 1,
+            textures: scene.textures.len() as u64,
+            cameras: scene.cameras.len() as u64,
+            light_models: lights.models.len() as u64,
+            emissive_triangles: lights.triangles.len() as u64,
+            dropped_emissive_triangles: lights.dropped_triangles,
+            punctual_lights: scene.punctual.len() as u64,
+            total_power: lights.total_power,
+            bounds_min: scene.bounds_min.into(),
+            bounds_max: scene.bounds_max.into(),
+            device_bytes: buffers + textures + accel,
+        }
+    }
+}
+
+impl fmt::Display for SceneStats {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
+        writeln!(
+            f,
+            "triangles           {} ({} unique)",
+            self.triangles, self.unique_triangles
+        )?;
+        writeln!(f, "vertices            {}", self.vertices)?;
+        writeln!(
+            f,
+            "instances           {} of {} primitives",
+            self.instances, self.primitives
+        )?;
+        writeln!(f, "materials           {}", self.materials)?;
+        writeln!(f, "textures            {}", self.textures)?;
+        writeln!(f, "cameras             {}", self.cameras)?;
+        writeln!(f, "light models        {}", self.light_models)?;
+        writeln!(
+            f,
+            "emissive triangles  {} ({} dropped: zero area or emission)",
+            self.emissive_triangles, self.dropped_emissive_triangles
+        )?;
+        writeln!(f, "punctual lights     {}", self.punctual_lights)?;
+        writeln!(f, "total power         {:.4e}", self.total_power)?;
+        writeln!(
+            f,
+            "bounds              {:?} .. {:?}",
+            self.bounds_min, self.bounds_max
+        )?;
+        write!(
+            f,
+            "device memory       ~{:.1} MiB (estimate)",
+            mib(self.device_bytes)
+        )
+    }
+}

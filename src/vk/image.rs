@@ -1,0 +1,247 @@
+//! Sampled 2D textures (RGBA8, sRGB or linear) and samplers.
+
+use super::buffer::Buffer;
+use super::device::Device;
+use super::{CheckVk, Result, VkError};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+/// Texel encoding of an RGBA8 texture.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TextureFormat {
+    /// Colour data (base colour, emission): decoded from sRGB by the sampler.
+    Srgb,
+    /// Non-colour data (normals, metallic-roughness): used as stored.
+    Linear,
+}
+
+/// A sampled RGBA8 image with one mip level.
+pub struct Texture {
+    device: Arc<Device>,
+    pub image: vk::Image,
+    pub view: vk::ImageView,
+    allocation: Option<Allocation>,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Texture {
+    /// Upload `rgba` (width × height × 4 bytes) into a new texture.
+    pub fn new(
+        device: &Arc<Device>,
+        width: u32,
+        height: u32,
+        rgba: &[u8],
+        format: TextureFormat,
+        name: &str,
+    ) -> Result<Texture> {
+        assert_eq!(
+            rgba.len(),
+            (width * height * 4) as usize,
+            "texture {name}: wrong byte count"
+        );
+        let vk_format = match format {
+            TextureFormat::Srgb => vk::Format::R8G8B8A8_SRGB,
+            TextureFormat::Linear => vk::Format::R8G8B8A8_UNORM,
+        };
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(vk_format)
+            .extent(vk::Extent3D {
+                width,
+                height,
+                depth: 1,
+            })
+            .mip_levels(1)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        let image = unsafe { device.raw.create_image(&info, None) }.check("vkCreateImage")?;
+        let requirements = unsafe { device.raw.get_image_memory_requirements(image) };
+        let allocation = device
+            .allocator()
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location: MemoryLocation::GpuOnly,
+                linear: false,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|source| {
+                unsafe { device.raw.destroy_image(image, None) };
+                VkError::Alloc {
+                    name: name.to_string(),
+                    source,
+                }
+            })?;
+        unsafe {
+            device
+                .raw
+                .bind_image_memory(image, allocation.memory(), allocation.offset())
+        }
+        .check("vkBindImageMemory")?;
+        device.set_name(image, name);
+
+        let mut staging = Buffer::new(
+            device,
+            rgba.len() as u64,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+            &format!("{name} (staging)"),
+        )?;
+        staging.write_mapped(0, rgba);
+        let range = vk::ImageSubresourceRange::default()
+            .aspect_mask(vk::ImageAspectFlags::COLOR)
+            .level_count(1)
+            .layer_count(1);
+        device.submit(|cmd| unsafe {
+            let to_dst = [vk::ImageMemoryBarrier::default()
+                .old_layout(vk::ImageLayout::UNDEFINED)
+                .new_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+                .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .image(image)
+                .subresource_range(range)];
+            device.raw.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::TOP_OF_PIPE,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &to_dst,
+            );
+            let copy = [vk::BufferImageCopy::default()
+                .image_subresource(
+                    vk::ImageSubresourceLayers::default()
+                        .aspect_mask(vk::ImageAspectFlags::COLOR)
+                        .layer_count(1),
+                )
+                .image_extent(vk::Extent3D {
+                    width,
+                    height,
+                    depth: 1,
+                })];
+            device.raw.cmd_copy_buffer_to_image(
+                cmd,
+                staging.raw,
+                image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &copy,
+            );
+            let to_read = [vk::ImageMemoryBarrier::default()
+                .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+                .new_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+                .dst_access_mask(vk::AccessFlags::SHADER_READ)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .image(image)
+                .subresource_range(range)];
+            device.raw.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &to_read,
+            );
+        })?;
+
+        let view_info = vk::ImageViewCreateInfo::default()
+            .image(image)
+            .view_type(vk::ImageViewType::TYPE_2D)
+            .format(vk_format)
+            .subresource_range(range);
+        let view =
+            unsafe { device.raw.create_image_view(&view_info, None) }.check("vkCreateImageView")?;
+        device.set_name(view, name);
+        Ok(Texture {
+            device: device.clone(),
+            image,
+            view,
+            allocation: Some(allocation),
+            width,
+            height,
+        })
+    }
+}
+
+impl Drop for Texture {
+    fn drop(&mut self) {
+        unsafe {
+            self.device.raw.destroy_image_view(self.view, None);
+            self.device.raw.destroy_image(self.image, None);
+        }
+        if let Some(a) = self.allocation.take() {
+            let _ = self.device.allocator().free(a);
+        }
+    }
+}
+
+/// Texture coordinate wrapping (glTF sampler wrapS / wrapT).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum WrapMode {
+    #[default]
+    Repeat,
+    MirroredRepeat,
+    ClampToEdge,
+}
+
+/// Sampler parameters (glTF sampler).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub struct SamplerDesc {
+    pub wrap_u: WrapMode,
+    pub wrap_v: WrapMode,
+    /// Nearest-neighbour magnification/minification instead of bilinear.
+    pub nearest: bool,
+}
+
+/// A sampler object.
+pub struct Sampler {
+    device: Arc<Device>,
+    pub raw: vk::Sampler,
+    pub desc: SamplerDesc,
+}
+
+impl Sampler {
+    pub fn new(device: &Arc<Device>, desc: SamplerDesc) -> Result<Sampler> {
+        let mode = |w: WrapMode| match w {
+            WrapMode::Repeat => vk::SamplerAddressMode::REPEAT,
+            WrapMode::MirroredRepeat => vk::SamplerAddressMode::MIRRORED_REPEAT,
+            WrapMode::ClampToEdge => vk::SamplerAddressMode::CLAMP_TO_EDGE,
+        };
+        let filter = if desc.nearest {
+            vk::Filter::NEAREST
+        } else {
+            vk::Filter::LINEAR
+        };
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(filter)
+            .min_filter(filter)
+            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+            .address_mode_u(mode(desc.wrap_u))
+            .address_mode_v(mode(desc.wrap_v))
+            .address_mode_w(vk::SamplerAddressMode::REPEAT)
+            .max_lod(0.0);
+        let raw = unsafe { device.raw.create_sampler(&info, None) }.check("vkCreateSampler")?;
+        device.set_name(raw, &format!("sampler {desc:?}"));
+        Ok(Sampler {
+            device: device.clone(),
+            raw,
+            desc,
+        })
+    }
+}
+
+impl Drop for Sampler {
+    fn drop(&mut self) {
+        unsafe { self.device.raw.destroy_sampler(self.raw, None) };
+    }
+}
