@@ -107,13 +107,14 @@ bool shadow_test(Surface s, LightSample ls, inout uint shadow_rays) {
 // One light sample from the source distribution, MIS-weighted against direction sampling.
 NeeResult nee_single(Surface s, DirectionSampler d, inout Rng rng, inout uint shadow_rays) {
     NeeResult r = nee_none();
+    if (params.strategy == STRATEGY_BSDF_ONLY) return r;
     LightSample ls = sample_light(s.p, rng_next4(rng));
     r.chosen_model = light_model_of(ls);
     if (!(ls.pdf > 0.0) || max3(ls.Le_G) <= 0.0) return r;
     vec3 f = surface_bsdf_eval(s, ls.wi);
     if (max3(f) <= 0.0) return r;
     float w = 1.0;
-    if (ls.area) {
+    if (ls.area && params.strategy == STRATEGY_MIS) {
         float p_light = ls.pdf * ls.dist * ls.dist / max(ls.cos_y, 1e-12);
         w = power_heuristic(p_light, direction_pdf(s, d, ls.wi));
     }
@@ -159,7 +160,7 @@ float ris_target(RisContext ctx, inout RisCandidate c) {
 float ris_denominator(RisContext ctx, RisCandidate c, uint M) {
     float q_light = c.from_direction ? light_source_pdf(c.ls.tri) : c.ls.pdf;
     float q_direction = 0.0;
-    if (c.ls.area)
+    if (c.ls.area && params.strategy == STRATEGY_MIS)
         q_direction = direction_pdf(ctx.s, ctx.d, c.ls.wi) * c.ls.cos_y / max(c.ls.dist * c.ls.dist, 1e-20);
     return float(M) * q_light + q_direction;
 }
@@ -171,9 +172,12 @@ float ris_denominator(RisContext ctx, RisCandidate c, uint M) {
 NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_next, Surface next, float next_t,
                   inout Rng rng, inout uint shadow_rays) {
     NeeResult r = nee_none();
+    if (params.strategy == STRATEGY_BSDF_ONLY) return r;
     RisContext ctx = RisContext(s, d);
     RisCandidate extra;
-    bool has_extra = ds.valid && hit_next && max3(next.emission) > 0.0;
+    // Emitters NEE cannot sample (not in the light table) stay with direction sampling.
+    bool has_extra = params.strategy == STRATEGY_MIS && ds.valid && hit_next && max3(next.emission) > 0.0
+        && next.light_tri != INVALID_INDEX;
     if (has_extra) {
         extra.ls.wi = ds.wi;
         extra.ls.dist = next_t;
@@ -203,9 +207,10 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
 // MIS weight of emission reached by direction sampling from a vertex whose direction
 // pdf was `dir_pdf` (see the header comment).
 float emission_weight(Surface next, vec3 wi, float t, float dir_pdf) {
-    if (NEE_MODE == NEE_RIS) return 0.0;
     float q = light_source_pdf(next.light_tri);
-    if (q <= 0.0) return 1.0;
+    // Emitters NEE cannot sample are found by direction sampling alone.
+    if (q <= 0.0 || params.strategy == STRATEGY_BSDF_ONLY) return 1.0;
+    if (params.strategy == STRATEGY_NEE_ONLY || NEE_MODE == NEE_RIS) return 0.0;
     float cos_y = abs(dot(next.ng, wi));
     float p_light = q * t * t / max(cos_y, 1e-12);
     return power_heuristic(dir_pdf, p_light);

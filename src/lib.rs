@@ -15,4 +15,6 @@ pub mod lights;
 pub mod render;
 pub mod scene;
 pub mod shaders;
+pub mod stats;
+pub mod testing;
 pub mod vk;

@@ -29,6 +29,12 @@
 #define NEE_UNIFORM 0u
 #define NEE_RIS 1u
 
+// Direct-light estimation (FrameParams.strategy): both techniques MIS-combined, or NEE
+// alone, or direction sampling alone. All three converge to the same image.
+#define STRATEGY_MIS 0u
+#define STRATEGY_NEE_ONLY 1u
+#define STRATEGY_BSDF_ONLY 2u
+
 // RIS candidate sources (FrameParams.ris_source).
 #define RIS_SOURCE_UNIFORM 0u
 #define RIS_SOURCE_POWER 1u

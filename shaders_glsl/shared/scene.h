@@ -118,6 +118,7 @@ struct FrameParams {
     uint debug_pixel;          // y * width + x, INVALID_INDEX when not tracing a pixel
     uint debug_sample;         // sample index to trace, INVALID_INDEX for all
     float scene_radius;
+    uint strategy;             // STRATEGY_*: MIS, or one technique alone (debugging, tests)
 };
 
 // Push constants of one dispatch: a tile of pixels and a range of sample indices.

@@ -3,7 +3,7 @@
 
 use anyhow::{Context, Result};
 use lanterna::render::session::{self, DeviceOptions, LoadedScene};
-use lanterna::render::{LightSource, Method, RenderSettings};
+use lanterna::render::{LightSource, Method, RenderSettings, Strategy};
 use lanterna::scene::{Camera, CameraOverride};
 use lanterna::shaders::ShaderSource;
 use lanterna::vk::DeviceSelector;
@@ -114,6 +114,10 @@ pub struct MethodArgs {
     /// direct light from direction-sampled hits alone).
     #[arg(long)]
     pub no_record_nee: bool,
+    /// Direct light from NEE and direction sampling combined by MIS, or from one of them
+    /// alone (a debugging switch: all three converge to the same image).
+    #[arg(long, value_enum, default_value = "mis")]
+    pub strategy: Strategy,
 }
 
 impl MethodArgs {
@@ -129,6 +133,7 @@ impl MethodArgs {
             ris_candidates: self.ris_candidates,
             bsdf_fraction: self.bsdf_fraction,
             record_nee: !self.no_record_nee,
+            strategy: self.strategy,
             ..RenderSettings::default()
         }
     }

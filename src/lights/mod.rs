@@ -9,6 +9,7 @@
 //! probability with which NEE would have chosen the same point (for MIS).
 
 pub mod alias;
+pub mod reservoir;
 
 use crate::gpu;
 use crate::scene::{Scene, SceneError};

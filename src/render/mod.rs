@@ -13,7 +13,7 @@ mod settings;
 
 pub use film::Film;
 pub use gpu_scene::GpuScene;
-pub use settings::{LightSource, Method, RenderSettings};
+pub use settings::{LightSource, Method, RenderSettings, Strategy};
 
 use crate::gpu;
 use crate::lights::LightTable;
@@ -243,6 +243,11 @@ impl Renderer {
             debug_pixel: gpu::INVALID_INDEX,
             debug_sample: gpu::INVALID_INDEX,
             scene_radius: self.scene_radius,
+            strategy: match s.strategy {
+                Strategy::Mis => gpu::STRATEGY_MIS,
+                Strategy::Nee => gpu::STRATEGY_NEE_ONLY,
+                Strategy::Bsdf => gpu::STRATEGY_BSDF_ONLY,
+            },
         }
     }
 

@@ -67,6 +67,21 @@ pub enum LightSource {
     Power,
 }
 
+/// How direct light is estimated: both techniques combined by MIS (the default), or one
+/// alone (for debugging and for tests that check all three agree).
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum Strategy {
+    Mis,
+    /// Next-event estimation only (emission reached by direction sampling is dropped
+    /// unless NEE cannot sample that emitter).
+    Nee,
+    /// Direction sampling only (no NEE).
+    Bsdf,
+}
+
 /// Parameters of one render that the kernel sees.
 #[derive(Clone, Debug)]
 pub struct RenderSettings {
@@ -89,6 +104,7 @@ pub struct RenderSettings {
     pub spatial_jitter: bool,
     /// Guiding: box directional filter (else nearest).
     pub directional_box: bool,
+    pub strategy: Strategy,
 }
 
 impl Default for RenderSettings {
@@ -106,6 +122,7 @@ impl Default for RenderSettings {
             record_nee: true,
             spatial_jitter: true,
             directional_box: true,
+            strategy: Strategy::Mis,
         }
     }
 }

@@ -1,0 +1,185 @@
+//! RIS and reservoir sampling in the real GLSL (test kernels on lavapipe), checked
+//! against exact distributions computed on the CPU.
+
+use lanterna::{stats, testing};
+
+const TRIALS: u32 = 1 << 18;
+
+fn run_reservoir(weights: &[f32], seed: u32) -> Vec<u32> {
+    let push: Vec<u8> = [weights.len() as u32, TRIALS, seed]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let out = testing::run_kernel(
+        "tests/reservoir",
+        bytemuck::cast_slice(weights),
+        &[],
+        TRIALS as usize * 4,
+        &push,
+        TRIALS,
+    )
+    .expect("reservoir kernel");
+    bytemuck::pod_collect_to_vec(&out)
+}
+
+#[test]
+fn reservoir_selects_in_proportion_to_weights() {
+    let weights = [0.5f32, 0.0, 3.0, 1.0, 0.25, 7.0, 2.0, 1e-3];
+    let kept = run_reservoir(&weights, 7);
+    let mut counts = vec![0.0; weights.len()];
+    for k in kept {
+        assert!((k as usize) < weights.len(), "nothing kept");
+        counts[k as usize] += 1.0;
+    }
+    assert_eq!(counts[1], 0.0, "a zero-weight candidate was kept");
+    let total: f32 = weights.iter().sum();
+    let expected: Vec<f64> = weights
+        .iter()
+        .map(|&w| (w / total) as f64 * TRIALS as f64)
+        .collect();
+    let chi = stats::chi_square(&counts, &expected, 5.0);
+    assert!(
+        chi.p_value > 1e-4,
+        "selection frequencies differ from w/Σw: {chi:?}"
+    );
+    testing::assert_no_validation_errors();
+}
+
+/// Exact probability that RIS with `m` candidates from `q` selects each light, for
+/// targets `p`: sum over all multisets of candidates (multinomial counts n) of
+/// P(n) · n_j w_j / Σ n_i w_i with w_i = p_i / q_i.
+fn exact_selection(p: &[f64], q: &[f64], m: u32) -> Vec<f64> {
+    let l = p.len();
+    let w: Vec<f64> = p
+        .iter()
+        .zip(q)
+        .map(|(p, q)| if *q > 0.0 { p / q } else { 0.0 })
+        .collect();
+    let ln_fact: Vec<f64> = (0..=m).map(|k| stats::ln_gamma(k as f64 + 1.0)).collect();
+    let mut out = vec![0.0; l];
+    let mut n = vec![0u32; l];
+    fn rec(
+        i: usize,
+        left: u32,
+        n: &mut Vec<u32>,
+        q: &[f64],
+        w: &[f64],
+        ln_fact: &[f64],
+        m: u32,
+        out: &mut [f64],
+    ) {
+        if i + 1 == n.len() {
+            n[i] = left;
+            let mut ln_p = ln_fact[m as usize];
+            for (k, &c) in n.iter().enumerate() {
+                if c > 0 {
+                    if q[k] == 0.0 {
+                        return;
+                    }
+                    ln_p += c as f64 * q[k].ln() - ln_fact[c as usize];
+                }
+            }
+            let total: f64 = n.iter().zip(w).map(|(&c, w)| c as f64 * w).sum();
+            if total > 0.0 {
+                for k in 0..n.len() {
+                    out[k] += ln_p.exp() * n[k] as f64 * w[k] / total;
+                }
+            }
+            return;
+        }
+        for c in 0..=left {
+            n[i] = c;
+            rec(i + 1, left - c, n, q, w, ln_fact, m, out);
+        }
+    }
+    rec(0, m, &mut n, q, &w, &ln_fact, m, &mut out);
+    out
+}
+
+fn run_ris(p: &[f32], q: &[f32], m: u32, seed: u32) -> Vec<(u32, f32)> {
+    let push: Vec<u8> = [p.len() as u32, TRIALS, seed, m]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let out = testing::run_kernel(
+        "tests/ris",
+        bytemuck::cast_slice(p),
+        bytemuck::cast_slice(q),
+        TRIALS as usize * 8,
+        &push,
+        TRIALS,
+    )
+    .expect("ris kernel");
+    let words: Vec<u32> = bytemuck::pod_collect_to_vec(&out);
+    words
+        .chunks_exact(2)
+        .map(|c| (c[0], f32::from_bits(c[1])))
+        .collect()
+}
+
+// Five lights whose target and source disagree strongly (as a uniform source does for
+// lights of very different power).
+const TARGET: [f32; 5] = [0.2, 5.0, 1.0, 0.05, 2.5];
+const SOURCE: [f32; 5] = [0.2, 0.2, 0.2, 0.2, 0.2];
+
+#[test]
+fn ris_selection_matches_exact_distribution_for_each_m() {
+    let p: Vec<f64> = TARGET.iter().map(|&v| v as f64).collect();
+    let q: Vec<f64> = SOURCE.iter().map(|&v| v as f64).collect();
+    let p_norm: Vec<f64> = p.iter().map(|v| v / p.iter().sum::<f64>()).collect();
+    let mut last_tv = f64::INFINITY;
+    for (i, m) in [1u32, 4, 32].into_iter().enumerate() {
+        let exact = exact_selection(&p, &q, m);
+        let picks = run_ris(&TARGET, &SOURCE, m, 100 + i as u32);
+        let mut counts = vec![0.0; p.len()];
+        for (index, _) in &picks {
+            counts[*index as usize] += 1.0;
+        }
+        let expected: Vec<f64> = exact.iter().map(|e| e * TRIALS as f64).collect();
+        let chi = stats::chi_square(&counts, &expected, 5.0);
+        assert!(
+            chi.p_value > 1e-4,
+            "M = {m}: selections differ from the exact RIS distribution: {chi:?}"
+        );
+        // As M grows the selection approaches p̂ / Σp̂.
+        let tv: f64 = 0.5
+            * exact
+                .iter()
+                .zip(&p_norm)
+                .map(|(a, b)| (a - b).abs())
+                .sum::<f64>();
+        assert!(
+            tv < last_tv,
+            "M = {m}: total variation to p̂/Σp̂ did not shrink ({tv} ≥ {last_tv})"
+        );
+        last_tv = tv;
+    }
+    assert!(
+        last_tv < 0.02,
+        "M = 32 is still far from p̂/Σp̂ (TV {last_tv})"
+    );
+    testing::assert_no_validation_errors();
+}
+
+#[test]
+fn ris_contribution_weight_is_unbiased() {
+    // E[f(Y)·W] = Σ f over the source's support, for any f that is zero where p̂ is.
+    let f = [1.0f64, 2.0, 0.5, 4.0, 1.0];
+    for m in [1u32, 8] {
+        let picks = run_ris(&TARGET, &SOURCE, m, 200 + m);
+        // Batch means make the t-test's normal approximation sound.
+        let batch = 1024;
+        let estimates: Vec<f64> = picks
+            .chunks(batch)
+            .map(|c| {
+                c.iter()
+                    .map(|&(i, w)| f[i as usize] * w as f64)
+                    .sum::<f64>()
+                    / c.len() as f64
+            })
+            .collect();
+        let p = stats::t_test_against(&estimates, f.iter().sum());
+        assert!(p > 1e-4, "M = {m}: RIS estimate biased (p = {p})");
+    }
+    testing::assert_no_validation_errors();
+}
