@@ -165,11 +165,15 @@ pub fn run(args: Args) -> Result<()> {
         .collect();
     let image = Image::from_sums(width, height, sums, meta)?;
     common::ensure_parent(&output)?;
-    image_io::write_exr(&output, &image)
+    let written = image_io::write_exr(&output, &image)
         .with_context(|| format!("cannot write {}", output.display()))?;
+    if written.nonfinite > 0 {
+        // The kernel drops non-finite samples, so this would be a film bug: say so loudly.
+        log::error!("{}: {} non-finite pixel values", output.display(), written.nonfinite);
+    }
     if let Some(p) = &png {
         common::ensure_parent(p)?;
-        image_io::write_png(p, &image, args.exposure)
+        let _ = image_io::write_png(p, &image, args.exposure)
             .with_context(|| format!("cannot write {}", p.display()))?;
     }
 
