@@ -80,3 +80,133 @@ pub fn run_kernel(
     })?;
     output.read_bytes(output_bytes as u64)
 }
+
+// ---- image statistics ------------------------------------------------------------------
+
+use crate::lights::LightTable;
+use crate::render::{RenderSettings, RenderStats, Renderer};
+use crate::scene::{Camera, Scene};
+use std::sync::atomic::AtomicBool;
+
+/// A render split into independent batches (disjoint ranges of sample indices): the
+/// spread of the batch means estimates the variance of the estimator.
+pub struct Batches {
+    pub width: u32,
+    pub height: u32,
+    /// Mean linear RGB of each batch, row-major.
+    pub images: Vec<Vec<f32>>,
+}
+
+/// Render `batches` × `spp` samples with `settings`.
+pub fn render_batches(scene: &Scene, camera: &Camera, settings: RenderSettings, batches: u32, spp: u64) -> Batches {
+    let lights = LightTable::build(scene).expect("light table");
+    let mut r = Renderer::new(device(), scene, &lights, camera.clone(), settings.clone(), Default::default())
+        .expect("renderer");
+    let cancel = AtomicBool::new(false);
+    let mut stats = RenderStats::default();
+    let mut images = Vec::new();
+    for b in 0..batches as u64 {
+        r.clear_film().unwrap();
+        r.render_samples(b * spp, spp, false, &cancel, &mut |_| {}, &mut stats).expect("render");
+        images.push(r.film().unwrap().mean());
+    }
+    assert_eq!(stats.nonfinite_samples, 0, "the kernel produced non-finite samples");
+    Batches {
+        width: settings.width,
+        height: settings.height,
+        images,
+    }
+}
+
+impl Batches {
+    /// Per block of `block`×`block` pixels and channel: the batch means.
+    pub fn block_estimates(&self, block: u32) -> Vec<Vec<f64>> {
+        let bx = self.width.div_ceil(block);
+        let by = self.height.div_ceil(block);
+        let mut out = vec![vec![0.0; self.images.len()]; (bx * by * 3) as usize];
+        let mut counts = vec![0.0; (bx * by) as usize];
+        for y in 0..self.height {
+            for x in 0..self.width {
+                counts[((y / block) * bx + x / block) as usize] += 1.0;
+            }
+        }
+        for (k, img) in self.images.iter().enumerate() {
+            for y in 0..self.height {
+                for x in 0..self.width {
+                    let b = ((y / block) * bx + x / block) as usize;
+                    let p = ((y * self.width + x) * 3) as usize;
+                    for c in 0..3 {
+                        out[b * 3 + c][k] += img[p + c] as f64 / counts[b];
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Mean over all batches.
+    pub fn mean(&self) -> Vec<f64> {
+        let n = self.images.len() as f64;
+        let mut m = vec![0.0; self.images[0].len()];
+        for img in &self.images {
+            for (a, &b) in m.iter_mut().zip(img) {
+                *a += b as f64 / n;
+            }
+        }
+        m
+    }
+
+    /// Estimates of the mean over a rectangle (x0, y0, w, h), one per batch, per channel.
+    pub fn region_estimates(&self, x0: u32, y0: u32, w: u32, h: u32) -> [Vec<f64>; 3] {
+        let mut out = [Vec::new(), Vec::new(), Vec::new()];
+        for img in &self.images {
+            let mut s = [0.0f64; 3];
+            for y in y0..y0 + h {
+                for x in x0..x0 + w {
+                    let p = ((y * self.width + x) * 3) as usize;
+                    for c in 0..3 {
+                        s[c] += img[p + c] as f64;
+                    }
+                }
+            }
+            for c in 0..3 {
+                out[c].push(s[c] / (w * h) as f64);
+            }
+        }
+        out
+    }
+}
+
+/// Two renders agree in expectation: Welch's t-test per block and channel, with the
+/// family-wise significance `alpha` split over all comparisons (Šidák). Returns the
+/// smallest p-value and where it was, or an error describing the worst block.
+pub fn assert_same_expectation(a: &Batches, b: &Batches, block: u32, alpha: f64) -> f64 {
+    let ea = a.block_estimates(block);
+    let eb = b.block_estimates(block);
+    let threshold = crate::stats::sidak(alpha, ea.len());
+    let mut worst = (1.0f64, 0usize);
+    for (i, (x, y)) in ea.iter().zip(&eb).enumerate() {
+        // Blocks that are identically zero in both (sky) carry no information.
+        if x.iter().chain(y).all(|v| *v == 0.0) {
+            continue;
+        }
+        let p = crate::stats::welch(x, y);
+        if p < worst.0 {
+            worst = (p, i);
+        }
+    }
+    let (p, i) = worst;
+    if p < threshold {
+        let bx = a.width.div_ceil(block);
+        let (blk, c) = (i / 3, i % 3);
+        let (ma, _) = crate::stats::mean_var(&ea[i]);
+        let (mb, _) = crate::stats::mean_var(&eb[i]);
+        panic!(
+            "renders differ: block ({}, {}) channel {c}: means {ma} vs {mb}, p = {p:.3e} < {threshold:.3e} (Šidák over {} tests at α = {alpha})",
+            (blk as u32 % bx) * block,
+            (blk as u32 / bx) * block,
+            ea.len()
+        );
+    }
+    p
+}

@@ -1,8 +1,88 @@
-//! `lanterna info` (not yet implemented).
+//! `lanterna info [SCENE]`: the Vulkan devices and what each supports of what lanterna
+//! needs, or a scene's statistics.
+
+use anyhow::{Context, Result};
+use lanterna::render::session;
+use lanterna::scene::SceneStats;
+use lanterna::vk::{Device, Instance, InstanceOptions};
+use std::path::PathBuf;
 
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Print this scene's statistics instead of the device list.
+    pub scene: Option<PathBuf>,
+    /// Print as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
 
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`lanterna info` is not implemented yet")
+pub fn run(args: Args) -> Result<()> {
+    match &args.scene {
+        Some(path) => scene_info(path, args.json),
+        None => device_info(args.json),
+    }
+}
+
+fn scene_info(path: &std::path::Path, json: bool) -> Result<()> {
+    let loaded = session::load_scene(path)?;
+    let stats = SceneStats::new(&loaded.scene, &loaded.lights);
+    if json {
+        println!("{}", serde_json::to_string_pretty(&stats)?);
+    } else {
+        println!("{}", path.display());
+        println!("{stats}");
+        if !loaded.scene.cameras.is_empty() {
+            let names: Vec<String> = loaded
+                .scene
+                .cameras
+                .iter()
+                .enumerate()
+                .map(|(i, c)| format!("{i}: {}", c.name))
+                .collect();
+            println!("cameras             {}", names.join(", "));
+        }
+    }
+    Ok(())
+}
+
+fn device_info(json: bool) -> Result<()> {
+    let instance = Instance::new(&InstanceOptions::from_env()).context("cannot create a Vulkan instance")?;
+    let devices = Device::list(&instance)?;
+    if json {
+        let list: Vec<serde_json::Value> = devices
+            .iter()
+            .map(|d| {
+                serde_json::json!({
+                    "index": d.index,
+                    "name": d.name,
+                    "type": d.kind_name(),
+                    "api_version": d.api_version_string(),
+                    "driver": d.driver,
+                    "missing": d.features.missing(),
+                    "features": d.features.rows().iter().map(|(n, ok, _)| (n.to_string(), *ok)).collect::<std::collections::BTreeMap<_, _>>(),
+                })
+            })
+            .collect();
+        println!("{}", serde_json::to_string_pretty(&list)?);
+        return Ok(());
+    }
+    if devices.is_empty() {
+        println!("no Vulkan devices (run scripts/setup to install lavapipe)");
+    }
+    for d in &devices {
+        let missing = d.features.missing();
+        println!(
+            "[{}] {} — {}, Vulkan {}, {}: {}",
+            d.index,
+            d.name,
+            d.kind_name(),
+            d.api_version_string(),
+            d.driver,
+            if missing.is_empty() { "can render" } else { "cannot render" }
+        );
+        for (name, ok, need) in d.features.rows() {
+            println!("      {} {name:<34} ({need})", if ok { "yes" } else { " no" });
+        }
+    }
+    Ok(())
 }

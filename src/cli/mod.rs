@@ -60,6 +60,11 @@ pub fn main() -> ExitCode {
         Command::Merge(a) => merge::run(a),
         Command::Compare(a) => compare::run(a),
     };
+    // With validation on, a validation error is a failure even if the command finished.
+    let result = result.and_then(|()| match lanterna::vk::validation_error_count() {
+        0 => Ok(()),
+        n => Err(anyhow::anyhow!("{n} Vulkan validation error(s) were reported (see the log)")),
+    });
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

@@ -1,0 +1,166 @@
+//! Bad input gives a clear error naming the file and the problem, a non-zero exit, no
+//! panic, and no output file.
+
+use std::path::Path;
+use std::process::Command;
+
+fn lanterna(args: &[&str]) -> (bool, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_lanterna"))
+        .args(args)
+        .env("LANTERNA_VALIDATION", "1")
+        .output()
+        .expect("run lanterna");
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!stderr.contains("panicked"), "lanterna panicked:\n{stderr}");
+    (out.status.success(), stderr)
+}
+
+/// A minimal valid scene: one emitting quad seen by a camera. Tests break one part of it.
+fn scene_json(emissive: &str, camera: bool, buffer_uri: &str) -> String {
+    let cameras = if camera {
+        r#","cameras":[{"type":"perspective","perspective":{"yfov":0.8,"znear":0.1}}]"#
+    } else {
+        ""
+    };
+    let camera_node = if camera { r#",{"camera":0,"translation":[0,0,3]}"# } else { "" };
+    let nodes = if camera { "[0,1]" } else { "[0]" };
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},
+        "buffers":[{{"uri":"{buffer_uri}","byteLength":60}}],
+        "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":12}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[-1,-1,0],"max":[1,1,0]}},
+                     {{"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"}}],
+        "materials":[{{"emissiveFactor":{emissive}}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1,"material":0}}]}}],
+        "nodes":[{{"mesh":0}}{camera_node}],
+        "scenes":[{{"nodes":{nodes}}}],"scene":0{cameras}}}"#
+    )
+}
+
+fn write_scene(dir: &Path, json: &str) -> String {
+    let mut bin = Vec::new();
+    for p in [[-1f32, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]] {
+        for c in p {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    std::fs::write(dir.join("quad.bin"), bin).unwrap();
+    let path = dir.join("scene.gltf");
+    std::fs::write(&path, json).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+fn render_fails_with(scene: &str, dir: &Path, expected: &[&str]) {
+    let out = dir.join("out.exr");
+    let (ok, stderr) = lanterna(&["render", scene, "--spp", "1", "--width", "8", "-o", out.to_str().unwrap(), "--quiet"]);
+    assert!(!ok, "render succeeded on bad input {scene}");
+    for e in expected {
+        assert!(stderr.contains(e), "error message lacks `{e}`:\n{stderr}");
+    }
+    assert!(!out.exists() && !out.with_extension("png").exists(), "an output file was written");
+    let leftovers: Vec<_> = std::fs::read_dir(dir).unwrap().filter_map(|e| e.ok()).filter(|e| e.file_name().to_string_lossy().contains("tmp")).collect();
+    assert!(leftovers.is_empty(), "temporary files left behind");
+}
+
+#[test]
+fn the_valid_scene_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), &scene_json("[1,1,1]", true, "quad.bin"));
+    let out = dir.path().join("ok.exr");
+    let (ok, stderr) = lanterna(&["render", &scene, "--spp", "1", "--width", "8", "-o", out.to_str().unwrap(), "--quiet"]);
+    assert!(ok, "{stderr}");
+    assert!(out.exists());
+}
+
+#[test]
+fn missing_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("nope.gltf");
+    render_fails_with(missing.to_str().unwrap(), dir.path(), &["nope.gltf", "cannot read"]);
+}
+
+#[test]
+fn malformed_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("broken.gltf");
+    std::fs::write(&path, "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [").unwrap();
+    render_fails_with(path.to_str().unwrap(), dir.path(), &["broken.gltf", "not a valid glTF"]);
+}
+
+#[test]
+fn truncated_glb() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cut.glb");
+    std::fs::write(&path, b"glTF\x02\x00\x00\x00\xff\x00\x00\x00").unwrap();
+    render_fails_with(path.to_str().unwrap(), dir.path(), &["cut.glb"]);
+}
+
+#[test]
+fn missing_buffer() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), &scene_json("[1,1,1]", true, "gone.bin"));
+    render_fails_with(&scene, dir.path(), &["scene.gltf", "gone.bin"]);
+}
+
+#[test]
+fn no_camera() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), &scene_json("[1,1,1]", false, "quad.bin"));
+    render_fails_with(&scene, dir.path(), &["scene.gltf", "no camera", "--look-at"]);
+}
+
+#[test]
+fn no_camera_but_look_at_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), &scene_json("[1,1,1]", false, "quad.bin"));
+    let out = dir.path().join("ok.exr");
+    let (ok, stderr) = lanterna(&[
+        "render", &scene, "--look-at", "0,0,3,0,0,0", "--spp", "1", "--width", "8", "-o", out.to_str().unwrap(), "--quiet",
+    ]);
+    assert!(ok, "{stderr}");
+}
+
+#[test]
+fn zero_lights() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), &scene_json("[0,0,0]", true, "quad.bin"));
+    render_fails_with(&scene, dir.path(), &["scene.gltf", "no lights"]);
+}
+
+#[test]
+fn non_finite_emission() {
+    let dir = tempfile::tempdir().unwrap();
+    // 1e39 overflows f32 to infinity.
+    let scene = write_scene(dir.path(), &scene_json("[1e39,1,1]", true, "quad.bin"));
+    render_fails_with(&scene, dir.path(), &["scene.gltf", "non-finite"]);
+}
+
+#[test]
+fn unknown_camera() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), &scene_json("[1,1,1]", true, "quad.bin"));
+    let out = dir.path().join("x.exr");
+    let (ok, stderr) = lanterna(&["render", &scene, "--camera", "closeup", "--spp", "1", "-o", out.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(stderr.contains("closeup") && stderr.contains("0: `camera 0`"), "{stderr}");
+}
+
+#[test]
+fn bad_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), &scene_json("[1,1,1]", true, "quad.bin"));
+    for args in [
+        vec!["render", scene.as_str(), "--spp", "0"],
+        vec!["render", scene.as_str(), "--max-depth", "0", "--spp", "1"],
+        vec!["render", scene.as_str(), "--method", "magic"],
+        vec!["render", scene.as_str(), "--time", "-3"],
+        vec!["render", scene.as_str(), "--look-at", "1,2,3"],
+    ] {
+        let (ok, stderr) = lanterna(&args);
+        assert!(!ok, "{args:?} succeeded");
+        assert!(stderr.contains("error"), "{args:?}: {stderr}");
+    }
+}
