@@ -98,19 +98,36 @@ pub struct Batches {
 }
 
 /// Render `batches` × `spp` samples with `settings`.
-pub fn render_batches(scene: &Scene, camera: &Camera, settings: RenderSettings, batches: u32, spp: u64) -> Batches {
+pub fn render_batches(
+    scene: &Scene,
+    camera: &Camera,
+    settings: RenderSettings,
+    batches: u32,
+    spp: u64,
+) -> Batches {
     let lights = LightTable::build(scene).expect("light table");
-    let mut r = Renderer::new(device(), scene, &lights, camera.clone(), settings.clone(), Default::default())
-        .expect("renderer");
+    let mut r = Renderer::new(
+        device(),
+        scene,
+        &lights,
+        camera.clone(),
+        settings.clone(),
+        Default::default(),
+    )
+    .expect("renderer");
     let cancel = AtomicBool::new(false);
     let mut stats = RenderStats::default();
     let mut images = Vec::new();
     for b in 0..batches as u64 {
         r.clear_film().unwrap();
-        r.render_samples(b * spp, spp, false, &cancel, &mut |_| {}, &mut stats).expect("render");
+        r.render_samples(b * spp, spp, false, &cancel, &mut |_| {}, &mut stats)
+            .expect("render");
         images.push(r.film().unwrap().mean());
     }
-    assert_eq!(stats.nonfinite_samples, 0, "the kernel produced non-finite samples");
+    assert_eq!(
+        stats.nonfinite_samples, 0,
+        "the kernel produced non-finite samples"
+    );
     Batches {
         width: settings.width,
         height: settings.height,

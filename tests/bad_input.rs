@@ -22,7 +22,11 @@ fn scene_json(emissive: &str, camera: bool, buffer_uri: &str) -> String {
     } else {
         ""
     };
-    let camera_node = if camera { r#",{"camera":0,"translation":[0,0,3]}"# } else { "" };
+    let camera_node = if camera {
+        r#",{"camera":0,"translation":[0,0,3]}"#
+    } else {
+        ""
+    };
     let nodes = if camera { "[0,1]" } else { "[0]" };
     format!(
         r#"{{"asset":{{"version":"2.0"}},
@@ -39,7 +43,12 @@ fn scene_json(emissive: &str, camera: bool, buffer_uri: &str) -> String {
 
 fn write_scene(dir: &Path, json: &str) -> String {
     let mut bin = Vec::new();
-    for p in [[-1f32, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]] {
+    for p in [
+        [-1f32, -1.0, 0.0],
+        [1.0, -1.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [-1.0, 1.0, 0.0],
+    ] {
         for c in p {
             bin.extend_from_slice(&c.to_le_bytes());
         }
@@ -55,13 +64,30 @@ fn write_scene(dir: &Path, json: &str) -> String {
 
 fn render_fails_with(scene: &str, dir: &Path, expected: &[&str]) {
     let out = dir.join("out.exr");
-    let (ok, stderr) = lanterna(&["render", scene, "--spp", "1", "--width", "8", "-o", out.to_str().unwrap(), "--quiet"]);
+    let (ok, stderr) = lanterna(&[
+        "render",
+        scene,
+        "--spp",
+        "1",
+        "--width",
+        "8",
+        "-o",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
     assert!(!ok, "render succeeded on bad input {scene}");
     for e in expected {
         assert!(stderr.contains(e), "error message lacks `{e}`:\n{stderr}");
     }
-    assert!(!out.exists() && !out.with_extension("png").exists(), "an output file was written");
-    let leftovers: Vec<_> = std::fs::read_dir(dir).unwrap().filter_map(|e| e.ok()).filter(|e| e.file_name().to_string_lossy().contains("tmp")).collect();
+    assert!(
+        !out.exists() && !out.with_extension("png").exists(),
+        "an output file was written"
+    );
+    let leftovers: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains("tmp"))
+        .collect();
     assert!(leftovers.is_empty(), "temporary files left behind");
 }
 
@@ -70,7 +96,17 @@ fn the_valid_scene_renders() {
     let dir = tempfile::tempdir().unwrap();
     let scene = write_scene(dir.path(), &scene_json("[1,1,1]", true, "quad.bin"));
     let out = dir.path().join("ok.exr");
-    let (ok, stderr) = lanterna(&["render", &scene, "--spp", "1", "--width", "8", "-o", out.to_str().unwrap(), "--quiet"]);
+    let (ok, stderr) = lanterna(&[
+        "render",
+        &scene,
+        "--spp",
+        "1",
+        "--width",
+        "8",
+        "-o",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
     assert!(ok, "{stderr}");
     assert!(out.exists());
 }
@@ -79,7 +115,11 @@ fn the_valid_scene_renders() {
 fn missing_file() {
     let dir = tempfile::tempdir().unwrap();
     let missing = dir.path().join("nope.gltf");
-    render_fails_with(missing.to_str().unwrap(), dir.path(), &["nope.gltf", "cannot read"]);
+    render_fails_with(
+        missing.to_str().unwrap(),
+        dir.path(),
+        &["nope.gltf", "cannot read"],
+    );
 }
 
 #[test]
@@ -87,7 +127,11 @@ fn malformed_json() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("broken.gltf");
     std::fs::write(&path, "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [").unwrap();
-    render_fails_with(path.to_str().unwrap(), dir.path(), &["broken.gltf", "not a valid glTF"]);
+    render_fails_with(
+        path.to_str().unwrap(),
+        dir.path(),
+        &["broken.gltf", "not a valid glTF"],
+    );
 }
 
 #[test]
@@ -109,7 +153,11 @@ fn missing_buffer() {
 fn no_camera() {
     let dir = tempfile::tempdir().unwrap();
     let scene = write_scene(dir.path(), &scene_json("[1,1,1]", false, "quad.bin"));
-    render_fails_with(&scene, dir.path(), &["scene.gltf", "no camera", "--look-at"]);
+    render_fails_with(
+        &scene,
+        dir.path(),
+        &["scene.gltf", "no camera", "--look-at"],
+    );
 }
 
 #[test]
@@ -118,7 +166,17 @@ fn no_camera_but_look_at_renders() {
     let scene = write_scene(dir.path(), &scene_json("[1,1,1]", false, "quad.bin"));
     let out = dir.path().join("ok.exr");
     let (ok, stderr) = lanterna(&[
-        "render", &scene, "--look-at", "0,0,3,0,0,0", "--spp", "1", "--width", "8", "-o", out.to_str().unwrap(), "--quiet",
+        "render",
+        &scene,
+        "--look-at",
+        "0,0,3,0,0,0",
+        "--spp",
+        "1",
+        "--width",
+        "8",
+        "-o",
+        out.to_str().unwrap(),
+        "--quiet",
     ]);
     assert!(ok, "{stderr}");
 }
@@ -143,9 +201,21 @@ fn unknown_camera() {
     let dir = tempfile::tempdir().unwrap();
     let scene = write_scene(dir.path(), &scene_json("[1,1,1]", true, "quad.bin"));
     let out = dir.path().join("x.exr");
-    let (ok, stderr) = lanterna(&["render", &scene, "--camera", "closeup", "--spp", "1", "-o", out.to_str().unwrap()]);
+    let (ok, stderr) = lanterna(&[
+        "render",
+        &scene,
+        "--camera",
+        "closeup",
+        "--spp",
+        "1",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
     assert!(!ok);
-    assert!(stderr.contains("closeup") && stderr.contains("0: `camera 0`"), "{stderr}");
+    assert!(
+        stderr.contains("closeup") && stderr.contains("0: `camera 0`"),
+        "{stderr}"
+    );
 }
 
 #[test]

@@ -46,7 +46,8 @@ fn scene_info(path: &std::path::Path, json: bool) -> Result<()> {
 }
 
 fn device_info(json: bool) -> Result<()> {
-    let instance = Instance::new(&InstanceOptions::from_env()).context("cannot create a Vulkan instance")?;
+    let instance =
+        Instance::new(&InstanceOptions::from_env()).context("cannot create a Vulkan instance")?;
     let devices = Device::list(&instance)?;
     if json {
         let list: Vec<serde_json::Value> = devices
@@ -78,10 +79,17 @@ fn device_info(json: bool) -> Result<()> {
             d.kind_name(),
             d.api_version_string(),
             d.driver,
-            if missing.is_empty() { "can render" } else { "cannot render" }
+            if missing.is_empty() {
+                "can render"
+            } else {
+                "cannot render"
+            }
         );
         for (name, ok, need) in d.features.rows() {
-            println!("      {} {name:<34} ({need})", if ok { "yes" } else { " no" });
+            println!(
+                "      {} {name:<34} ({need})",
+                if ok { "yes" } else { " no" }
+            );
         }
     }
     Ok(())

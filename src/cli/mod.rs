@@ -63,7 +63,9 @@ pub fn main() -> ExitCode {
     // With validation on, a validation error is a failure even if the command finished.
     let result = result.and_then(|()| match lanterna::vk::validation_error_count() {
         0 => Ok(()),
-        n => Err(anyhow::anyhow!("{n} Vulkan validation error(s) were reported (see the log)")),
+        n => Err(anyhow::anyhow!(
+            "{n} Vulkan validation error(s) were reported (see the log)"
+        )),
     });
     match result {
         Ok(()) => ExitCode::SUCCESS,

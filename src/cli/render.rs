@@ -169,7 +169,11 @@ pub fn run(args: Args) -> Result<()> {
         .with_context(|| format!("cannot write {}", output.display()))?;
     if written.nonfinite > 0 {
         // The kernel drops non-finite samples, so this would be a film bug: say so loudly.
-        log::error!("{}: {} non-finite pixel values", output.display(), written.nonfinite);
+        log::error!(
+            "{}: {} non-finite pixel values",
+            output.display(),
+            written.nonfinite
+        );
     }
     if let Some(p) = &png {
         common::ensure_parent(p)?;

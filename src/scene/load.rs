@@ -21,9 +21,9 @@ pub fn load(path: &Path, _options: &LoadOptions) -> Result<Scene, SceneError> {
         path: path.to_path_buf(),
         message,
     };
-    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+    let bytes = std::fs::read(path).map_err(|error| SceneError::Io {
         path: path.to_path_buf(),
-        source,
+        error,
     })?;
     let gltf::Gltf { document, mut blob } =
         gltf::Gltf::from_slice(&bytes).map_err(|e| SceneError::Gltf {

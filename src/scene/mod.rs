@@ -24,10 +24,10 @@ use std::path::{Path, PathBuf};
 /// Errors loading a scene. Every variant names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    #[error("{path}: cannot read the scene: {source}")]
+    #[error("{path}: cannot read the scene: {error}")]
     Io {
         path: PathBuf,
-        source: std::io::Error,
+        error: std::io::Error,
     },
     #[error("{path}: not a valid glTF file: {message}")]
     Gltf { path: PathBuf, message: String },

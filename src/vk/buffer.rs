@@ -45,11 +45,11 @@ impl Buffer {
                 linear: true,
                 allocation_scheme: AllocationScheme::GpuAllocatorManaged,
             })
-            .map_err(|source| {
+            .map_err(|error| {
                 unsafe { device.raw.destroy_buffer(raw, None) };
                 VkError::Alloc {
                     name: name.to_string(),
-                    source,
+                    error,
                 }
             })?;
         unsafe {

@@ -421,9 +421,9 @@ impl Device {
             buffer_device_address: true,
             allocation_sizes: Default::default(),
         })
-        .map_err(|source| VkError::Alloc {
+        .map_err(|error| VkError::Alloc {
             name: "allocator".into(),
-            source,
+            error,
         })?;
         let accel = ash::khr::acceleration_structure::Device::new(raw_instance, &raw);
         let debug_utils = instance

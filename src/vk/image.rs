@@ -71,11 +71,11 @@ impl Texture {
                 linear: false,
                 allocation_scheme: AllocationScheme::GpuAllocatorManaged,
             })
-            .map_err(|source| {
+            .map_err(|error| {
                 unsafe { device.raw.destroy_image(image, None) };
                 VkError::Alloc {
                     name: name.to_string(),
-                    source,
+                    error,
                 }
             })?;
         unsafe {

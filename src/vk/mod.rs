@@ -36,10 +36,10 @@ pub enum VkError {
         call: &'static str,
         result: vk::Result,
     },
-    #[error("GPU memory allocation for `{name}` failed: {source}")]
+    #[error("GPU memory allocation for `{name}` failed: {error}")]
     Alloc {
         name: String,
-        source: gpu_allocator::AllocationError,
+        error: gpu_allocator::AllocationError,
     },
     #[error("no Vulkan device found")]
     NoDevice,
