@@ -27,6 +27,7 @@ struct DirectionSample {
     vec3 weight;   // f·cos / pdf
     float pdf;     // mixture pdf (solid angle)
     bool valid;
+    bool guided;   // drawn from the SD-tree rather than the BSDF
 };
 
 DirectionSampler direction_sampler(Surface s) {
@@ -54,7 +55,8 @@ float direction_pdf(Surface s, DirectionSampler d, vec3 wi) {
 DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
     DirectionSample ds;
     vec4 u = rng_next4(rng);
-    if (u.w < d.bsdf_fraction) {
+    ds.guided = u.w >= d.bsdf_fraction;
+    if (!ds.guided) {
         vec3 wi_local;
         bool ok = bsdf_sample(s.bsdf, surface_to_local(s, s.wo), u.xyz, wi_local);
         ds.wi = ok ? surface_to_world(s, wi_local) : s.n;
@@ -72,6 +74,8 @@ DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
     vec3 f = surface_bsdf_eval(s, ds.wi);
     ds.valid = ds.pdf > 0.0 && max3(f) > 0.0;
     ds.weight = ds.valid ? f / ds.pdf : vec3(0.0);
+    TRACE6("  direction (guided=%u) wi=%v3f pdf=%f (bsdf pdf %f, guide share %f) weight=%v3f\n", uint(ds.guided),
+           ds.wi, ds.pdf, surface_bsdf_pdf(s, ds.wi), 1.0 - d.bsdf_fraction, ds.weight);
     return ds;
 }
 
@@ -83,6 +87,8 @@ struct NeeResult {
     vec3 record_dir;     // direction of the light sample
     float record_value;  // mean-RGB incident radiance / pdf along record_dir (0: none)
     uint chosen_model;   // light model NEE picked (AOV), INVALID_INDEX if none
+    bool connected;      // the shadow ray found the light visible
+    float ris_weight;    // RIS contribution weight W (0 without RIS)
 };
 
 NeeResult nee_none() {
@@ -91,6 +97,8 @@ NeeResult nee_none() {
     r.record_dir = vec3(0.0);
     r.record_value = 0.0;
     r.chosen_model = INVALID_INDEX;
+    r.connected = false;
+    r.ris_weight = 0.0;
     return r;
 }
 
@@ -118,9 +126,13 @@ NeeResult nee_single(Surface s, DirectionSampler d, inout Rng rng, inout uint sh
         float p_light = ls.pdf * ls.dist * ls.dist / max(ls.cos_y, 1e-12);
         w = power_heuristic(p_light, direction_pdf(s, d, ls.wi));
     }
-    if (!shadow_test(s, ls, shadow_rays)) return r;
+    bool vis = shadow_test(s, ls, shadow_rays);
+    TRACE6("  nee light model %u tri %u pdf=%f mis=%f visible=%u f=%v3f\n", r.chosen_model, ls.tri, ls.pdf, w, uint(vis), f);
+    if (!vis) return r;
+    r.connected = true;
     vec3 Li_over_pdf = ls.Le_G * (w / ls.pdf);
     r.contribution = f * Li_over_pdf;
+    TRACE1("  nee contribution=%v3f\n", r.contribution);
     if (ls.area) {
         r.record_dir = ls.wi;
         r.record_value = (Li_over_pdf.x + Li_over_pdf.y + Li_over_pdf.z) / 3.0;
@@ -191,10 +203,17 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
         extra.from_direction = true;
     }
     RisResult res = ris_resample(ctx, params.ris_candidates, rng, has_extra, extra);
+    TRACE4("  ris: %u candidates + %u direction candidate, kept=%u (direction candidate: %u)\n", params.ris_candidates,
+           uint(has_extra), uint(res.found), uint(res.extra_chosen));
     if (!res.found) return r;
     r.chosen_model = res.extra_chosen ? instances[next.instance].light_model : light_model_of(res.y.ls);
+    r.ris_weight = res.W;
     // The extra candidate's visibility is known: its ray hit it.
-    if (!res.extra_chosen && !shadow_test(s, res.y.ls, shadow_rays)) return r;
+    bool vis = res.extra_chosen || shadow_test(s, res.y.ls, shadow_rays);
+    TRACE6("  ris chosen model %u tri %u p_hat=%f W=%f visible=%u value=%v3f\n", r.chosen_model, res.y.ls.tri, res.p_hat,
+           res.W, uint(vis), res.y.value);
+    if (!vis) return r;
+    r.connected = true;
     r.contribution = res.y.value * res.W;
     if (res.y.ls.area) {
         vec3 Li_over_pdf = res.y.ls.Le_G * res.W;

@@ -60,13 +60,35 @@ void record_path(VertexRecord rec[MAX_RECORDED_VERTICES], uint count, inout Rng 
     }
 }
 
-vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays) {
+// First-hit data and path statistics for AOVs.
+struct PathInfo {
+    vec3 albedo;
+    vec3 normal;
+    float depth;
+    vec3 position;
+    float lights_connected;
+    float ris_weight;
+    uint selected_light;
+    float guided;
+    float directions;
+};
+
+vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo info) {
+    info = PathInfo(vec3(0.0), vec3(0.0), 0.0, vec3(0.0), 0.0, 0.0, INVALID_INDEX, 0.0, 0.0);
     vec3 origin, dir;
     camera_ray(pixel, rng_next2(rng), origin, dir);
+    TRACE2("camera ray o=%v3f d=%v3f\n", origin, dir);
     rays.camera += 1u;
     Hit hit = trace_closest(origin, dir, FLT_MAX);
-    if (!hit.valid) return vec3(0.0);
+    if (!hit.valid) {
+        TRACE0("  miss\n");
+        return vec3(0.0);
+    }
     Surface s = make_surface(hit, dir);
+    info.albedo = s.bsdf.base_color;
+    info.normal = s.n;
+    info.depth = hit.t;
+    info.position = s.p;
     vec3 L = s.emission;
     vec3 beta = vec3(1.0);
 
@@ -75,8 +97,14 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays) {
     bool record_nee = (params.guiding_flags & GUIDE_FLAG_RECORD_NEE) != 0u;
 
     for (uint depth = 1u; depth < params.max_depth; ++depth) {
+        TRACE6("vertex %u p=%v3f n=%v3f material %u front=%u emission=%v3f\n", depth, s.p, s.n, s.material, uint(s.front),
+               s.emission);
+        TRACE4("  base colour %v3f metallic %f alpha %f throughput %v3f\n", s.bsdf.base_color, s.bsdf.metallic, s.bsdf.alpha,
+               beta);
         DirectionSampler d = direction_sampler(s);
         DirectionSample ds = sample_direction(s, d, rng);
+        info.directions += 1.0;
+        if (ds.guided) info.guided += 1.0;
         bool hit_next = false;
         Hit next;
         Surface ns;
@@ -90,6 +118,11 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays) {
         NeeResult nee = NEE_MODE == NEE_RIS ? nee_ris(s, d, ds, hit_next, ns, next.t, rng, rays.shadow)
                                             : nee_single(s, d, rng, rays.shadow);
         L += beta * nee.contribution;
+        if (nee.connected) info.lights_connected += 1.0;
+        if (depth == 1u) {
+            info.ris_weight = nee.ris_weight;
+            info.selected_light = nee.chosen_model;
+        }
 
         vec3 emitted = vec3(0.0);
         vec3 emitted_recorded = vec3(0.0);
@@ -98,6 +131,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays) {
             emitted = ns.emission * w;
             // Without NEE records, direct light reaches the guide through hits alone.
             emitted_recorded = record_nee ? emitted : ns.emission;
+            TRACE3("  direction hit emitter: Le=%v3f mis=%f contribution=%v3f\n", ns.emission, w, beta * ds.weight * emitted);
         }
         L += beta * ds.weight * emitted;
 
@@ -122,11 +156,15 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays) {
             r.nee_value = nee.record_value;
             rec[recorded++] = r;
         }
-        if (!alive) break;
+        if (!alive) {
+            TRACE1("  path ends (the direction sample hit a surface: %u)\n", uint(hit_next));
+            break;
+        }
         beta *= weight;
         s = ns;
     }
     if (TRAINING) record_path(rec, recorded, rng);
+    TRACE1("sample radiance L=%v3f\n", L);
     return L;
 }
 
@@ -140,10 +178,19 @@ void main() {
     RayCounts rays = RayCounts(0u, 0u, 0u);
     uint nonfinite = 0u;
     u64vec3 sum = u64vec3(0ul);
+    float aov_sum[AOV_CHANNELS];
+    for (uint c = 0u; c < AOV_CHANNELS; ++c) aov_sum[c] = 0.0;
+    float outlier_lum = -1.0;
+    uint outlier_index = 0u;
+    vec3 outlier_rgb = vec3(0.0);
+    uint selected = INVALID_INDEX;
     for (uint i = 0u; i < pc.sample_count; ++i) {
         uint sample_index = pc.sample_begin + i;
         Rng rng = rng_init(pixel_index, sample_index, params.seed);
-        vec3 L = trace_path(pixel, rng, rays);
+        g_trace = pixel_index == params.debug_pixel && (params.debug_sample == INVALID_INDEX || sample_index == params.debug_sample);
+        TRACE3("--- pixel (%u, %u) sample %u\n", pixel.x, pixel.y, sample_index);
+        PathInfo info;
+        vec3 L = trace_path(pixel, rng, rays, info);
         if (!all_finite(L) || any(lessThan(L, vec3(0.0)))) {
             nonfinite += 1u;
             continue;
@@ -151,11 +198,49 @@ void main() {
         // Fixed point: each sample is rounded alone, so sums do not depend on how the
         // samples were split into dispatches.
         sum += u64vec3(min(L, vec3(1e9)) * FILM_FIXED_SCALE + 0.5);
+        if (AOVS) {
+            aov_sum[AOV_ALBEDO + 0] += info.albedo.x;
+            aov_sum[AOV_ALBEDO + 1] += info.albedo.y;
+            aov_sum[AOV_ALBEDO + 2] += info.albedo.z;
+            aov_sum[AOV_NORMAL + 0] += info.normal.x;
+            aov_sum[AOV_NORMAL + 1] += info.normal.y;
+            aov_sum[AOV_NORMAL + 2] += info.normal.z;
+            aov_sum[AOV_DEPTH] += info.depth;
+            aov_sum[AOV_POSITION + 0] += info.position.x;
+            aov_sum[AOV_POSITION + 1] += info.position.y;
+            aov_sum[AOV_POSITION + 2] += info.position.z;
+            aov_sum[AOV_LIGHT_COUNT] += info.lights_connected;
+            aov_sum[AOV_RIS_WEIGHT] += info.ris_weight;
+            aov_sum[AOV_GUIDE_FRACTION] += info.directions > 0.0 ? info.guided / info.directions : 0.0;
+            if (sample_index == params.aov_first_sample) selected = info.selected_light;
+            float lum = luminance(L);
+            if (lum > outlier_lum) {
+                outlier_lum = lum;
+                outlier_index = sample_index;
+                outlier_rgb = L;
+            }
+        }
     }
     uint base = 3u * pixel_index;
     film[base + 0u] += sum.x;
     film[base + 1u] += sum.y;
     film[base + 2u] += sum.z;
+    if (AOVS) {
+        uint a = AOV_CHANNELS * pixel_index;
+        for (uint c = 0u; c < AOV_CHANNELS; ++c)
+            if (c != AOV_SELECTED_LIGHT) aov[a + c] += aov_sum[c];
+        // Only the dispatch holding aov_first_sample writes it (-1: NEE picked nothing).
+        if (pc.sample_begin <= params.aov_first_sample && params.aov_first_sample - pc.sample_begin < pc.sample_count)
+            aov[a + AOV_SELECTED_LIGHT] = selected == INVALID_INDEX ? -1.0 : float(selected);
+        uint o = OUTLIER_FLOATS * pixel_index;
+        if (outlier_lum > outliers[o]) {
+            outliers[o] = outlier_lum;
+            outliers[o + 1u] = uintBitsToFloat(outlier_index);
+            outliers[o + 2u] = outlier_rgb.x;
+            outliers[o + 3u] = outlier_rgb.y;
+            outliers[o + 4u] = outlier_rgb.z;
+        }
+    }
 
     atomicAdd(stats[STAT_CAMERA_RAYS], rays.camera);
     atomicAdd(stats[STAT_BOUNCE_RAYS], rays.bounce);

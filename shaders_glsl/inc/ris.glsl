@@ -16,6 +16,8 @@
 #ifndef INC_RIS_GLSL
 #define INC_RIS_GLSL
 
+#include "debug.glsl"
+
 struct RisResult {
     RisCandidate y;     // the kept candidate
     float p_hat;        // p̂(y)
@@ -35,7 +37,9 @@ RisResult ris_resample(RisContext ctx, uint M, inout Rng rng, bool has_extra, Ri
         RisCandidate c = ris_draw(ctx, rng);
         float p = ris_target(ctx, c);
         float w = p > 0.0 ? p / ris_denominator(ctx, c, slots) : 0.0;
-        if (reservoir_update(r, w, rng_next(rng))) {
+        bool kept = reservoir_update(r, w, rng_next(rng));
+        TRACE4("    candidate %u: p_hat=%f w=%f kept=%u\n", i, p, w, uint(kept));
+        if (kept) {
             res.y = c;
             res.p_hat = p;
             res.found = true;

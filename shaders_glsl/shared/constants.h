@@ -51,6 +51,21 @@
 #define STAT_GUIDE_RECORDS 4
 #define STAT_COUNT 8
 
+// AOV channels (BINDING_AOV holds AOV_CHANNELS floats per pixel, summed over samples).
+#define AOV_ALBEDO 0          // 3: base colour at the first hit
+#define AOV_NORMAL 3          // 3: shading normal at the first hit (world space)
+#define AOV_DEPTH 6           // 1: distance from the camera to the first hit
+#define AOV_POSITION 7        // 3: world position of the first hit
+#define AOV_LIGHT_COUNT 10    // 1: unoccluded NEE connections along the path
+#define AOV_RIS_WEIGHT 11     // 1: RIS contribution weight W at the first hit
+#define AOV_SELECTED_LIGHT 12 // 1: light model NEE picked at the first hit, first sample only
+#define AOV_GUIDE_FRACTION 13 // 1: share of the path's directions drawn from the SD-tree
+#define AOV_CHANNELS 14
+
+// Outliers (BINDING_OUTLIERS): per pixel the largest single-sample luminance, its sample
+// index (as float bits) and its RGB.
+#define OUTLIER_FLOATS 5
+
 // GGX roughness is clamped to this alpha: lobes narrower than it are numerically delta.
 #define MIN_GGX_ALPHA 0.0016
 // Lobes with alpha below this are not guided (nearly specular).

@@ -114,11 +114,11 @@ struct FrameParams {
     uint guiding_flags;        // GUIDE_FLAG_* (guiding.h)
     vec3 guide_origin;         // SD-tree cube
     float guide_size;
-    uint aov_mask;
     uint debug_pixel;          // y * width + x, INVALID_INDEX when not tracing a pixel
     uint debug_sample;         // sample index to trace, INVALID_INDEX for all
     float scene_radius;
     uint strategy;             // STRATEGY_*: MIS, or one technique alone (debugging, tests)
+    uint aov_first_sample;     // the sample whose choices AOV_SELECTED_LIGHT shows
 };
 
 // Push constants of one dispatch: a tile of pixels and a range of sample indices.

@@ -42,6 +42,88 @@ pub struct Args {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Extra EXR layers of first-hit data, comma-separated: albedo, normal, depth
+    /// (distance to the camera), position, light-count (unoccluded NEE connections per
+    /// path), ris-weight (mean RIS contribution weight at the first hit), selected-light
+    /// (light model NEE picked at the first hit for the first sample; also written as a
+    /// false-coloured PNG), guide-fraction (share of guided directions), sample-count.
+    #[arg(long, value_delimiter = ',', value_name = "NAMES")]
+    pub aov: Vec<Aov>,
+    /// Render only this pixel and print a trace of every path vertex (position, normal,
+    /// material, sampled direction and pdfs, MIS weights, RIS candidates, throughput,
+    /// contributions) through the validation layer's debug printf.
+    #[arg(long, value_name = "X,Y", value_parser = parse_pixel)]
+    pub pixel: Option<(u32, u32)>,
+    /// With --pixel: trace only this sample index (reproduces it exactly).
+    #[arg(long, value_name = "K", requires = "pixel")]
+    pub sample: Option<u32>,
+    /// List the N pixels with the largest single-sample contributions and their sample
+    /// indices (reproduce one with --pixel X,Y --sample K).
+    #[arg(long, value_name = "N")]
+    pub report_outliers: Option<usize>,
+}
+
+/// AOV layers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Aov {
+    Albedo,
+    Normal,
+    Depth,
+    Position,
+    LightCount,
+    RisWeight,
+    SelectedLight,
+    GuideFraction,
+    SampleCount,
+}
+
+impl Aov {
+    fn name(self) -> &'static str {
+        match self {
+            Aov::Albedo => "albedo",
+            Aov::Normal => "normal",
+            Aov::Depth => "depth",
+            Aov::Position => "position",
+            Aov::LightCount => "light-count",
+            Aov::RisWeight => "ris-weight",
+            Aov::SelectedLight => "selected-light",
+            Aov::GuideFraction => "guide-fraction",
+            Aov::SampleCount => "sample-count",
+        }
+    }
+
+    /// (first channel in the kernel's AOV buffer, channel names); None: computed on the host.
+    fn layout(self) -> Option<(u32, &'static [&'static str])> {
+        use lanterna::gpu::*;
+        Some(match self {
+            Aov::Albedo => (AOV_ALBEDO, &["R", "G", "B"]),
+            Aov::Normal => (AOV_NORMAL, &["X", "Y", "Z"]),
+            Aov::Depth => (AOV_DEPTH, &["Z"]),
+            Aov::Position => (AOV_POSITION, &["X", "Y", "Z"]),
+            Aov::LightCount => (AOV_LIGHT_COUNT, &["Y"]),
+            Aov::RisWeight => (AOV_RIS_WEIGHT, &["Y"]),
+            Aov::SelectedLight => (AOV_SELECTED_LIGHT, &["Y"]),
+            Aov::GuideFraction => (AOV_GUIDE_FRACTION, &["Y"]),
+            Aov::SampleCount => return None,
+        })
+    }
+}
+
+fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
+    let (x, y) = s.split_once(',').ok_or("expected X,Y")?;
+    Ok((
+        x.trim().parse().map_err(|e| format!("`{x}`: {e}"))?,
+        y.trim().parse().map_err(|e| format!("`{y}`: {e}"))?,
+    ))
+}
+
+/// Same text for --report-outliers and --pixel --sample, so one can be checked against
+/// the other.
+fn describe_sample(x: u32, y: u32, sample: u32, rgb: [f32; 3]) -> String {
+    format!(
+        "pixel ({x}, {y}) sample {sample}: radiance ({:e}, {:e}, {:e})",
+        rgb[0], rgb[1], rgb[2]
+    )
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -76,9 +158,11 @@ pub fn run(args: Args) -> Result<()> {
 
     let started = Instant::now();
     let (loaded, camera, width, height) = common::load(&args.scene)?;
-    let device =
-        session::open_device(&args.device.options()).context("cannot open a Vulkan device")?;
-    let settings = args.method.settings(width, height);
+    let mut device_options = args.device.options();
+    device_options.debug_printf = args.pixel.is_some();
+    let device = session::open_device(&device_options).context("cannot open a Vulkan device")?;
+    let mut settings = args.method.settings(width, height);
+    settings.aovs = !args.aov.is_empty() || args.pixel.is_some() || args.report_outliers.is_some();
     let mut renderer = Renderer::new(
         device.clone(),
         &loaded.scene,
@@ -87,6 +171,9 @@ pub fn run(args: Args) -> Result<()> {
         settings,
         args.device.shaders(),
     )?;
+    if let Some((x, y)) = args.pixel {
+        return trace_pixel(&mut renderer, x, y, &args, spp);
+    }
     renderer.prepare()?;
     let setup_seconds = started.elapsed().as_secs_f64();
 
@@ -163,7 +250,47 @@ pub fn run(args: Args) -> Result<()> {
         .chunks_exact(3)
         .map(|c| [c[0], c[1], c[2]])
         .collect();
-    let image = Image::from_sums(width, height, sums, meta)?;
+    let mut image = Image::from_sums(width, height, sums, meta)?;
+    if !args.aov.is_empty() {
+        let data = renderer.aovs()?;
+        for aov in &args.aov {
+            let layer = match aov.layout() {
+                Some((first, channels)) => {
+                    let n = lanterna::gpu::AOV_CHANNELS as usize;
+                    let values: Vec<f32> = data
+                        .chunks_exact(n)
+                        .flat_map(|px| {
+                            px[first as usize..first as usize + channels.len()]
+                                .iter()
+                                .copied()
+                        })
+                        .collect();
+                    image_io::Aov::new(aov.name(), channels, values)?
+                }
+                None => image_io::Aov::new(
+                    aov.name(),
+                    &["Y"],
+                    vec![film.spp as f32; (width * height) as usize],
+                )?,
+            };
+            image.aovs.push(layer);
+        }
+        if args.aov.contains(&Aov::SelectedLight) {
+            let n = lanterna::gpu::AOV_CHANNELS as usize;
+            let ids: Vec<f32> = data
+                .chunks_exact(n)
+                .map(|px| px[lanterna::gpu::AOV_SELECTED_LIGHT as usize])
+                .collect();
+            let path = output.with_extension("selected-light.png");
+            common::ensure_parent(&path)?;
+            image_io::write_png_rgb8(&path, width, height, &false_colour(&ids))
+                .with_context(|| format!("cannot write {}", path.display()))?;
+            log::info!(
+                "wrote {} (light model NEE picked at the first hit, false-coloured)",
+                path.display()
+            );
+        }
+    }
     common::ensure_parent(&output)?;
     let written = image_io::write_exr(&output, &image)
         .with_context(|| format!("cannot write {}", output.display()))?;
@@ -181,6 +308,17 @@ pub fn run(args: Args) -> Result<()> {
             .with_context(|| format!("cannot write {}", p.display()))?;
     }
 
+    if let Some(n) = args.report_outliers {
+        let list = renderer.outliers(n)?;
+        println!("largest single-sample contributions (reproduce with --pixel X,Y --sample K):");
+        for o in &list {
+            println!(
+                "  {}  luminance {:e}",
+                describe_sample(o.x, o.y, o.sample, o.rgb),
+                o.luminance
+            );
+        }
+    }
     if stats.nonfinite_samples > 0 {
         log::warn!(
             "{} samples were NaN, infinite or negative and were dropped (a bug: please report with --seed)",
@@ -211,5 +349,59 @@ pub fn run(args: Args) -> Result<()> {
             .map(|p| format!(" and {}", p.display()))
             .unwrap_or_default()
     );
+    Ok(())
+}
+
+/// Distinct colours for light-model indices (black where NEE picked nothing).
+fn false_colour(ids: &[f32]) -> Vec<u8> {
+    ids.iter()
+        .flat_map(|&id| {
+            if id < 0.0 {
+                return [0, 0, 0];
+            }
+            // A multiplicative hash spreads neighbouring indices over hue.
+            let h = (id as u32).wrapping_mul(2_654_435_761);
+            [
+                (h >> 24) as u8 | 0x30,
+                (h >> 16) as u8 | 0x30,
+                (h >> 8) as u8 | 0x30,
+            ]
+        })
+        .collect()
+}
+
+/// `--pixel X,Y`: render that pixel alone with the debug kernel and print its trace.
+fn trace_pixel(renderer: &mut Renderer, x: u32, y: u32, args: &Args, spp: u64) -> Result<()> {
+    let (begin, count) = match args.sample {
+        Some(k) => (k as u64, 1),
+        None => (args.sample_offset, if args.spp.is_some() { spp } else { 1 }),
+    };
+    let lines = renderer.trace_pixel(x, y, begin, count, args.sample)?;
+    if lines.is_empty() {
+        log::warn!("no trace was printed: the validation layer's debug printf is unavailable");
+    }
+    for line in &lines {
+        for l in line.lines() {
+            log::info!(target: "trace", "{l}");
+        }
+    }
+    let film = renderer.film()?;
+    let i = ((y * film.width + x) * 3) as usize;
+    let mean = film.mean();
+    log::info!(
+        "pixel ({x}, {y}) mean over {count} sample(s): ({:e}, {:e}, {:e})",
+        mean[i],
+        mean[i + 1],
+        mean[i + 2]
+    );
+    if let Some(k) = args.sample {
+        let o = renderer.outliers(usize::MAX)?;
+        let rgb = o
+            .iter()
+            .find(|o| o.x == x && o.y == y)
+            .map(|o| o.rgb)
+            .unwrap_or([0.0; 3]);
+        println!("{}", describe_sample(x, y, k, rgb));
+    }
     Ok(())
 }

@@ -65,6 +65,19 @@ struct Variant {
     ris: bool,
     guiding: bool,
     training: bool,
+    aovs: bool,
+    /// The debug-printf kernel (per-pixel traces).
+    debug: bool,
+}
+
+/// The largest single-sample contribution seen at a pixel.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Outlier {
+    pub x: u32,
+    pub y: u32,
+    pub sample: u32,
+    pub luminance: f32,
+    pub rgb: [f32; 3],
 }
 
 /// Buffers bound at the guiding bindings (the SD-tree's flat arrays).
@@ -115,6 +128,9 @@ pub struct Renderer {
     /// Samples accumulated in the film, and the first sample index.
     film_spp: u64,
     film_offset: u64,
+    /// Pixel index and sample traced by the debug kernel.
+    debug_pixel: u32,
+    debug_sample: u32,
 }
 
 /// Target duration of one submission (a GPU watchdog and Ctrl-C both want it short).
@@ -160,8 +176,16 @@ impl Renderer {
         )?;
         let film = Buffer::zeroed(&device, pixels * 3 * 8, usage, "film")?;
         let stats = Buffer::zeroed(&device, gpu::STAT_COUNT as u64 * 4, usage, "stats")?;
-        let aov = Buffer::zeroed(&device, 16, usage, "aov (unused)")?;
-        let outliers = Buffer::zeroed(&device, 16, usage, "outliers (unused)")?;
+        let (aov_floats, outlier_floats) = if settings.aovs {
+            (
+                pixels * gpu::AOV_CHANNELS as u64,
+                pixels * gpu::OUTLIER_FLOATS as u64,
+            )
+        } else {
+            (4, 4)
+        };
+        let aov = Buffer::zeroed(&device, aov_floats * 4, usage, "aovs")?;
+        let outliers = Buffer::zeroed(&device, outlier_floats * 4, usage, "outliers")?;
         let guide = GuideBuffers::empty(&device)?;
         let lo = scene.bounds_min;
         let size = (scene.bounds_max - lo).max_element().max(1e-3);
@@ -188,6 +212,8 @@ impl Renderer {
             seconds_per_sample: None,
             film_spp: 0,
             film_offset: 0,
+            debug_pixel: gpu::INVALID_INDEX,
+            debug_sample: gpu::INVALID_INDEX,
         };
         r.upload_params()?;
         Ok(r)
@@ -239,15 +265,15 @@ impl Renderer {
             guiding_flags: flags,
             guide_origin: self.guide_origin,
             guide_size: self.guide_size,
-            aov_mask: 0,
-            debug_pixel: gpu::INVALID_INDEX,
-            debug_sample: gpu::INVALID_INDEX,
+            debug_pixel: self.debug_pixel,
+            debug_sample: self.debug_sample,
             scene_radius: self.scene_radius,
             strategy: match s.strategy {
                 Strategy::Mis => gpu::STRATEGY_MIS,
                 Strategy::Nee => gpu::STRATEGY_NEE_ONLY,
                 Strategy::Bsdf => gpu::STRATEGY_BSDF_ONLY,
             },
+            aov_first_sample: self.film_offset as u32,
         }
     }
 
@@ -312,7 +338,9 @@ impl Renderer {
         if self.pipelines.contains_key(&v) {
             return Ok(());
         }
-        let spirv = self.shaders.load("render")?;
+        let spirv = self
+            .shaders
+            .load(if v.debug { "render_debug" } else { "render" })?;
         let spec = [
             if v.ris {
                 gpu::NEE_RIS
@@ -321,11 +349,12 @@ impl Renderer {
             },
             v.guiding as u32,
             v.training as u32,
+            v.aovs as u32,
         ];
         let started = Instant::now();
         let name = format!(
-            "render (ris={}, guiding={}, training={})",
-            v.ris, v.guiding, v.training
+            "render (ris={}, guiding={}, training={}, aovs={}, debug={})",
+            v.ris, v.guiding, v.training, v.aovs, v.debug
         );
         let p = ComputePipeline::new(
             &self.device,
@@ -405,15 +434,104 @@ impl Renderer {
             ris: self.settings.method.uses_ris(),
             guiding: self.settings.method.uses_guiding(),
             training,
+            aovs: self.settings.aovs,
+            debug: false,
         }
     }
 
-    /// Clear the film (and its sample count).
+    /// Clear the film (and its sample count), the AOVs and the outliers.
     pub fn clear_film(&mut self) -> Result<()> {
         self.film.fill_zero()?;
+        self.aov.fill_zero()?;
+        self.outliers.fill_zero()?;
         self.film_spp = 0;
         self.film_offset = 0;
         Ok(())
+    }
+
+    /// Mean AOV channels per pixel (`AOV_CHANNELS` floats each), when `settings.aovs`.
+    pub fn aovs(&self) -> Result<Vec<f32>> {
+        let pixels = self.settings.width as usize * self.settings.height as usize;
+        let mut a: Vec<f32> = self.aov.read(pixels * gpu::AOV_CHANNELS as usize)?;
+        let n = self.film_spp.max(1) as f32;
+        for px in a.chunks_exact_mut(gpu::AOV_CHANNELS as usize) {
+            for (c, v) in px.iter_mut().enumerate() {
+                if c != gpu::AOV_SELECTED_LIGHT as usize {
+                    *v /= n;
+                }
+            }
+        }
+        Ok(a)
+    }
+
+    /// The `n` pixels with the largest single-sample contributions, largest first.
+    pub fn outliers(&self, n: usize) -> Result<Vec<Outlier>> {
+        let pixels = self.settings.width as usize * self.settings.height as usize;
+        let raw: Vec<f32> = self.outliers.read(pixels * gpu::OUTLIER_FLOATS as usize)?;
+        let mut list: Vec<Outlier> = raw
+            .chunks_exact(gpu::OUTLIER_FLOATS as usize)
+            .enumerate()
+            .filter(|(_, o)| o[0] > 0.0)
+            .map(|(i, o)| Outlier {
+                x: (i % self.settings.width as usize) as u32,
+                y: (i / self.settings.width as usize) as u32,
+                sample: o[1].to_bits(),
+                luminance: o[0],
+                rgb: [o[2], o[3], o[4]],
+            })
+            .collect();
+        list.sort_by(|a, b| b.luminance.total_cmp(&a.luminance));
+        list.truncate(n);
+        Ok(list)
+    }
+
+    /// Render samples [begin, begin + count) of pixel (x, y) alone with the debug kernel,
+    /// printing a trace of every path vertex of sample `traced` (all when None) through
+    /// debug printf; returns the printed lines (the device must have been opened with
+    /// debug printf). The film then holds that pixel's samples.
+    pub fn trace_pixel(
+        &mut self,
+        x: u32,
+        y: u32,
+        begin: u64,
+        count: u64,
+        traced: Option<u32>,
+    ) -> Result<Vec<String>> {
+        if x >= self.settings.width || y >= self.settings.height {
+            return Err(RenderError::Invalid(format!(
+                "pixel ({x}, {y}) is outside the {}×{} image",
+                self.settings.width, self.settings.height
+            )));
+        }
+        if !self.device.instance.debug_printf {
+            return Err(RenderError::Invalid(
+                "per-pixel traces need the validation layer's debug printf (package vulkan-validationlayers)".into(),
+            ));
+        }
+        self.debug_pixel = y * self.settings.width + x;
+        self.debug_sample = traced.unwrap_or(gpu::INVALID_INDEX);
+        self.clear_film()?;
+        self.film_offset = begin;
+        self.upload_params()?;
+        let mut v = self.variant(false);
+        v.debug = true;
+        self.pipeline(v)?;
+        let set = self.descriptor_set(v)?;
+        crate::vk::take_debug_printf_messages();
+        let pipeline = &self.pipelines[&v];
+        let push = gpu::PushConstants {
+            tile_origin: [x, y],
+            tile_size: [1, 1],
+            sample_begin: begin as u32,
+            sample_count: count as u32,
+        };
+        self.device
+            .submit(|cmd| pipeline.cmd_dispatch(cmd, set, bytemuck::bytes_of(&push), [1, 1, 1]))?;
+        self.film_spp = count;
+        self.debug_pixel = gpu::INVALID_INDEX;
+        self.debug_sample = gpu::INVALID_INDEX;
+        self.upload_params()?;
+        Ok(crate::vk::take_debug_printf_messages())
     }
 
     /// Render sample indices [begin, begin + count) into the film. `training` records
@@ -452,8 +570,9 @@ impl Renderer {
         let v = self.variant(training);
         self.pipeline(v)?;
         let set = self.descriptor_set(v)?;
-        if self.film_spp == 0 {
+        if self.film_spp == 0 && self.film_offset != begin {
             self.film_offset = begin;
+            self.upload_params()?;
         }
         let (w, h) = (self.settings.width, self.settings.height);
         let started = Instant::now();

@@ -105,6 +105,8 @@ pub struct RenderSettings {
     /// Guiding: box directional filter (else nearest).
     pub directional_box: bool,
     pub strategy: Strategy,
+    /// Accumulate first-hit AOVs and per-pixel outliers (costs memory and a little time).
+    pub aovs: bool,
 }
 
 impl Default for RenderSettings {
@@ -123,6 +125,7 @@ impl Default for RenderSettings {
             spatial_jitter: true,
             directional_box: true,
             strategy: Strategy::Mis,
+            aovs: false,
         }
     }
 }

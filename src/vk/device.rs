@@ -221,8 +221,8 @@ fn describe(instance: &Instance, index: usize, pd: vk::PhysicalDevice) -> Result
         host_query_reset: f12.host_query_reset == vk::TRUE,
         float_atomics: has_af && f_af.shader_buffer_float32_atomic_add == vk::TRUE,
         shader_clock: has_clock && f_clock.shader_subgroup_clock == vk::TRUE,
-        non_semantic_info: has_ext(&exts, ash::khr::shader_non_semantic_info::NAME)
-            || props.api_version >= vk::API_VERSION_1_3,
+        // Enabled as an extension even on 1.3 devices: the instance asks for Vulkan 1.2.
+        non_semantic_info: has_ext(&exts, ash::khr::shader_non_semantic_info::NAME),
         timestamps: timestamps && props.limits.timestamp_compute_and_graphics == vk::TRUE,
     };
     let name = props
@@ -371,7 +371,7 @@ impl Device {
         if f.shader_clock {
             ext_names.push(ash::khr::shader_clock::NAME.as_ptr());
         }
-        if f.non_semantic_info && info.api_version < vk::API_VERSION_1_3 {
+        if f.non_semantic_info {
             ext_names.push(ash::khr::shader_non_semantic_info::NAME.as_ptr());
         }
 

@@ -108,6 +108,7 @@ impl Instance {
         let debug_printf = validation && options.debug_printf;
         if debug_printf {
             info = info.push_next(&mut validation_features);
+            configure_printf_layer();
         }
         let raw = unsafe { entry.create_instance(&info, None) }.check("vkCreateInstance")?;
 
@@ -165,6 +166,27 @@ impl Drop for Instance {
             }
             self.raw.destroy_instance(None);
         }
+    }
+}
+
+/// Debug printf sends every line through the debug callback under one message id, which
+/// the layer's duplicate-message limit would cut after ten, and its default buffer holds
+/// only 1 KiB per submission. Point the layer at a settings file that lifts both (unless
+/// the user has their own).
+fn configure_printf_layer() {
+    if std::env::var_os("VK_LAYER_SETTINGS_PATH").is_some() {
+        return;
+    }
+    let path = std::env::temp_dir().join(format!(
+        "lanterna-vk_layer_settings-{}.txt",
+        std::process::id()
+    ));
+    let text = "khronos_validation.printf_buffer_size = 1048576\n\
+                khronos_validation.enable_message_limit = false\n\
+                khronos_validation.printf_verbose = false\n";
+    if std::fs::write(&path, text).is_ok() {
+        // Set before the instance exists; the layer reads it at vkCreateInstance.
+        std::env::set_var("VK_LAYER_SETTINGS_PATH", &path);
     }
 }
 
