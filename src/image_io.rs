@@ -140,7 +140,8 @@ impl RenderMeta {
         }
         let spp = self.spp?;
         let start = self.sample_offset.unwrap_or(0);
-        Some(vec![start..start.checked_add(spp)?])
+        let end = start.checked_add(spp)?;
+        Some(vec![Range { start, end }])
     }
 }
 

@@ -136,7 +136,8 @@ fn gaps_are_recorded_and_filling_them_is_exact() {
 #[test]
 fn refusals_name_both_files_and_the_difference() {
     let a = render(0, 8);
-    let cases: Vec<(&str, Box<dyn Fn(&mut Image)>)> = vec![
+    type Change = Box<dyn Fn(&mut Image)>;
+    let cases: Vec<(&str, Change)> = vec![
         (
             "scene (hash)",
             Box::new(|i: &mut Image| i.meta.scene_hash = Some("hash-B".into())),

@@ -10,6 +10,7 @@ use plotters::prelude::*;
 use super::compare::{CompareError, Crop};
 use super::fonts;
 use super::metrics::abs_error_map;
+use super::text::TextBackend;
 use crate::image_io::{tonemap, write_png_rgb8, Image};
 
 /// One method's column.
@@ -27,7 +28,7 @@ const MARGIN: i32 = 12;
 const GAP: i32 = 10;
 const TITLE_H: i32 = 40;
 const LABEL_H: i32 = 46;
-const ROW_LABEL_H: i32 = 26;
+const ROW_LABEL_H: i32 = 32;
 const BAR_BAND_W: i32 = 120;
 /// The error maps' scale saturates at this quantile of all methods' errors.
 pub const ERROR_QUANTILE: f64 = 0.99;
@@ -231,7 +232,7 @@ pub fn write_grid(
     fonts::ensure_registered();
     let (cw, chh) = (canvas.width, canvas.height);
     {
-        let root = BitMapBackend::with_buffer(&mut canvas.rgb, (cw, chh)).into_drawing_area();
+        let root = TextBackend::with_buffer(&mut canvas.rgb, (cw, chh)).into_drawing_area();
         let e = |x: &dyn std::fmt::Display| figure(x.to_string());
         let text = |size: u32| (fonts::FAMILY, size).into_font().color(&BLACK);
         root.draw_text(title, &text(22), (MARGIN, MARGIN + 6))
@@ -267,7 +268,7 @@ pub fn write_grid(
                 ERROR_QUANTILE * 100.0
             ),
             &text(15),
-            (MARGIN, err_top - ROW_LABEL_H + 4),
+            (MARGIN, err_top - ROW_LABEL_H + 8),
         )
         .map_err(|x| e(&x))?;
         let tick_x = bar_x + bar_w as i32 + 6;
@@ -281,7 +282,7 @@ pub fn write_grid(
             root.draw_text(&label, &text(13), (tick_x, y.max(err_top - 7)))
                 .map_err(|x| e(&x))?;
         }
-        root.draw_text("|error|", &text(14), (bar_x, err_top - 18))
+        root.draw_text("|error|", &text(14), (bar_x, err_top - ROW_LABEL_H + 8))
             .map_err(|x| e(&x))?;
         if let Some(c) = crop {
             let zoom = f64::from(pw) / f64::from(c.w);
@@ -291,7 +292,7 @@ pub fn write_grid(
                     c.x, c.y, c.w, c.h
                 ),
                 &text(15),
-                (MARGIN, crop_top - ROW_LABEL_H + 4),
+                (MARGIN, crop_top - ROW_LABEL_H + 8),
             )
             .map_err(|x| e(&x))?;
             // Outline the crop on the reference panel.

@@ -13,6 +13,7 @@ pub mod metrics;
 pub mod plot;
 pub mod reference;
 pub mod report;
+pub mod text;
 
 /// The error type renderer implementations of this module's traits return.
 pub type BoxError = Box<dyn std::error::Error + Send + Sync + 'static>;

@@ -9,6 +9,7 @@ use plotters::prelude::*;
 use super::compare::CompareError;
 use super::fonts;
 use super::report::{Record, Report};
+use super::text::TextBackend;
 use crate::image_io::write_png_rgb8;
 
 /// Plot size in pixels.
@@ -89,7 +90,7 @@ pub fn write_error_plot(path: &Path, report: &Report, axis: Axis) -> Result<(), 
 fn draw(buffer: &mut [u8], report: &Report, axis: Axis) -> Result<(), String> {
     fonts::ensure_registered();
     let e = |e: &dyn std::fmt::Display| e.to_string();
-    let root = BitMapBackend::with_buffer(buffer, PLOT_SIZE).into_drawing_area();
+    let root = TextBackend::with_buffer(buffer, PLOT_SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(|x| e(&x))?;
     let lines: Vec<(String, Vec<(f64, f64)>)> = report
         .methods
@@ -111,7 +112,16 @@ fn draw(buffer: &mut [u8], report: &Report, axis: Axis) -> Result<(), String> {
         .margin(16)
         .x_label_area_size(56)
         .y_label_area_size(90)
-        .build_cartesian_2d((x_lo..x_hi).log_scale(), (y_lo..y_hi).log_scale())
+        .build_cartesian_2d(
+            (x_lo..x_hi)
+                .log_scale()
+                .with_key_points(log_ticks(x_lo, x_hi, axis == Axis::Spp))
+                .with_light_points(log_ticks(x_lo, x_hi, false)),
+            (y_lo..y_hi)
+                .log_scale()
+                .with_key_points(log_ticks(y_lo, y_hi, false))
+                .with_light_points(light_ticks(y_lo, y_hi)),
+        )
         .map_err(|x| e(&x))?;
     chart
         .configure_mesh()
@@ -120,7 +130,7 @@ fn draw(buffer: &mut [u8], report: &Report, axis: Axis) -> Result<(), String> {
         .label_style((fonts::FAMILY, 16))
         .axis_desc_style((fonts::FAMILY, 18))
         .x_label_formatter(&|v| format_tick(*v))
-        .y_label_formatter(&|v| format!("{v:.1e}"))
+        .y_label_formatter(&|v| format_tick(*v))
         .draw()
         .map_err(|x| e(&x))?;
     let mut any = false;
@@ -165,12 +175,50 @@ fn draw(buffer: &mut [u8], report: &Report, axis: Axis) -> Result<(), String> {
     Ok(())
 }
 
+/// Labelled ticks in `[lo, hi]`: powers of two (for spp, when there are few enough), else
+/// 1, 2, 5 × 10^k, densified to every integer mantissa when that gives too few.
+fn log_ticks(lo: f64, hi: f64, powers_of_two: bool) -> Vec<f64> {
+    if powers_of_two {
+        let ticks: Vec<f64> = (0..64)
+            .map(|k| 2f64.powi(k))
+            .filter(|v| *v >= lo && *v <= hi)
+            .collect();
+        if (2..=14).contains(&ticks.len()) {
+            return ticks;
+        }
+    }
+    for mantissas in [
+        &[1.0, 2.0, 5.0][..],
+        &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0][..],
+    ] {
+        let ticks = decade_ticks(lo, hi, mantissas);
+        if ticks.len() >= 4 {
+            return ticks;
+        }
+    }
+    decade_ticks(lo, hi, &[1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0])
+}
+
+/// Unlabelled grid lines: every integer mantissa of every decade.
+fn light_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    decade_ticks(lo, hi, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0])
+}
+
+fn decade_ticks(lo: f64, hi: f64, mantissas: &[f64]) -> Vec<f64> {
+    let first = lo.log10().floor() as i32;
+    let last = hi.log10().ceil() as i32;
+    (first..=last)
+        .flat_map(|k| mantissas.iter().map(move |m| m * 10f64.powi(k)))
+        .filter(|v| *v >= lo && *v <= hi)
+        .collect()
+}
+
 /// Tick labels that read naturally on a log axis: integers as integers, else 3 digits.
 fn format_tick(v: f64) -> String {
     if v >= 1.0 && (v - v.round()).abs() < 1e-9 * v {
         format!("{}", v.round() as u64)
-    } else if v >= 0.01 {
-        format!("{}", (v * 1000.0).round() / 1000.0)
+    } else if v >= 0.001 {
+        format!("{}", (v * 1e4).round() / 1e4)
     } else {
         format!("{v:.1e}")
     }

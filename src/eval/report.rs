@@ -68,7 +68,8 @@ pub fn fill_ratios(records: &mut [Record]) {
     }
 }
 
-/// CSV with a header row; empty cells for missing values; RFC 4180 quoting.
+/// CSV with a header row; numbers in Rust's shortest round-trip form, empty cells for
+/// missing values, RFC 4180 quoting.
 pub fn to_csv(report: &Report) -> String {
     fn cell(s: &str) -> String {
         if s.contains([',', '"', '\n']) {
@@ -77,7 +78,7 @@ pub fn to_csv(report: &Report) -> String {
             s.to_string()
         }
     }
-    let opt = |v: Option<f64>| v.map(|v| format!("{v:e}")).unwrap_or_default();
+    let opt = |v: Option<f64>| v.map(|v| v.to_string()).unwrap_or_default();
     let mut out = String::from(
         "method,budget_kind,budget,spp,render_seconds,setup_seconds,gpu_seconds,\
          training_seconds,mae,relmse,mae_ratio_to_pt,relmse_ratio_to_pt,image\n",
@@ -85,7 +86,7 @@ pub fn to_csv(report: &Report) -> String {
     for r in &report.records {
         let _ = writeln!(
             out,
-            "{},{},{},{},{:e},{:e},{},{},{:e},{:e},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{}",
             cell(&r.method),
             r.budget_kind,
             r.budget,
