@@ -185,6 +185,14 @@ fn failure_then_resume_equals_uninterrupted() {
     assert!(!j.output.exists());
     let cp = read_exr(&j.checkpoint).unwrap();
     assert_eq!((cp.meta.spp, cp.meta.sample_offset), (Some(12), Some(0)));
+    assert_eq!(
+        cp.meta.extra.get("next_sample").map(String::as_str),
+        Some("12")
+    );
+    assert_eq!(
+        cp.meta.extra.get("target_spp").map(String::as_str),
+        Some("20")
+    );
 
     // Without --resume an existing checkpoint is refused rather than overwritten.
     let e = render_reference(
@@ -219,6 +227,10 @@ fn failure_then_resume_equals_uninterrupted() {
     );
     assert_eq!(bits(&out.image), bits(&reference));
     assert!(!j.checkpoint.exists());
+    assert!(
+        out.image.meta.extra.is_empty(),
+        "checkpoint-only keys stay out of the result"
+    );
 }
 
 #[test]

@@ -39,6 +39,7 @@ pub struct Args {
     /// Path segments (1 = emitters seen directly); must match the reference's.
     #[arg(long, default_value_t = 4)]
     pub max_depth: u32,
+    /// Seed of the per-(pixel, sample) random numbers.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Where the report goes (created if missing).

@@ -29,16 +29,18 @@ pub struct Args {
     /// Path segments (1 = emitters seen directly).
     #[arg(long, default_value_t = 4)]
     pub max_depth: u32,
+    /// Seed of the per-(pixel, sample) random numbers.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// First sample index K: renders samples [K, K + spp), so separate runs with
     /// disjoint ranges can be merged with `lanterna merge`.
     #[arg(long, default_value_t = 0)]
     pub sample_offset: u64,
-    /// Write a checkpoint at least this often (seconds); 0 = after every chunk.
+    /// Seconds between checkpoints (OUTPUT's stem + `.checkpoint.exr`); 0 = after every chunk.
     #[arg(long, default_value_t = 300.0)]
     pub checkpoint_every: f64,
-    /// Continue from the checkpoint next to the output, if there is one.
+    /// Continue from the checkpoint next to OUTPUT, if there is one (same scene, method,
+    /// seed, depth and sample offset), with no sample lost or repeated.
     #[arg(long)]
     pub resume: bool,
     /// Samples per chunk (default: adapt chunks to about 2 s each).

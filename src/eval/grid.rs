@@ -345,4 +345,39 @@ mod tests {
         assert_eq!(panel_size(32, 24), (224, 168));
         assert_eq!(panel_size(256, 100), (256, 100));
     }
+
+    #[test]
+    fn large_image_with_tall_crop_downscales() {
+        let (w, h) = (701u32, 301u32);
+        let rgb: Vec<[f32; 3]> = (0..w * h)
+            .map(|i| [(i % w) as f32 / w as f32, 0.5, 0.25])
+            .collect();
+        let reference = Image::new(w, h, rgb.clone()).unwrap();
+        let noisy =
+            Image::new(w, h, rgb.iter().map(|p| [p[0] + 0.1, p[1], p[2]]).collect()).unwrap();
+        let columns = [Column {
+            label: "pt".into(),
+            image: &noisy,
+            mae: Some(0.1 / 3.0),
+        }];
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("grid.png");
+        let crop = Crop {
+            x: 700,
+            y: 0,
+            w: 1,
+            h: 301,
+        };
+        write_grid(&path, "big", &reference, &columns, Some(crop), 0.0).unwrap();
+        let png = image::open(&path).unwrap();
+        let (pw, ph) = panel_size(w, h);
+        assert_eq!((pw, ph), (320, 137));
+        assert_eq!(
+            png.width() as i32,
+            MARGIN + 2 * (pw as i32 + GAP) + BAR_BAND_W + MARGIN
+        );
+        // The tall crop is capped at twice the panel height.
+        let crop_top = MARGIN + TITLE_H + LABEL_H + 2 * (ph as i32 + ROW_LABEL_H);
+        assert_eq!(png.height() as i32, crop_top + 2 * ph as i32 + MARGIN);
+    }
 }

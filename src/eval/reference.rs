@@ -56,6 +56,12 @@ pub struct ReferenceJob {
     pub resume: bool,
 }
 
+/// Extra metadata of a checkpoint: the next sample index to render (informational: it
+/// equals `sample_offset + spp`).
+pub const NEXT_SAMPLE_KEY: &str = "next_sample";
+/// Extra metadata of a checkpoint: the spp the finished reference will have.
+pub const TARGET_SPP_KEY: &str = "target_spp";
+
 /// `ref.exr` → `ref.checkpoint.exr` next to it.
 pub fn checkpoint_path(output: &Path) -> PathBuf {
     let stem = output
@@ -281,10 +287,19 @@ pub fn render_reference(
         ChunkPolicy::Adaptive { .. } => 1,
     };
     let write_checkpoint = |state: &State, progress: &mut dyn FnMut(&ProgressEvent)| {
-        let image = state.image(job, start.elapsed().as_secs_f64())?;
+        let mut image = state.image(job, start.elapsed().as_secs_f64())?;
+        // Self-describing for people reading the header; resuming relies on spp and offset.
+        let next_sample = job.sample_offset + state.done;
+        image
+            .meta
+            .extra
+            .insert(NEXT_SAMPLE_KEY.into(), next_sample.to_string());
+        image
+            .meta
+            .extra
+            .insert(TARGET_SPP_KEY.into(), job.spp.to_string());
         // Non-finite values are logged by write_exr; the final write reports them too.
         let _ = write_exr(&job.checkpoint, &image)?;
-        let next_sample = job.sample_offset + state.done;
         progress(&ProgressEvent::Checkpoint {
             path: job.checkpoint.clone(),
             next_sample,
