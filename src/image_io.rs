@@ -140,7 +140,8 @@ impl RenderMeta {
         }
         let spp = self.spp?;
         let start = self.sample_offset.unwrap_or(0);
-        Some(vec![start..start.checked_add(spp)?])
+        let end = start.checked_add(spp)?;
+        Some(vec![Range { start, end }])
     }
 }
 
@@ -550,7 +551,6 @@ pub fn write_exr(path: &Path, image: &Image) -> Result<WriteSummary, ImageError>
     let mut bytes = Cursor::new(Vec::new());
     exr_image
         .write()
-        .non_parallel()
         .to_buffered(&mut bytes)
         .map_err(|e| ImageError::Invalid {
             path: path.to_path_buf(),
@@ -590,7 +590,6 @@ pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
         .all_channels()
         .all_layers()
         .all_attributes()
-        .non_parallel()
         .from_buffered(Cursor::new(&bytes))
         .map_err(|e| ImageError::NotExr {
             path: pathbuf.clone(),
