@@ -88,6 +88,19 @@ pub struct MethodArgs {
     /// SD-tree path guiding with pt's NEE; guided-ris: guiding trained by RIS NEE.
     #[arg(long, default_value = "pt")]
     pub method: Method,
+    #[command(flatten)]
+    pub estimator: EstimatorArgs,
+}
+
+impl MethodArgs {
+    pub fn settings(&self, width: u32, height: u32) -> RenderSettings {
+        self.estimator.settings(self.method, width, height)
+    }
+}
+
+/// Options shared by all methods.
+#[derive(clap::Args, Clone, Debug)]
+pub struct EstimatorArgs {
     /// Maximum path length in segments, counted like Mitsuba's max_depth: 1 renders only
     /// emitters seen directly, 2 adds direct lighting, 3 one bounce of indirect light, …
     #[arg(long, default_value_t = 4)]
@@ -120,10 +133,10 @@ pub struct MethodArgs {
     pub strategy: Strategy,
 }
 
-impl MethodArgs {
-    pub fn settings(&self, width: u32, height: u32) -> RenderSettings {
+impl EstimatorArgs {
+    pub fn settings(&self, method: Method, width: u32, height: u32) -> RenderSettings {
         RenderSettings {
-            method: self.method,
+            method,
             width,
             height,
             max_depth: self.max_depth,
@@ -132,6 +145,7 @@ impl MethodArgs {
             source: self.source,
             ris_candidates: self.ris_candidates,
             bsdf_fraction: self.bsdf_fraction,
+            train_fraction: self.train_fraction,
             record_nee: !self.no_record_nee,
             strategy: self.strategy,
             ..RenderSettings::default()
@@ -187,4 +201,40 @@ pub fn ensure_parent(path: &std::path::Path) -> Result<()> {
             .with_context(|| format!("cannot create directory {}", dir.display()))?;
     }
     Ok(())
+}
+
+/// Metadata every render's EXR carries, from what was rendered and how.
+pub fn render_meta(
+    settings: &RenderSettings,
+    scene: &SceneArgs,
+    scene_hash: &str,
+    device: &lanterna::vk::Device,
+) -> lanterna::image_io::RenderMeta {
+    let mut meta = lanterna::image_io::RenderMeta::new();
+    meta.method = Some(settings.method.name().to_string());
+    meta.seed = Some(settings.seed as u64);
+    meta.max_depth = Some(settings.max_depth);
+    meta.device = Some(device.info.name.clone());
+    meta.scene_path = Some(scene.scene.display().to_string());
+    meta.scene_hash = Some(scene_hash.to_string());
+    for (k, v) in [
+        ("source", format!("{:?}", settings.source).to_lowercase()),
+        ("ris_candidates", settings.ris_candidates.to_string()),
+        ("rr_depth", settings.rr_depth.to_string()),
+        (
+            "strategy",
+            format!("{:?}", settings.strategy).to_lowercase(),
+        ),
+    ] {
+        meta.extra.insert(k.to_string(), v);
+    }
+    if settings.method.uses_guiding() {
+        meta.extra
+            .insert("bsdf_fraction".into(), settings.bsdf_fraction.to_string());
+        meta.extra
+            .insert("train_fraction".into(), settings.train_fraction.to_string());
+        meta.extra
+            .insert("record_nee".into(), settings.record_nee.to_string());
+    }
+    meta
 }

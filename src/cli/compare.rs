@@ -4,15 +4,25 @@
 //! `lanterna::eval::compare`; this file parses and checks the arguments.
 
 use std::path::PathBuf;
+use std::time::Instant;
 
+use super::common::{self, DeviceArgs, EstimatorArgs, SceneArgs};
 use anyhow::Context;
-use lanterna::eval::compare::{run_compare, CompareConfig, Crop, MethodRunner, METHODS};
+use lanterna::eval::compare::{
+    run_compare, Budget, CompareConfig, Crop, MethodResult, MethodRunner, METHODS,
+};
+use lanterna::eval::BoxError;
 use lanterna::image_io::{read_exr, Image};
+use lanterna::render::{run, session, Method, Renderer};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The scene (glTF).
-    pub scene: PathBuf,
+    #[command(flatten)]
+    pub view: SceneArgs,
+    #[command(flatten)]
+    pub estimator: EstimatorArgs,
+    #[command(flatten)]
+    pub device: DeviceArgs,
     /// Reference EXR of the same scene, max depth and resolution.
     #[arg(long)]
     pub reference: PathBuf,
@@ -36,12 +46,6 @@ pub struct Args {
     /// Also save every render as DIR/images/<method>_<budget>.exr.
     #[arg(long)]
     pub save_images: bool,
-    /// Path segments (1 = emitters seen directly); must match the reference's.
-    #[arg(long, default_value_t = 4)]
-    pub max_depth: u32,
-    /// Seed of the per-(pixel, sample) random numbers.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
     /// Where the report goes (created if missing).
     #[arg(long)]
     pub out_dir: PathBuf,
@@ -67,7 +71,7 @@ pub fn config(args: &Args) -> CompareConfig {
         exposure: args.exposure,
         out_dir: args.out_dir.clone(),
         save_images: args.save_images,
-        scene: args.scene.display().to_string(),
+        scene: args.view.scene.display().to_string(),
         reference: args.reference.display().to_string(),
     }
 }
@@ -78,31 +82,124 @@ pub fn load_reference(args: &Args, config: &CompareConfig) -> anyhow::Result<Ima
     config.validate(&reference)?;
     reference.check_finite(&args.reference.display().to_string())?;
     if let Some(depth) = reference.meta.max_depth {
-        if depth != args.max_depth {
+        if depth != args.estimator.max_depth {
             anyhow::bail!(
                 "{} was rendered with max depth {depth}, but --max-depth is {}",
                 args.reference.display(),
-                args.max_depth
+                args.estimator.max_depth
             );
         }
     }
     Ok(reference)
 }
 
-/// The renderer behind the comparison. The GPU renderer implements `MethodRunner`;
-/// until it is wired in here, this command stops with an error after checking its inputs.
-fn open_runner(args: &Args, _reference: &Image) -> anyhow::Result<Box<dyn MethodRunner>> {
-    anyhow::bail!(
-        "cannot render {}: the GPU renderer is not connected to `lanterna compare` yet",
-        args.scene.display()
-    )
+/// The GPU renderer behind the comparison: one scene on the device, the method switched
+/// per run.
+struct GpuRunner {
+    renderer: Renderer,
+    estimator: EstimatorArgs,
+    setup_seconds: f64,
+    meta: lanterna::image_io::RenderMeta,
+    cancel: &'static std::sync::atomic::AtomicBool,
+}
+
+impl MethodRunner for GpuRunner {
+    fn render(&mut self, method: &str, budget: Budget) -> Result<MethodResult, BoxError> {
+        let method: Method = method.parse()?;
+        let (w, h) = (self.renderer.settings.width, self.renderer.settings.height);
+        self.renderer
+            .set_settings(self.estimator.settings(method, w, h))?;
+        let prep = Instant::now();
+        self.renderer.prepare()?;
+        log::debug!(
+            "{method}: pipelines ready in {:.1} s",
+            prep.elapsed().as_secs_f64()
+        );
+        let budget = match budget {
+            Budget::Spp(n) => run::Budget::Spp(n),
+            Budget::Seconds(s) => run::Budget::Seconds(s),
+        };
+        let out = run::run_method(&mut self.renderer, budget, 0, self.cancel, &mut |_| {})?;
+        if self.cancel.load(std::sync::atomic::Ordering::SeqCst) {
+            return Err("interrupted".into());
+        }
+        let mut meta = self.meta.clone();
+        meta.method = Some(method.name().to_string());
+        meta.spp = Some(out.film.spp);
+        meta.sample_offset = Some(out.film.sample_offset);
+        meta.render_seconds = Some(out.seconds);
+        let sums = out
+            .film
+            .sums
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
+        let image = Image::from_sums(w, h, sums, meta)?;
+        log::info!(
+            "{method} {budget:?}: {} spp in {:.2} s",
+            out.film.spp,
+            out.seconds
+        );
+        Ok(MethodResult {
+            spp: out.film.spp,
+            render_seconds: out.seconds,
+            setup_seconds: self.setup_seconds,
+            gpu_seconds: Some(out.stats.gpu_seconds),
+            training_seconds: method.uses_guiding().then_some(out.training_seconds),
+            image,
+        })
+    }
+}
+
+fn open_runner(args: &Args, reference: &Image) -> anyhow::Result<Box<dyn MethodRunner>> {
+    let started = Instant::now();
+    let mut view = args.view.clone();
+    view.width = Some(view.width.unwrap_or(reference.width));
+    view.height = Some(view.height.unwrap_or(reference.height));
+    let (loaded, camera, width, height) = common::load(&view)?;
+    if let Some(hash) = &reference.meta.scene_hash {
+        if *hash != loaded.scene.hash {
+            log::warn!(
+                "{} was rendered from a different scene content (hash {hash}, this scene {}); errors compare unlike images",
+                args.reference.display(),
+                loaded.scene.hash
+            );
+        }
+    }
+    let device =
+        session::open_device(&args.device.options()).context("cannot open a Vulkan device")?;
+    let first = args
+        .methods
+        .first()
+        .map(|m| m.parse::<Method>())
+        .transpose()
+        .map_err(anyhow::Error::msg)?;
+    let settings = args
+        .estimator
+        .settings(first.unwrap_or(Method::Pt), width, height);
+    let renderer = Renderer::new(
+        device.clone(),
+        &loaded.scene,
+        &loaded.lights,
+        camera,
+        settings,
+        args.device.shaders(),
+    )?;
+    let meta = common::render_meta(&renderer.settings, &view, &loaded.scene.hash, &device);
+    Ok(Box::new(GpuRunner {
+        renderer,
+        estimator: args.estimator.clone(),
+        setup_seconds: started.elapsed().as_secs_f64(),
+        meta,
+        cancel: common::cancel_flag(),
+    }))
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let config = config(&args);
     let reference = load_reference(&args, &config)?;
-    if !args.scene.exists() {
-        anyhow::bail!("scene {} not found", args.scene.display());
+    if !args.view.scene.exists() {
+        anyhow::bail!("scene {} not found", args.view.scene.display());
     }
     let mut runner = open_runner(&args, &reference)?;
     let report = run_compare(runner.as_mut(), &reference, &config)?;

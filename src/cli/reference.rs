@@ -7,31 +7,30 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
+use super::common::{self, DeviceArgs, MethodArgs, SceneArgs};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use lanterna::eval::reference::{
     checkpoint_path, render_reference, ChunkPolicy, ProgressEvent, ReferenceJob, SampleRenderer,
 };
+use lanterna::eval::BoxError;
+use lanterna::image_io::RenderMeta;
+use lanterna::render::{session, RenderStats, Renderer};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The scene (glTF).
-    pub scene: PathBuf,
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[command(flatten)]
+    pub method: MethodArgs,
+    #[command(flatten)]
+    pub device: DeviceArgs,
     /// Samples per pixel of the reference.
     #[arg(long)]
     pub spp: u64,
     /// Output EXR (with exact film sums and metadata).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Method: pt, ris, guided, guided-ris.
-    #[arg(long, default_value = "pt")]
-    pub method: String,
-    /// Path segments (1 = emitters seen directly).
-    #[arg(long, default_value_t = 4)]
-    pub max_depth: u32,
-    /// Seed of the per-(pixel, sample) random numbers.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
     /// First sample index K: renders samples [K, K + spp), so separate runs with
     /// disjoint ranges can be merged with `lanterna merge`.
     #[arg(long, default_value_t = 0)]
@@ -48,13 +47,73 @@ pub struct Args {
     pub chunk_spp: Option<u64>,
 }
 
-/// The renderer behind the reference loop. The GPU renderer implements
-/// `SampleRenderer`; until it is wired in here, this command stops with an error.
+/// The GPU renderer behind the reference loop: exact film sums of sample ranges.
+struct GpuSamples {
+    renderer: Renderer,
+    meta: RenderMeta,
+    cancel: AtomicBool,
+}
+
+impl SampleRenderer for GpuSamples {
+    fn resolution(&self) -> (u32, u32) {
+        (self.renderer.settings.width, self.renderer.settings.height)
+    }
+
+    fn metadata(&self) -> RenderMeta {
+        self.meta.clone()
+    }
+
+    fn render_samples(&mut self, first: u64, count: u64) -> Result<Vec<[u64; 3]>, BoxError> {
+        self.renderer.clear_film()?;
+        let mut stats = RenderStats::default();
+        let done = self.renderer.render_samples(
+            first,
+            count,
+            false,
+            &self.cancel,
+            &mut |_| {},
+            &mut stats,
+        )?;
+        if done != count {
+            return Err(format!("rendered {done} of {count} samples").into());
+        }
+        if stats.nonfinite_samples > 0 {
+            log::warn!("{} non-finite samples dropped", stats.nonfinite_samples);
+        }
+        let film = self.renderer.film()?;
+        Ok(film
+            .sums
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect())
+    }
+}
+
 fn open_renderer(args: &Args) -> anyhow::Result<Box<dyn SampleRenderer>> {
-    anyhow::bail!(
-        "cannot render {}: the GPU renderer is not connected to `lanterna reference` yet",
-        args.scene.display()
-    )
+    anyhow::ensure!(
+        !args.method.method.uses_guiding(),
+        "a reference is rendered with pt or ris: guided methods train on their own samples, so \
+         disjoint sample ranges would not be independent"
+    );
+    let (loaded, camera, width, height) = common::load(&args.scene)?;
+    let device =
+        session::open_device(&args.device.options()).context("cannot open a Vulkan device")?;
+    let settings = args.method.settings(width, height);
+    let mut renderer = Renderer::new(
+        device.clone(),
+        &loaded.scene,
+        &loaded.lights,
+        camera,
+        settings,
+        args.device.shaders(),
+    )?;
+    renderer.prepare()?;
+    let meta = common::render_meta(&renderer.settings, &args.scene, &loaded.scene.hash, &device);
+    Ok(Box::new(GpuSamples {
+        renderer,
+        meta,
+        cancel: AtomicBool::new(false),
+    }))
 }
 
 fn job(args: &Args) -> anyhow::Result<ReferenceJob> {

@@ -3,7 +3,7 @@
 use super::common::{self, DeviceArgs, MethodArgs, SceneArgs};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use lanterna::image_io::{self, Image, RenderMeta};
+use lanterna::image_io::{self, Image};
 use lanterna::render::{session, RenderStats, Renderer};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -227,24 +227,13 @@ pub fn run(args: Args) -> Result<()> {
     );
 
     let film = renderer.film()?;
-    let mut meta = RenderMeta::new();
+    let mut meta =
+        common::render_meta(&renderer.settings, &args.scene, &loaded.scene.hash, &device);
     meta.spp = Some(film.spp);
     meta.sample_offset = Some(film.sample_offset);
-    meta.method = Some(args.method.method.name().to_string());
-    meta.seed = Some(args.method.seed as u64);
-    meta.max_depth = Some(args.method.max_depth);
     meta.render_seconds = Some(render_seconds);
-    meta.device = Some(device.info.name.clone());
-    meta.scene_path = Some(args.scene.scene.display().to_string());
-    meta.scene_hash = Some(loaded.scene.hash.clone());
-    for (k, v) in [
-        ("source", format!("{:?}", args.method.source).to_lowercase()),
-        ("ris_candidates", args.method.ris_candidates.to_string()),
-        ("rr_depth", args.method.rr_depth.to_string()),
-        ("gpu_seconds", format!("{:.6}", stats.gpu_seconds)),
-    ] {
-        meta.extra.insert(k.to_string(), v);
-    }
+    meta.extra
+        .insert("gpu_seconds".into(), format!("{:.6}", stats.gpu_seconds));
     let sums: Vec<[u64; 3]> = film
         .sums
         .chunks_exact(3)

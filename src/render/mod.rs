@@ -8,6 +8,8 @@
 
 mod film;
 mod gpu_scene;
+mod guided;
+pub mod run;
 pub mod session;
 mod settings;
 
@@ -281,6 +283,25 @@ impl Renderer {
         let p = self.frame_params();
         self.params.upload(0, bytemuck::bytes_of(&p))?;
         Ok(())
+    }
+
+    /// Switch to other settings of the same image size (another method, seed, …).
+    pub fn set_settings(&mut self, settings: RenderSettings) -> Result<()> {
+        if (settings.width, settings.height, settings.aovs)
+            != (
+                self.settings.width,
+                self.settings.height,
+                self.settings.aovs,
+            )
+        {
+            return Err(RenderError::Invalid(
+                "set_settings cannot change the image size or AOVs".into(),
+            ));
+        }
+        self.settings = settings;
+        // Another method has another cost per sample: measure it again.
+        self.seconds_per_sample = None;
+        self.upload_params()
     }
 
     /// Replace the guiding buffers (after a refit); `origin`/`size` give the SD-tree cube.

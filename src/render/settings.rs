@@ -98,6 +98,8 @@ pub struct RenderSettings {
     pub ris_candidates: u32,
     /// Guiding: probability of sampling the BSDF in the one-sample mixture.
     pub bsdf_fraction: f32,
+    /// Guiding: share of the budget spent training the SD-tree.
+    pub train_fraction: f32,
     /// Guiding: record NEE contributions into the SD-tree.
     pub record_nee: bool,
     /// Guiding: stochastic spatial filter (else nearest).
@@ -121,6 +123,7 @@ impl Default for RenderSettings {
             source: LightSource::Uniform,
             ris_candidates: 32,
             bsdf_fraction: 0.5,
+            train_fraction: 0.3,
             record_nee: true,
             spatial_jitter: true,
             directional_box: true,
