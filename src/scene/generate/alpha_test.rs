@@ -12,11 +12,21 @@ use glam::{Vec2, Vec3};
 use serde_json::{json, Map};
 
 pub fn build(o: &Options) -> Result<Built, GenerateError> {
-    let radiance = check_range("emission", o.emission.unwrap_or(1.0), 0.0, 1e6, "in [0, 1e6]")?;
+    let radiance = check_range(
+        "emission",
+        o.emission.unwrap_or(1.0),
+        0.0,
+        1e6,
+        "in [0, 1e6]",
+    )?;
     let aspect = o.aspect.unwrap_or(1.0);
     let mut g = Gltf::new();
     let cells = 8;
-    let tex = g.texture("checker", textures::alpha_checker(cells, 8).png()?, Filter::Nearest);
+    let tex = g.texture(
+        "checker",
+        textures::alpha_checker(cells, 8).png()?,
+        Filter::Nearest,
+    );
     let mask = g.material(Material {
         base_color: [0.0, 0.0, 0.0, 1.0],
         base_color_texture: Some(tex),
@@ -25,7 +35,13 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
         ..Material::diffuse("mask", [0.0; 3])
     });
     let mut quad = MeshData::new();
-    quad.rect_mapped(Vec3::new(-1.0, -1.0, 0.0), Vec3::X * 2.0, Vec3::Y * 2.0, Vec2::ZERO, Vec2::ONE);
+    quad.rect_mapped(
+        Vec3::new(-1.0, -1.0, 0.0),
+        Vec3::X * 2.0,
+        Vec3::Y * 2.0,
+        Vec2::ZERO,
+        Vec2::ONE,
+    );
     let mesh = g.mesh("mask", &[(&quad, mask)]);
     g.node(Node::mesh(mesh, Vec3::ZERO).named("mask"));
 
@@ -49,5 +65,9 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
         "expected_mean_for_aspect_1": num(radiance * 0.5),
         "mask_albedo": 0.0,
     });
-    Ok(Built { gltf: g, options, analytic: Some(analytic) })
+    Ok(Built {
+        gltf: g,
+        options,
+        analytic: Some(analytic),
+    })
 }

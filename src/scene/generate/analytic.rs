@@ -20,7 +20,11 @@ const PLANE_HALF: f32 = 100.0;
 
 fn plane(g: &mut Gltf, albedo: f32) {
     let mut geo = MeshData::new();
-    geo.rect(Vec3::new(-PLANE_HALF, 0.0, PLANE_HALF), Vec3::X * 2.0 * PLANE_HALF, -Vec3::Z * 2.0 * PLANE_HALF);
+    geo.rect(
+        Vec3::new(-PLANE_HALF, 0.0, PLANE_HALF),
+        Vec3::X * 2.0 * PLANE_HALF,
+        -Vec3::Z * 2.0 * PLANE_HALF,
+    );
     let mat = g.material(Material::diffuse("plane", [albedo; 3]));
     let mesh = g.mesh("plane", &[(&geo, mat)]);
     g.node(Node::mesh(mesh, Vec3::ZERO).named("plane"));
@@ -29,7 +33,11 @@ fn plane(g: &mut Gltf, albedo: f32) {
 fn camera(g: &mut Gltf, aspect: f32, height: f32) {
     let cam = g.camera("camera", 30.0, aspect);
     // Low enough that the line of sight to the origin passes under the light.
-    g.camera_node(cam, Vec3::new(0.0, 0.6 * height, 2.5 * height.max(1.0)), Vec3::ZERO);
+    g.camera_node(
+        cam,
+        Vec3::new(0.0, 0.6 * height, 2.5 * height.max(1.0)),
+        Vec3::ZERO,
+    );
 }
 
 /// Irradiance at the point under the centre of a parallel square of half-side `a` at
@@ -42,9 +50,27 @@ pub fn square_irradiance(l: f64, a: f64, h: f64) -> f64 {
 
 pub fn build_plane_quad(o: &Options) -> Result<Built, GenerateError> {
     let albedo = check_range("albedo", o.albedo.unwrap_or(0.5), 0.0, 1.0, "in [0, 1]")?;
-    let radiance = check_range("emission", o.emission.unwrap_or(10.0), 0.0, 1e6, "in [0, 1e6]")?;
-    let h = check_range("height", o.height.unwrap_or(1.0), 0.01, 50.0, "in [0.01, 50] m")?;
-    let side = check_range("size", o.size.unwrap_or(0.5), 0.001, 50.0, "in [0.001, 50] m")?;
+    let radiance = check_range(
+        "emission",
+        o.emission.unwrap_or(10.0),
+        0.0,
+        1e6,
+        "in [0, 1e6]",
+    )?;
+    let h = check_range(
+        "height",
+        o.height.unwrap_or(1.0),
+        0.01,
+        50.0,
+        "in [0.01, 50] m",
+    )?;
+    let side = check_range(
+        "size",
+        o.size.unwrap_or(0.5),
+        0.001,
+        50.0,
+        "in [0.001, 50] m",
+    )?;
     let aspect = o.aspect.unwrap_or(1.0);
 
     let mut g = Gltf::new();
@@ -76,13 +102,29 @@ pub fn build_plane_quad(o: &Options) -> Result<Built, GenerateError> {
         "formula": "E = 4 L s atan(s), s = A/sqrt(1+A^2), A = (side/2)/height; radiance = albedo/pi * E",
         "valid_for_max_depth_at_least": 2,
     });
-    Ok(Built { gltf: g, options, analytic: Some(analytic) })
+    Ok(Built {
+        gltf: g,
+        options,
+        analytic: Some(analytic),
+    })
 }
 
 pub fn build_plane_point(o: &Options) -> Result<Built, GenerateError> {
     let albedo = check_range("albedo", o.albedo.unwrap_or(0.5), 0.0, 1.0, "in [0, 1]")?;
-    let intensity = check_range("intensity", o.intensity.unwrap_or(10.0), 0.0, 1e6, "in [0, 1e6]")?;
-    let h = check_range("height", o.height.unwrap_or(1.0), 0.01, 50.0, "in [0.01, 50] m")?;
+    let intensity = check_range(
+        "intensity",
+        o.intensity.unwrap_or(10.0),
+        0.0,
+        1e6,
+        "in [0, 1e6]",
+    )?;
+    let h = check_range(
+        "height",
+        o.height.unwrap_or(1.0),
+        0.01,
+        50.0,
+        "in [0.01, 50] m",
+    )?;
     let aspect = o.aspect.unwrap_or(1.0);
 
     let mut g = Gltf::new();
@@ -90,7 +132,11 @@ pub fn build_plane_point(o: &Options) -> Result<Built, GenerateError> {
     let cone = (30f32.to_radians(), 45f32.to_radians());
     let light = g.punctual_light("light", [1.0; 3], intensity, o.spot.then_some(cone));
     // A spot light shines down its local −Z; turning −Z onto −Y is −90° about X.
-    let rotation = if o.spot { Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2) } else { Quat::IDENTITY };
+    let rotation = if o.spot {
+        Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2)
+    } else {
+        Quat::IDENTITY
+    };
     g.node(Node {
         name: Some("light".into()),
         light: Some(light),
@@ -123,7 +169,11 @@ pub fn build_plane_point(o: &Options) -> Result<Built, GenerateError> {
         analytic["spot_inner_cone_angle"] = num(cone.0);
         analytic["spot_outer_cone_angle"] = num(cone.1);
     }
-    Ok(Built { gltf: g, options, analytic: Some(analytic) })
+    Ok(Built {
+        gltf: g,
+        options,
+        analytic: Some(analytic),
+    })
 }
 
 #[cfg(test)]

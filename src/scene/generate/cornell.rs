@@ -16,8 +16,14 @@ use serde_json::{json, Map};
 const WHITE: [f32; 3] = [0.73, 0.73, 0.73];
 const RED: [f32; 3] = [0.63, 0.065, 0.05];
 const GREEN: [f32; 3] = [0.14, 0.45, 0.091];
-const PALETTE: [[f32; 3]; 6] =
-    [[1.0, 0.75, 0.45], [1.0, 0.3, 0.2], [0.3, 0.6, 1.0], [0.4, 1.0, 0.4], [1.0, 0.9, 0.3], [0.9, 0.4, 1.0]];
+const PALETTE: [[f32; 3]; 6] = [
+    [1.0, 0.75, 0.45],
+    [1.0, 0.3, 0.2],
+    [0.3, 0.6, 1.0],
+    [0.4, 1.0, 0.4],
+    [1.0, 0.9, 0.3],
+    [0.9, 0.4, 1.0],
+];
 /// Radiance of the weakest and strongest emitters (a 200× span).
 const L_MIN: f32 = 2.0;
 const L_MAX: f32 = 400.0;
@@ -71,25 +77,69 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
     let k = ((n as f32 / 16.0).sqrt().ceil() as u32).max(1);
     let e = 0.002; // off the wall, so emitter and wall never share a plane
     let regions = [
-        Region { o: Vec3::new(-0.8, y1 - e, -0.8), u: Vec3::X * 1.6, v: Vec3::Z * 1.6, hidden: false },
-        Region { o: Vec3::new(-0.05, 0.15, z0 + e), u: Vec3::X * 0.85, v: Vec3::Y * 1.6, hidden: false },
-        Region { o: Vec3::new(-0.7, 1.45, z0 + e), u: Vec3::X * 0.6, v: Vec3::Y * 0.4, hidden: false },
-        Region { o: Vec3::new(x0 + e, 0.2, -0.8), u: Vec3::Y * 1.6, v: Vec3::Z * 1.5, hidden: false },
-        Region { o: Vec3::new(x1 - e, 0.2, -0.8), u: Vec3::Z * 1.5, v: Vec3::Y * 1.6, hidden: false },
-        Region { o: Vec3::new(-0.68, 0.08, z0 + e), u: Vec3::X * 0.5, v: Vec3::Y * 0.75, hidden: true },
-        Region { o: Vec3::new(-0.7, e, z0 + 0.05), u: Vec3::Z * 0.2, v: Vec3::X * 0.55, hidden: true },
+        Region {
+            o: Vec3::new(-0.8, y1 - e, -0.8),
+            u: Vec3::X * 1.6,
+            v: Vec3::Z * 1.6,
+            hidden: false,
+        },
+        Region {
+            o: Vec3::new(-0.05, 0.15, z0 + e),
+            u: Vec3::X * 0.85,
+            v: Vec3::Y * 1.6,
+            hidden: false,
+        },
+        Region {
+            o: Vec3::new(-0.7, 1.45, z0 + e),
+            u: Vec3::X * 0.6,
+            v: Vec3::Y * 0.4,
+            hidden: false,
+        },
+        Region {
+            o: Vec3::new(x0 + e, 0.2, -0.8),
+            u: Vec3::Y * 1.6,
+            v: Vec3::Z * 1.5,
+            hidden: false,
+        },
+        Region {
+            o: Vec3::new(x1 - e, 0.2, -0.8),
+            u: Vec3::Z * 1.5,
+            v: Vec3::Y * 1.6,
+            hidden: false,
+        },
+        Region {
+            o: Vec3::new(-0.68, 0.08, z0 + e),
+            u: Vec3::X * 0.5,
+            v: Vec3::Y * 0.75,
+            hidden: true,
+        },
+        Region {
+            o: Vec3::new(-0.7, e, z0 + 0.05),
+            u: Vec3::Z * 0.2,
+            v: Vec3::X * 0.55,
+            hidden: true,
+        },
     ];
     let mut visible_slots = Vec::new();
     let mut hidden_slots = Vec::new();
     for reg in &regions {
         // Slot count along each edge in proportion to its length (≥ 1).
-        let (nu, nv) = ((reg.u.length() * 4.0 * k as f32).round().max(1.0) as u32, (reg.v.length() * 4.0 * k as f32).round().max(1.0) as u32);
+        let (nu, nv) = (
+            (reg.u.length() * 4.0 * k as f32).round().max(1.0) as u32,
+            (reg.v.length() * 4.0 * k as f32).round().max(1.0) as u32,
+        );
         for i in 0..nu {
             for j in 0..nv {
-                let centre = reg.o + reg.u * ((i as f32 + 0.5) / nu as f32) + reg.v * ((j as f32 + 0.5) / nv as f32);
+                let centre = reg.o
+                    + reg.u * ((i as f32 + 0.5) / nu as f32)
+                    + reg.v * ((j as f32 + 0.5) / nv as f32);
                 let cell = (reg.u.length() / nu as f32).min(reg.v.length() / nv as f32);
                 let slot = (centre, reg.u.normalize(), reg.v.normalize(), cell);
-                if reg.hidden { hidden_slots.push(slot) } else { visible_slots.push(slot) }
+                if reg.hidden {
+                    hidden_slots.push(slot)
+                } else {
+                    visible_slots.push(slot)
+                }
             }
         }
     }
@@ -107,10 +157,18 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
     // Radiances log-spaced over the full span (so it is exactly 200× whenever n ≥ 2), then
     // dealt to slots at random.
     let mut radiances: Vec<f32> = (0..n)
-        .map(|i| if n == 1 { L_MAX } else { L_MIN * (L_MAX / L_MIN).powf(i as f32 / (n - 1) as f32) })
+        .map(|i| {
+            if n == 1 {
+                L_MAX
+            } else {
+                L_MIN * (L_MAX / L_MIN).powf(i as f32 / (n - 1) as f32)
+            }
+        })
         .collect();
     shuffle(&mut rng, &mut radiances);
-    let slots = hidden_slots[..n_hidden].iter().chain(&visible_slots[..n_visible]);
+    let slots = hidden_slots[..n_hidden]
+        .iter()
+        .chain(&visible_slots[..n_visible]);
     let mut hidden_power_share = 0.0f64;
     let mut total_power = 0.0f64;
     for (i, (&(c, u, v, cell), &l)) in slots.zip(&radiances).enumerate() {
@@ -118,10 +176,15 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
         let color = *rng.pick(&PALETTE);
         let mut q = MeshData::new();
         q.rect(c - (u + v) * (side / 2.0), u * side, v * side);
-        let m = g.material(Material::emitter(&format!("light{i}"), color.map(|x| x * l)));
+        let m = g.material(Material::emitter(
+            &format!("light{i}"),
+            color.map(|x| x * l),
+        ));
         let mesh = g.mesh(&format!("light{i}"), &[(&q, m)]);
         g.node(Node::mesh(mesh, Vec3::ZERO).named(format!("light{i}")));
-        let p = std::f64::consts::PI * (side * side) as f64 * (l * (color[0] + color[1] + color[2]) / 3.0) as f64;
+        let p = std::f64::consts::PI
+            * (side * side) as f64
+            * (l * (color[0] + color[1] + color[2]) / 3.0) as f64;
         total_power += p;
         if i < n_hidden {
             hidden_power_share += p;
@@ -139,7 +202,11 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
         "radiance_max": num(L_MAX),
         "hidden_power_fraction": hidden_power_share / total_power,
     });
-    Ok(Built { gltf: g, options, analytic: Some(analytic) })
+    Ok(Built {
+        gltf: g,
+        options,
+        analytic: Some(analytic),
+    })
 }
 
 fn shuffle<T>(rng: &mut Rng, v: &mut [T]) {

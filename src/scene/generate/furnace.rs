@@ -10,8 +10,20 @@ use glam::{Vec2, Vec3};
 use serde_json::{json, Map};
 
 pub fn build(o: &Options) -> Result<Built, GenerateError> {
-    let albedo = check_range("albedo", o.albedo.unwrap_or(0.5), 0.0, 0.999, "in [0, 0.999]")?;
-    let emission = check_range("emission", o.emission.unwrap_or(1.0), 0.0, 1e6, "in [0, 1e6]")?;
+    let albedo = check_range(
+        "albedo",
+        o.albedo.unwrap_or(0.5),
+        0.0,
+        0.999,
+        "in [0, 0.999]",
+    )?;
+    let emission = check_range(
+        "emission",
+        o.emission.unwrap_or(1.0),
+        0.0,
+        1e6,
+        "in [0, 1e6]",
+    )?;
     let shape = o.shape.unwrap_or(Shape::Box);
     let aspect = o.aspect.unwrap_or(1.0);
 
@@ -21,7 +33,10 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
         Shape::Sphere => inward_sphere(&mut geo, 1.0, 48, 24),
     }
     let mut g = Gltf::new();
-    let mat = g.material(Material { emission: [emission; 3], ..Material::diffuse("furnace", [albedo; 3]) });
+    let mat = g.material(Material {
+        emission: [emission; 3],
+        ..Material::diffuse("furnace", [albedo; 3])
+    });
     let mesh = g.mesh("enclosure", &[(&geo, mat)]);
     g.node(Node::mesh(mesh, Vec3::ZERO).named("enclosure"));
     let cam = g.camera("inside", 60.0, aspect);
@@ -30,10 +45,17 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
     let mut options = Map::new();
     options.insert("albedo".into(), num(albedo));
     options.insert("emission".into(), num(emission));
-    options.insert("shape".into(), json!(if shape == Shape::Box { "box" } else { "sphere" }));
+    options.insert(
+        "shape".into(),
+        json!(if shape == Shape::Box { "box" } else { "sphere" }),
+    );
     options.insert("aspect".into(), num(aspect));
     let expected: Vec<f64> = (1..=8)
-        .map(|d| (0..d).map(|k| emission as f64 * (albedo as f64).powi(k)).sum::<f64>())
+        .map(|d| {
+            (0..d)
+                .map(|k| emission as f64 * (albedo as f64).powi(k))
+                .sum::<f64>()
+        })
         .collect();
     let analytic = json!({
         "albedo": num(albedo),
@@ -41,14 +63,25 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
         "formula": "pixel value = emission * sum_{k=0}^{D-1} albedo^k for max depth D",
         "expected_by_max_depth": expected,
     });
-    Ok(Built { gltf: g, options, analytic: Some(analytic) })
+    Ok(Built {
+        gltf: g,
+        options,
+        analytic: Some(analytic),
+    })
 }
 
 /// A UV sphere with its faces wound to look inward (triangles at the poles).
 fn inward_sphere(geo: &mut MeshData, r: f32, slices: u32, stacks: u32) {
     let p = |i: u32, j: u32| {
-        let (phi, theta) = (i as f32 / slices as f32 * std::f32::consts::TAU, j as f32 / stacks as f32 * std::f32::consts::PI);
-        Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()) * r
+        let (phi, theta) = (
+            i as f32 / slices as f32 * std::f32::consts::TAU,
+            j as f32 / stacks as f32 * std::f32::consts::PI,
+        );
+        Vec3::new(
+            theta.sin() * phi.cos(),
+            theta.cos(),
+            theta.sin() * phi.sin(),
+        ) * r
     };
     for j in 0..stacks {
         for i in 0..slices {

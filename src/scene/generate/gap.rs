@@ -29,7 +29,11 @@ fn room(geo: &mut MeshData, x0: f32, x1: f32, open_x: f32) {
 fn wall_face(geo: &mut MeshData, x: f32, sign: f32) {
     let (z0, z1, top) = DOOR;
     let mut rect = |za: f32, zb: f32, ya: f32, yb: f32| {
-        let (o, u, v) = (Vec3::new(x, ya, za), Vec3::Z * (zb - za), Vec3::Y * (yb - ya));
+        let (o, u, v) = (
+            Vec3::new(x, ya, za),
+            Vec3::Z * (zb - za),
+            Vec3::Y * (yb - ya),
+        );
         // Z × Y = −X: swap the edges for a face looking toward +x.
         if sign > 0.0 {
             geo.rect(o, v, u)
@@ -44,7 +48,13 @@ fn wall_face(geo: &mut MeshData, x: f32, sign: f32) {
 
 pub fn build(o: &Options) -> Result<Built, GenerateError> {
     let albedo = check_range("albedo", o.albedo.unwrap_or(0.7), 0.0, 1.0, "in [0, 1]")?;
-    let radiance = check_range("emission", o.emission.unwrap_or(50.0), 0.0, 1e6, "in [0, 1e6]")?;
+    let radiance = check_range(
+        "emission",
+        o.emission.unwrap_or(50.0),
+        0.0,
+        1e6,
+        "in [0, 1e6]",
+    )?;
     let aspect = o.aspect.unwrap_or(4.0 / 3.0);
     let mut g = Gltf::new();
     let wall = g.material(Material::diffuse("wall", [albedo; 3]));
@@ -64,8 +74,15 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
     // The emitter: a 0.6 m square just under the far room's ceiling, far from the door.
     let side = 0.6;
     let mut quad = MeshData::new();
-    quad.rect(Vec3::new(-2.6, H - 0.01, 0.5), Vec3::X * side, Vec3::Z * side);
-    let lamp = g.material(Material::emitter("lamp", [radiance, radiance * 0.85, radiance * 0.7]));
+    quad.rect(
+        Vec3::new(-2.6, H - 0.01, 0.5),
+        Vec3::X * side,
+        Vec3::Z * side,
+    );
+    let lamp = g.material(Material::emitter(
+        "lamp",
+        [radiance, radiance * 0.85, radiance * 0.7],
+    ));
     let mesh = g.mesh("lamp", &[(&quad, lamp)]);
     g.node(Node::mesh(mesh, Vec3::ZERO).named("lamp"));
 
@@ -80,5 +97,9 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
         "emitter_visible_from_camera": false,
         "doorway": {"x": [-T, 0.0], "y": [0.0, top], "z": [z0, z1]},
     });
-    Ok(Built { gltf: g, options, analytic: Some(analytic) })
+    Ok(Built {
+        gltf: g,
+        options,
+        analytic: Some(analytic),
+    })
 }

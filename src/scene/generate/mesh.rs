@@ -19,7 +19,13 @@ pub struct MeshData {
 
 impl Default for MeshData {
     fn default() -> Self {
-        MeshData { positions: Vec::new(), normals: Vec::new(), uvs: Vec::new(), indices: Vec::new(), uv_tile: 1.0 }
+        MeshData {
+            positions: Vec::new(),
+            normals: Vec::new(),
+            uvs: Vec::new(),
+            indices: Vec::new(),
+            uv_tile: 1.0,
+        }
     }
 }
 
@@ -29,7 +35,10 @@ impl MeshData {
     }
 
     pub fn with_uv_tile(uv_tile: f32) -> Self {
-        MeshData { uv_tile, ..Self::default() }
+        MeshData {
+            uv_tile,
+            ..Self::default()
+        }
     }
 
     pub fn is_empty(&self) -> bool {
@@ -52,7 +61,8 @@ impl MeshData {
             self.normals.push(n);
             self.uvs.push(uv[i]);
         }
-        self.indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+        self.indices
+            .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
     }
 
     /// The parallelogram `o, o+u, o+u+v, o+v`; its front faces along `u × v`. UVs follow
@@ -61,7 +71,12 @@ impl MeshData {
         let (lu, lv) = (u.length() / self.uv_tile, v.length() / self.uv_tile);
         self.quad(
             [o, o + u, o + u + v, o + v],
-            [uv0, uv0 + Vec2::new(lu, 0.0), uv0 + Vec2::new(lu, lv), uv0 + Vec2::new(0.0, lv)],
+            [
+                uv0,
+                uv0 + Vec2::new(lu, 0.0),
+                uv0 + Vec2::new(lu, lv),
+                uv0 + Vec2::new(0.0, lv),
+            ],
         );
     }
 
@@ -138,7 +153,12 @@ impl MeshData {
             let (a, b) = (ring(i), ring(i + 1));
             self.quad(
                 [a, b, b + up, a + up],
-                [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)],
+                [
+                    Vec2::new(0.0, 0.0),
+                    Vec2::new(1.0, 0.0),
+                    Vec2::new(1.0, 1.0),
+                    Vec2::new(0.0, 1.0),
+                ],
             );
             self.triangle(base + up, a + up, b + up);
             self.triangle(base, b, a);
@@ -148,7 +168,12 @@ impl MeshData {
     /// A square pyramid roof (four triangles) over the square of half-side `r` at `base`.
     pub fn pyramid(&mut self, base: Vec3, r: f32, height: f32) {
         let apex = base + Vec3::Y * height;
-        let c = [Vec3::new(-r, 0.0, r), Vec3::new(r, 0.0, r), Vec3::new(r, 0.0, -r), Vec3::new(-r, 0.0, -r)];
+        let c = [
+            Vec3::new(-r, 0.0, r),
+            Vec3::new(r, 0.0, r),
+            Vec3::new(r, 0.0, -r),
+            Vec3::new(-r, 0.0, -r),
+        ];
         for i in 0..4 {
             self.triangle(base + c[i], base + c[(i + 1) % 4], apex);
         }
@@ -158,7 +183,10 @@ impl MeshData {
     pub fn octahedron(&mut self, center: Vec3, radius: f32) {
         let axes = [Vec3::X, Vec3::Z, -Vec3::X, -Vec3::Z];
         for i in 0..4 {
-            let (a, b) = (center + axes[i] * radius, center + axes[(i + 1) % 4] * radius);
+            let (a, b) = (
+                center + axes[i] * radius,
+                center + axes[(i + 1) % 4] * radius,
+            );
             self.triangle(a, center + Vec3::Y * radius, b);
             self.triangle(b, center - Vec3::Y * radius, a);
         }
@@ -182,7 +210,8 @@ impl MeshData {
         let nm = m.inverse().transpose();
         for i in 0..other.positions.len() {
             self.positions.push(m.transform_point3(other.positions[i]));
-            self.normals.push(nm.transform_vector3(other.normals[i]).normalize());
+            self.normals
+                .push(nm.transform_vector3(other.normals[i]).normalize());
             self.uvs.push(other.uvs[i]);
         }
         self.indices.extend(other.indices.iter().map(|i| i + base));
@@ -193,7 +222,8 @@ impl MeshData {
         self.indices
             .chunks_exact(3)
             .map(|t| {
-                let [a, b, c] = [0, 1, 2].map(|k| m.transform_point3(self.positions[t[k] as usize]));
+                let [a, b, c] =
+                    [0, 1, 2].map(|k| m.transform_point3(self.positions[t[k] as usize]));
                 0.5 * (b - a).cross(c - a).length() as f64
             })
             .sum()
@@ -229,7 +259,12 @@ mod tests {
         assert!((m.area(Mat4::IDENTITY) - expected).abs() < 1e-5);
         for t in m.indices.chunks_exact(3) {
             let [a, b, c] = [0, 1, 2].map(|k| m.positions[t[k] as usize]);
-            assert!((b - a).cross(c - a).dot((a + b + c) / 3.0 - Vec3::new(1.0, 2.0, 3.0)) > 0.0);
+            assert!(
+                (b - a)
+                    .cross(c - a)
+                    .dot((a + b + c) / 3.0 - Vec3::new(1.0, 2.0, 3.0))
+                    > 0.0
+            );
         }
     }
 }

@@ -20,7 +20,9 @@
 
 use super::mesh::MeshData;
 use super::rng::Rng;
-use super::street_facade::{self as facade, BulbKind, FacadeMaterials, Frame, Prop, Run, Sink, Spot};
+use super::street_facade::{
+    self as facade, BulbKind, FacadeMaterials, Frame, Prop, Run, Sink, Spot,
+};
 use super::street_props as props;
 use super::textures;
 use super::writer::{num, Filter, Gltf, Material, Node};
@@ -53,8 +55,13 @@ const SIGN_WORDS: [(&str, [f32; 3]); 8] = [
     ("JAZZ", [0.4, 0.8, 1.0]),
 ];
 /// Garland colours: warm white first (most garlands), then the festive ones.
-const GARLAND_COLOURS: [[f32; 3]; 5] =
-    [[1.0, 0.72, 0.42], [1.0, 0.18, 0.12], [0.25, 1.0, 0.3], [0.3, 0.45, 1.0], [1.0, 0.6, 0.1]];
+const GARLAND_COLOURS: [[f32; 3]; 5] = [
+    [1.0, 0.72, 0.42],
+    [1.0, 0.18, 0.12],
+    [0.25, 1.0, 0.3],
+    [0.3, 0.45, 1.0],
+    [1.0, 0.6, 0.1],
+];
 const LEVELS: [f32; 3] = [0.6, 1.0, 1.6];
 /// Garland power per metre of wire (W/m in radiometric units of the scene).
 const GARLAND_POWER_PER_M: f32 = 12.0;
@@ -85,10 +92,22 @@ struct Materials {
 }
 
 fn materials(g: &mut Gltf, rng: &mut Rng) -> Result<Materials, GenerateError> {
-    let tex_cobbles = g.texture("cobbles", textures::cobbles(&mut rng.fork(1)).png()?, Filter::Linear);
-    let tex_paving = g.texture("paving", textures::paving(&mut rng.fork(2)).png()?, Filter::Linear);
+    let tex_cobbles = g.texture(
+        "cobbles",
+        textures::cobbles(&mut rng.fork(1)).png()?,
+        Filter::Linear,
+    );
+    let tex_paving = g.texture(
+        "paving",
+        textures::paving(&mut rng.fork(2)).png()?,
+        Filter::Linear,
+    );
     let tex_railing = g.texture("railing", textures::railing().png()?, Filter::Linear);
-    let tex_foliage = g.texture("foliage", textures::foliage(&mut rng.fork(3)).png()?, Filter::Linear);
+    let tex_foliage = g.texture(
+        "foliage",
+        textures::foliage(&mut rng.fork(3)).png()?,
+        Filter::Linear,
+    );
     let atlas = textures::sign_atlas(&SIGN_WORDS);
     let tex_signs = g.texture("signs", atlas.image.png()?, Filter::Linear);
 
@@ -110,19 +129,32 @@ fn materials(g: &mut Gltf, rng: &mut Rng) -> Result<Materials, GenerateError> {
     ]
     .map(|(n, c)| g.material(Material::diffuse(n, c)))
     .to_vec();
-    let shutters = [("shutter-green", [0.08, 0.2, 0.1]), ("shutter-blue", [0.07, 0.12, 0.25]), ("shutter-brown", [0.2, 0.1, 0.05])]
-        .map(|(n, c)| g.material(Material::diffuse(n, c)))
-        .to_vec();
-    let interior = [("interior-warm", [0.6, 0.42, 0.28]), ("interior-green", [0.25, 0.35, 0.25]), ("interior-red", [0.45, 0.15, 0.12])]
-        .map(|(n, c)| g.material(Material::diffuse(n, c)))
-        .to_vec();
+    let shutters = [
+        ("shutter-green", [0.08, 0.2, 0.1]),
+        ("shutter-blue", [0.07, 0.12, 0.25]),
+        ("shutter-brown", [0.2, 0.1, 0.05]),
+    ]
+    .map(|(n, c)| g.material(Material::diffuse(n, c)))
+    .to_vec();
+    let interior = [
+        ("interior-warm", [0.6, 0.42, 0.28]),
+        ("interior-green", [0.25, 0.35, 0.25]),
+        ("interior-red", [0.45, 0.15, 0.12]),
+    ]
+    .map(|(n, c)| g.material(Material::diffuse(n, c)))
+    .to_vec();
     let awnings = [
         ("awning-red", [0.5, 0.05, 0.04]),
         ("awning-green", [0.05, 0.25, 0.1]),
         ("awning-navy", [0.05, 0.07, 0.2]),
         ("awning-cream", [0.6, 0.55, 0.42]),
     ]
-    .map(|(n, c)| g.material(Material { double_sided: true, ..Material::diffuse(n, c) }))
+    .map(|(n, c)| {
+        g.material(Material {
+            double_sided: true,
+            ..Material::diffuse(n, c)
+        })
+    })
     .to_vec();
     let facade = FacadeMaterials {
         walls,
@@ -163,7 +195,10 @@ fn materials(g: &mut Gltf, rng: &mut Rng) -> Result<Materials, GenerateError> {
         glass_red: g.material(Material::glossy("candle-glass", [0.5, 0.05, 0.03], 0.1)),
         planter: g.material(Material::diffuse("planter", [0.4, 0.16, 0.08])),
         foliage: g.material(textured("foliage", tex_foliage, true)),
-        wire: g.material(Material { double_sided: true, ..Material::diffuse("wire", [0.02, 0.02, 0.02]) }),
+        wire: g.material(Material {
+            double_sided: true,
+            ..Material::diffuse("wire", [0.02, 0.02, 0.02])
+        }),
         signs,
     })
 }
@@ -199,30 +234,139 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
     let fm = &mats.facade;
     let signs = SIGN_WORDS.len();
     let mut placed = Vec::new();
-    let mut run = |rng: &mut Rng, origin: Vec3, u: Vec3, width: f32, ground: f32, first: Option<f32>, cafes: bool| {
+    let mut run = |rng: &mut Rng,
+                   origin: Vec3,
+                   u: Vec3,
+                   width: f32,
+                   ground: f32,
+                   first: Option<f32>,
+                   cafes: bool| {
         let r = facade::build_run(rng, fm, width, ground, first, signs, cafes);
         let h = r.end_heights;
-        placed.push(Placed { frame: Frame { origin, u }, run: r });
+        placed.push(Placed {
+            frame: Frame { origin, u },
+            run: r,
+        });
         h
     };
-    let left1 = run(&mut frng, Vec3::new(-FACADE_X, 0.0, Z_NEAR), -Vec3::Z, Z_NEAR - CROSS_Z0, CURB, None, true);
-    let left2 = run(&mut frng, Vec3::new(-FACADE_X, 0.0, CROSS_Z1), -Vec3::Z, CROSS_Z1 - Z_FAR, CURB, None, true);
-    let right1 = run(&mut frng, Vec3::new(FACADE_X, 0.0, CROSS_Z0), Vec3::Z, Z_NEAR - CROSS_Z0, CURB, None, true);
-    let right2 = run(&mut frng, Vec3::new(FACADE_X, 0.0, Z_FAR), Vec3::Z, CROSS_Z1 - Z_FAR, CURB, None, true);
-    run(&mut frng, Vec3::new(-FACADE_X, 0.0, Z_FAR), Vec3::X, 2.0 * FACADE_X, CURB, Some(left2.1), true);
-    run(&mut frng, Vec3::new(FACADE_X, 0.0, Z_NEAR), -Vec3::X, 2.0 * FACADE_X, CURB, Some(right1.1), true);
+    let left1 = run(
+        &mut frng,
+        Vec3::new(-FACADE_X, 0.0, Z_NEAR),
+        -Vec3::Z,
+        Z_NEAR - CROSS_Z0,
+        CURB,
+        None,
+        true,
+    );
+    let left2 = run(
+        &mut frng,
+        Vec3::new(-FACADE_X, 0.0, CROSS_Z1),
+        -Vec3::Z,
+        CROSS_Z1 - Z_FAR,
+        CURB,
+        None,
+        true,
+    );
+    let right1 = run(
+        &mut frng,
+        Vec3::new(FACADE_X, 0.0, CROSS_Z0),
+        Vec3::Z,
+        Z_NEAR - CROSS_Z0,
+        CURB,
+        None,
+        true,
+    );
+    let right2 = run(
+        &mut frng,
+        Vec3::new(FACADE_X, 0.0, Z_FAR),
+        Vec3::Z,
+        CROSS_Z1 - Z_FAR,
+        CURB,
+        None,
+        true,
+    );
+    run(
+        &mut frng,
+        Vec3::new(-FACADE_X, 0.0, Z_FAR),
+        Vec3::X,
+        2.0 * FACADE_X,
+        CURB,
+        Some(left2.1),
+        true,
+    );
+    run(
+        &mut frng,
+        Vec3::new(FACADE_X, 0.0, Z_NEAR),
+        -Vec3::X,
+        2.0 * FACADE_X,
+        CURB,
+        Some(right1.1),
+        true,
+    );
     let side = SIDE_X - FACADE_X;
-    run(&mut frng, Vec3::new(-FACADE_X, 0.0, CROSS_Z0), -Vec3::X, side, 0.0, Some(left1.1), false);
-    run(&mut frng, Vec3::new(-SIDE_X, 0.0, CROSS_Z1), Vec3::X, side, 0.0, None, false);
-    run(&mut frng, Vec3::new(SIDE_X, 0.0, CROSS_Z0), -Vec3::X, side, 0.0, None, false);
-    run(&mut frng, Vec3::new(FACADE_X, 0.0, CROSS_Z1), Vec3::X, side, 0.0, Some(right2.1), false);
-    run(&mut frng, Vec3::new(SIDE_X, 0.0, CROSS_Z1), Vec3::Z, CROSS_Z0 - CROSS_Z1, 0.0, None, false);
-    run(&mut frng, Vec3::new(-SIDE_X, 0.0, CROSS_Z0), -Vec3::Z, CROSS_Z0 - CROSS_Z1, 0.0, None, false);
+    run(
+        &mut frng,
+        Vec3::new(-FACADE_X, 0.0, CROSS_Z0),
+        -Vec3::X,
+        side,
+        0.0,
+        Some(left1.1),
+        false,
+    );
+    run(
+        &mut frng,
+        Vec3::new(-SIDE_X, 0.0, CROSS_Z1),
+        Vec3::X,
+        side,
+        0.0,
+        None,
+        false,
+    );
+    run(
+        &mut frng,
+        Vec3::new(SIDE_X, 0.0, CROSS_Z0),
+        -Vec3::X,
+        side,
+        0.0,
+        None,
+        false,
+    );
+    run(
+        &mut frng,
+        Vec3::new(FACADE_X, 0.0, CROSS_Z1),
+        Vec3::X,
+        side,
+        0.0,
+        Some(right2.1),
+        false,
+    );
+    run(
+        &mut frng,
+        Vec3::new(SIDE_X, 0.0, CROSS_Z1),
+        Vec3::Z,
+        CROSS_Z0 - CROSS_Z1,
+        0.0,
+        None,
+        false,
+    );
+    run(
+        &mut frng,
+        Vec3::new(-SIDE_X, 0.0, CROSS_Z0),
+        -Vec3::Z,
+        CROSS_Z0 - CROSS_Z1,
+        0.0,
+        None,
+        false,
+    );
 
     // Sidewalk furniture along the four main-street runs (local z = distance from wall).
     let mut prng = rng.fork(11);
     for (i, p) in placed.iter_mut().take(4).enumerate() {
-        let width = if i % 2 == 0 { Z_NEAR - CROSS_Z0 } else { CROSS_Z1 - Z_FAR };
+        let width = if i % 2 == 0 {
+            Z_NEAR - CROSS_Z0
+        } else {
+            CROSS_Z1 - Z_FAR
+        };
         sidewalk_props(&mut prng, &mut p.run, width, i);
     }
     // Cross-street lamp posts close to the walls.
@@ -230,7 +374,10 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
         for k in 0..2 {
             let x = 6.0 + 9.0 * k as f32 + if i % 2 == 0 { 0.0 } else { 4.5 };
             p.run.props.push((Prop::Post, Vec3::new(x, 0.0, 0.6), 0.0));
-            p.run.spots.push(Spot::Bulb { kind: BulbKind::Post, pos: Vec3::new(x, 0.0, 0.6) + props::POST_BULB });
+            p.run.spots.push(Spot::Bulb {
+                kind: BulbKind::Post,
+                pos: Vec3::new(x, 0.0, 0.6) + props::POST_BULB,
+            });
         }
     }
     for p in &placed {
@@ -245,7 +392,11 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
     while z > Z_FAR + 2.0 {
         if !(CROSS_Z1 - 1.5..=CROSS_Z0 + 1.5).contains(&z) {
             let (ya, yb) = (grng.range(5.9, 7.0), grng.range(5.9, 7.0));
-            let dz = if grng.chance(0.3) { -interval * 0.5 } else { 0.0 };
+            let dz = if grng.chance(0.3) {
+                -interval * 0.5
+            } else {
+                0.0
+            };
             let a = Vec3::new(-FACADE_X + 0.05, ya, z);
             let b = Vec3::new(FACADE_X - 0.05, yb, z + dz);
             garlands.push(facade::sagging(a, b, grng.range(0.5, 0.9), 24));
@@ -274,7 +425,10 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
         let rot = p.frame.rotation();
         for &(prop, pos, yaw) in &p.run.props {
             let node = Node::mesh(prop_meshes[prop as usize], p.frame.point(pos));
-            g.node(Node { rotation: rot * Quat::from_rotation_y(yaw), ..node });
+            g.node(Node {
+                rotation: rot * Quat::from_rotation_y(yaw),
+                ..node
+            });
         }
     }
 
@@ -284,12 +438,24 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
     for (ri, p) in placed.iter().enumerate() {
         for (si, s) in p.run.spots.iter().enumerate() {
             let priority = match s {
-                Spot::Bulb { kind: BulbKind::Post, .. } => 0,
+                Spot::Bulb {
+                    kind: BulbKind::Post,
+                    ..
+                } => 0,
                 Spot::Sign { .. } => 1,
-                Spot::Bulb { kind: BulbKind::Pendant, .. } => 2,
-                Spot::Bulb { kind: BulbKind::WallLantern, .. } => 3,
+                Spot::Bulb {
+                    kind: BulbKind::Pendant,
+                    ..
+                } => 2,
+                Spot::Bulb {
+                    kind: BulbKind::WallLantern,
+                    ..
+                } => 3,
                 Spot::Pane { .. } => 4,
-                Spot::Bulb { kind: BulbKind::Candle, .. } => 5,
+                Spot::Bulb {
+                    kind: BulbKind::Candle,
+                    ..
+                } => 5,
             };
             spots.push((priority, lrng.f32(), ri, si));
         }
@@ -302,10 +468,26 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
         let p = &placed[ri];
         let lit = k < fixed;
         chosen[k] = lit;
-        place_spot(&mut g, &mut sink, &mats, &mut lights, &mut lrng, p.frame, &p.run.spots[si], lit);
+        place_spot(
+            &mut g,
+            &mut sink,
+            &mats,
+            &mut lights,
+            &mut lrng,
+            p.frame,
+            &p.run.spots[si],
+            lit,
+        );
     }
     let garland_bulbs = lamps as usize - fixed;
-    place_garlands(&mut g, &mut sink, &mats, &mut grng, &garlands, garland_bulbs);
+    place_garlands(
+        &mut g,
+        &mut sink,
+        &mats,
+        &mut grng,
+        &garlands,
+        garland_bulbs,
+    );
 
     // All static geometry as one mesh, one primitive per material.
     let parts: Vec<(&MeshData, usize)> = sink.parts.iter().map(|(&m, geo)| (geo, m)).collect();
@@ -315,7 +497,13 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
     let cam = g.camera("street-view", 55.0, aspect);
     g.camera_node(cam, Vec3::new(-1.2, 1.7, 7.0), Vec3::new(0.6, 3.4, -40.0));
 
-    let count = |p: u32| spots.iter().zip(&chosen).filter(|(s, &c)| c && s.0 == p).count();
+    let count = |p: u32| {
+        spots
+            .iter()
+            .zip(&chosen)
+            .filter(|(s, &c)| c && s.0 == p)
+            .count()
+    };
     let mut options = Map::new();
     options.insert("lamps".into(), json!(lamps));
     options.insert("aspect".into(), num(aspect));
@@ -332,25 +520,49 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
         "sky": "none (black)",
         "units": "metres",
     });
-    Ok(Built { gltf: g, options, analytic: Some(analytic) })
+    Ok(Built {
+        gltf: g,
+        options,
+        analytic: Some(analytic),
+    })
 }
 
 /// Road (cobbles), raised sidewalks (paving) with curbs, along the main street; the cross
 /// street is cobbled wall to wall.
 fn ground(sink: &mut Sink, m: &Materials) {
     let road = sink.at(m.cobbles);
-    road.rect(Vec3::new(-ROAD_X, 0.0, Z_NEAR), Vec3::X * 2.0 * ROAD_X, Vec3::Z * (Z_FAR - Z_NEAR));
+    road.rect(
+        Vec3::new(-ROAD_X, 0.0, Z_NEAR),
+        Vec3::X * 2.0 * ROAD_X,
+        Vec3::Z * (Z_FAR - Z_NEAR),
+    );
     for (x0, x1) in [(-SIDE_X, -ROAD_X), (ROAD_X, SIDE_X)] {
-        road.rect(Vec3::new(x0, 0.0, CROSS_Z0), Vec3::X * (x1 - x0), Vec3::Z * (CROSS_Z1 - CROSS_Z0));
+        road.rect(
+            Vec3::new(x0, 0.0, CROSS_Z0),
+            Vec3::X * (x1 - x0),
+            Vec3::Z * (CROSS_Z1 - CROSS_Z0),
+        );
     }
     for (z0, z1) in [(CROSS_Z0, Z_NEAR), (Z_FAR, CROSS_Z1)] {
         for sx in [-1.0f32, 1.0] {
-            let (xa, xb) = if sx < 0.0 { (-FACADE_X, -ROAD_X) } else { (ROAD_X, FACADE_X) };
-            sink.at(m.paving).rect(Vec3::new(xa, CURB, z1), Vec3::X * (xb - xa), Vec3::Z * (z0 - z1));
+            let (xa, xb) = if sx < 0.0 {
+                (-FACADE_X, -ROAD_X)
+            } else {
+                (ROAD_X, FACADE_X)
+            };
+            sink.at(m.paving).rect(
+                Vec3::new(xa, CURB, z1),
+                Vec3::X * (xb - xa),
+                Vec3::Z * (z0 - z1),
+            );
             // Curb faces toward the road and toward the cross street.
             let curb = sink.at(m.curb);
             let kerb_x = sx * ROAD_X;
-            let (o, along) = if sx < 0.0 { (Vec3::new(kerb_x, 0.0, z1), Vec3::Z * (z0 - z1)) } else { (Vec3::new(kerb_x, 0.0, z0), Vec3::Z * (z1 - z0)) };
+            let (o, along) = if sx < 0.0 {
+                (Vec3::new(kerb_x, 0.0, z1), Vec3::Z * (z0 - z1))
+            } else {
+                (Vec3::new(kerb_x, 0.0, z0), Vec3::Z * (z1 - z0))
+            };
             curb.rect(o, along, Vec3::Y * CURB);
             // The end facing the cross street: −z for the near segment, +z for the far one.
             if z0 == CROSS_Z0 {
@@ -368,14 +580,19 @@ fn sidewalk_props(rng: &mut Rng, run: &mut Run, width: f32, index: usize) {
     let mut x = if index < 2 { 3.0 } else { 9.5 };
     while x < width - 1.0 {
         posts.push(x);
-        run.props.push((Prop::Post, Vec3::new(x, CURB, post_z), 0.0));
-        run.spots.push(Spot::Bulb { kind: BulbKind::Post, pos: Vec3::new(x, CURB, post_z) + props::POST_BULB });
+        run.props
+            .push((Prop::Post, Vec3::new(x, CURB, post_z), 0.0));
+        run.spots.push(Spot::Bulb {
+            kind: BulbKind::Post,
+            pos: Vec3::new(x, CURB, post_z) + props::POST_BULB,
+        });
         x += 13.0;
     }
     let mut x = 2.0;
     while x < width - 1.5 {
         if posts.iter().all(|p| (p - x).abs() > 1.6) && rng.chance(0.55) {
-            run.props.push((Prop::Planter, Vec3::new(x, CURB, post_z + 0.1), 0.0));
+            run.props
+                .push((Prop::Planter, Vec3::new(x, CURB, post_z + 0.1), 0.0));
         }
         x += rng.range(4.0, 7.0);
     }
@@ -404,7 +621,16 @@ struct LightMeshes {
 }
 
 #[allow(clippy::too_many_arguments)]
-fn place_spot(g: &mut Gltf, sink: &mut Sink, m: &Materials, lights: &mut LightMeshes, rng: &mut Rng, frame: Frame, spot: &Spot, lit: bool) {
+fn place_spot(
+    g: &mut Gltf,
+    sink: &mut Sink,
+    m: &Materials,
+    lights: &mut LightMeshes,
+    rng: &mut Rng,
+    frame: Frame,
+    spot: &Spot,
+    lit: bool,
+) {
     match *spot {
         Spot::Bulb { kind, pos } => {
             if !lit {
@@ -447,10 +673,16 @@ fn place_spot(g: &mut Gltf, sink: &mut Sink, m: &Materials, lights: &mut LightMe
             if !lit {
                 return;
             }
-            let rows = SIGN_WORDS.len() as f32;
+            let rows = SIGN_WORDS.len().next_power_of_two() as f32;
             let mut geo = MeshData::new();
             let (v0, v1) = (row as f32 / rows, (row + 1) as f32 / rows);
-            geo.rect_mapped(corner, Vec3::X * w, Vec3::Y * h, glam::Vec2::new(0.0, v0), glam::Vec2::new(1.0, v1));
+            geo.rect_mapped(
+                corner,
+                Vec3::X * w,
+                Vec3::Y * h,
+                glam::Vec2::new(0.0, v0),
+                glam::Vec2::new(1.0, v1),
+            );
             let mut world = MeshData::new();
             world.append(&geo, frame.matrix());
             let mesh = g.mesh(&format!("sign-{row}"), &[(&world, m.signs[row])]);
@@ -460,8 +692,18 @@ fn place_spot(g: &mut Gltf, sink: &mut Sink, m: &Materials, lights: &mut LightMe
 }
 
 /// Spreads `count` bulbs evenly (by arc length) over all garlands and draws their wires.
-fn place_garlands(g: &mut Gltf, sink: &mut Sink, m: &Materials, rng: &mut Rng, garlands: &[Vec<Vec3>], count: usize) {
-    let lengths: Vec<f32> = garlands.iter().map(|l| l.windows(2).map(|s| s[0].distance(s[1])).sum()).collect();
+fn place_garlands(
+    g: &mut Gltf,
+    sink: &mut Sink,
+    m: &Materials,
+    rng: &mut Rng,
+    garlands: &[Vec<Vec3>],
+    count: usize,
+) {
+    let lengths: Vec<f32> = garlands
+        .iter()
+        .map(|l| l.windows(2).map(|s| s[0].distance(s[1])).sum())
+        .collect();
     let total: f32 = lengths.iter().sum();
     for line in garlands {
         sink.at(m.wire).ribbon(line, 0.012, Vec3::Y);
@@ -473,7 +715,11 @@ fn place_garlands(g: &mut Gltf, sink: &mut Sink, m: &Materials, rng: &mut Rng, g
     let shares: Vec<f32> = lengths.iter().map(|l| l / total * count as f32).collect();
     let mut counts: Vec<usize> = shares.iter().map(|s| s.floor() as usize).collect();
     let mut order: Vec<usize> = (0..shares.len()).collect();
-    order.sort_by(|&a, &b| (shares[b] - shares[b].floor()).total_cmp(&(shares[a] - shares[a].floor())).then(a.cmp(&b)));
+    order.sort_by(|&a, &b| {
+        (shares[b] - shares[b].floor())
+            .total_cmp(&(shares[a] - shares[a].floor()))
+            .then(a.cmp(&b))
+    });
     let missing = count - counts.iter().sum::<usize>();
     for &i in order.iter().cycle().take(missing) {
         counts[i] += 1;
@@ -489,13 +735,20 @@ fn place_garlands(g: &mut Gltf, sink: &mut Sink, m: &Materials, rng: &mut Rng, g
         let step = len / n.max(1) as f32;
         for k in 0..n {
             let pos = point_at(line, (k as f32 + 0.5) * step) - Vec3::Y * (radius * 1.2);
-            let colour = if festive { 1 + k % (GARLAND_COLOURS.len() - 1) } else { 0 };
+            let colour = if festive {
+                1 + k % (GARLAND_COLOURS.len() - 1)
+            } else {
+                0
+            };
             let mesh = *cache.entry((colour, level)).or_insert_with(|| {
                 let mut geo = MeshData::new();
                 geo.octahedron(Vec3::ZERO, radius);
                 let l = base_radiance * LEVELS[level];
                 let name = format!("garland-{colour}-{level}");
-                let mat = g.material(Material::emitter(&name, GARLAND_COLOURS[colour].map(|x| x * l)));
+                let mat = g.material(Material::emitter(
+                    &name,
+                    GARLAND_COLOURS[colour].map(|x| x * l),
+                ));
                 g.mesh(&name, &[(&geo, mat)])
             });
             g.node(Node::mesh(mesh, pos));

@@ -29,7 +29,9 @@ pub struct Sink {
 impl Sink {
     pub fn at(&mut self, material: usize) -> &mut MeshData {
         let tile = self.tiles.get(&material).copied().unwrap_or(1.0);
-        self.parts.entry(material).or_insert_with(|| MeshData::with_uv_tile(tile))
+        self.parts
+            .entry(material)
+            .or_insert_with(|| MeshData::with_uv_tile(tile))
     }
 
     pub fn append(&mut self, other: &Sink, m: Mat4) {
@@ -52,7 +54,12 @@ impl Frame {
         self.u.cross(Vec3::Y)
     }
     pub fn matrix(&self) -> Mat4 {
-        Mat4::from_cols(self.u.extend(0.0), Vec3::Y.extend(0.0), self.normal().extend(0.0), self.origin.extend(1.0))
+        Mat4::from_cols(
+            self.u.extend(0.0),
+            Vec3::Y.extend(0.0),
+            self.normal().extend(0.0),
+            self.origin.extend(1.0),
+        )
     }
     pub fn rotation(&self) -> Quat {
         Quat::from_mat3(&glam::Mat3::from_cols(self.u, Vec3::Y, self.normal())).normalize()
@@ -89,11 +96,23 @@ pub enum BulbKind {
 
 /// A light model the façade offers, in local coordinates.
 pub enum Spot {
-    Bulb { kind: BulbKind, pos: Vec3 },
+    Bulb {
+        kind: BulbKind,
+        pos: Vec3,
+    },
     /// A glowing window pane filling the back of a recess: corner, width, height.
-    Pane { corner: Vec3, w: f32, h: f32 },
+    Pane {
+        corner: Vec3,
+        w: f32,
+        h: f32,
+    },
     /// An emissive sign face: corner, width, height, atlas row.
-    Sign { corner: Vec3, w: f32, h: f32, row: usize },
+    Sign {
+        corner: Vec3,
+        w: f32,
+        h: f32,
+        row: usize,
+    },
 }
 
 #[derive(Clone, Copy)]
@@ -124,9 +143,10 @@ struct Opening {
     y1: f32,
 }
 
-/// Wall pieces of the rectangle [x0, x1] × [y0, y1] at depth z minus the openings,
-/// facing +z (or −z when `back`), cut into horizontal bands at every opening edge.
-fn wall_with_holes(geo: &mut MeshData, x0: f32, x1: f32, y0: f32, y1: f32, z: f32, holes: &[Opening], back: bool) {
+/// Wall pieces of the rectangle `area` at depth z minus the openings, facing +z (or −z
+/// when `back`), cut into horizontal bands at every opening edge.
+fn wall_with_holes(geo: &mut MeshData, area: Opening, z: f32, holes: &[Opening], back: bool) {
+    let Opening { x0, x1, y0, y1 } = area;
     let mut ys = vec![y0, y1];
     for h in holes {
         ys.extend([h.y0.clamp(y0, y1), h.y1.clamp(y0, y1)]);
@@ -138,8 +158,11 @@ fn wall_with_holes(geo: &mut MeshData, x0: f32, x1: f32, y0: f32, y1: f32, z: f3
         if yb - ya < 1e-4 {
             continue;
         }
-        let mut cuts: Vec<(f32, f32)> =
-            holes.iter().filter(|h| h.y0 <= ya && h.y1 >= yb).map(|h| (h.x0.max(x0), h.x1.min(x1))).collect();
+        let mut cuts: Vec<(f32, f32)> = holes
+            .iter()
+            .filter(|h| h.y0 <= ya && h.y1 >= yb)
+            .map(|h| (h.x0.max(x0), h.x1.min(x1)))
+            .collect();
         cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut x = x0;
         for (c0, c1) in cuts.into_iter().chain([(x1, x1)]) {
@@ -203,7 +226,11 @@ pub fn build_run(
         if i > 0 && (height - prev_height).abs() > 1e-3 {
             let (lo, hi) = (height.min(prev_height), height.max(prev_height));
             let geo = run.sink.at(m.trim);
-            let (o, d, v) = (Vec3::new(b0, lo, -DEPTH), Vec3::Z * DEPTH, Vec3::Y * (hi - lo));
+            let (o, d, v) = (
+                Vec3::new(b0, lo, -DEPTH),
+                Vec3::Z * DEPTH,
+                Vec3::Y * (hi - lo),
+            );
             if height > prev_height {
                 geo.rect(o, d, v)
             } else {
@@ -220,7 +247,17 @@ pub fn build_run(
 }
 
 #[allow(clippy::too_many_arguments)]
-fn building(rng: &mut Rng, m: &FacadeMaterials, run: &mut Run, b0: f32, b1: f32, g: f32, height: f32, signs: usize, cafes: bool) {
+fn building(
+    rng: &mut Rng,
+    m: &FacadeMaterials,
+    run: &mut Run,
+    b0: f32,
+    b1: f32,
+    g: f32,
+    height: f32,
+    signs: usize,
+    cafes: bool,
+) {
     let w = b1 - b0;
     let wall = *rng.pick(&m.walls);
     let shutter_mat = rng.chance(0.6).then(|| *rng.pick(&m.shutters));
@@ -230,21 +267,43 @@ fn building(rng: &mut Rng, m: &FacadeMaterials, run: &mut Run, b0: f32, b1: f32,
     let shop_w = rng.range(2.6, 3.8).min(w - 2.0);
     let slack = w - shop_w - 1.6;
     let shop_x0 = b0 + 0.8 + slack * rng.range(0.15, 0.85);
-    let shop = Opening { x0: shop_x0, x1: shop_x0 + shop_w, y0: g, y1: g + 3.0 };
+    let shop = Opening {
+        x0: shop_x0,
+        x1: shop_x0 + shop_w,
+        y0: g,
+        y1: g + 3.0,
+    };
     let open = rng.chance(0.7);
     if open {
         shop_interior(rng, m, run, &shop, b0, b1, g);
     } else {
         reveals(run.sink.at(wall), &shop, 0.3, false);
-        run.sink.at(m.rolling_shutter).rect(Vec3::new(shop.x0, shop.y0, -0.3), Vec3::X * shop_w, Vec3::Y * 3.0);
+        run.sink.at(m.rolling_shutter).rect(
+            Vec3::new(shop.x0, shop.y0, -0.3),
+            Vec3::X * shop_w,
+            Vec3::Y * 3.0,
+        );
     }
     // Door in the wider pier beside the shop.
     let (left, right) = (shop.x0 - b0, b1 - shop.x1);
     if left.max(right) > 1.8 {
-        let cx = if left > right { b0 + left / 2.0 } else { shop.x1 + right / 2.0 };
-        let door = Opening { x0: cx - 0.55, x1: cx + 0.55, y0: g, y1: g + 2.4 };
+        let cx = if left > right {
+            b0 + left / 2.0
+        } else {
+            shop.x1 + right / 2.0
+        };
+        let door = Opening {
+            x0: cx - 0.55,
+            x1: cx + 0.55,
+            y0: g,
+            y1: g + 2.4,
+        };
         reveals(run.sink.at(wall), &door, 0.25, false);
-        run.sink.at(m.door).rect(Vec3::new(door.x0, door.y0, -0.25), Vec3::X * 1.1, Vec3::Y * 2.4);
+        run.sink.at(m.door).rect(
+            Vec3::new(door.x0, door.y0, -0.25),
+            Vec3::X * 1.1,
+            Vec3::Y * 2.4,
+        );
         holes.push(door);
     }
     // Awning, sign and café furniture for open shops.
@@ -254,26 +313,53 @@ fn building(rng: &mut Rng, m: &FacadeMaterials, run: &mut Run, b0: f32, b1: f32,
     }
     if signs > 0 {
         let sw = (shop_w + 0.2).min(2.6);
-        run.sink.at(m.sign_board).cuboid(Vec3::new(cx - sw / 2.0 - 0.05, g + 3.53, 0.0), Vec3::new(cx + sw / 2.0 + 0.05, g + 4.0, 0.06));
-        run.spots.push(Spot::Sign { corner: Vec3::new(cx - sw / 2.0, g + 3.56, 0.062), w: sw, h: 0.41, row: rng.below(signs) });
+        run.sink.at(m.sign_board).cuboid(
+            Vec3::new(cx - sw / 2.0 - 0.05, g + 3.53, 0.0),
+            Vec3::new(cx + sw / 2.0 + 0.05, g + 4.0, 0.06),
+        );
+        run.spots.push(Spot::Sign {
+            corner: Vec3::new(cx - sw / 2.0, g + 3.56, 0.062),
+            w: sw,
+            h: 0.41,
+            row: rng.below(signs),
+        });
     }
     if open && cafes && rng.chance(0.7) {
         let n = ((shop_w / 1.25) as usize).clamp(1, 3);
         for k in 0..n {
             let x = shop.x0 + shop_w * (k as f32 + 0.5) / n as f32;
             let z = rng.range(1.05, 1.3);
-            run.props.push((Prop::Table, Vec3::new(x, g, z), rng.range(0.0, 1.0)));
-            run.props.push((Prop::Chair, Vec3::new(x - 0.52, g, z), std::f32::consts::FRAC_PI_2));
-            run.props.push((Prop::Chair, Vec3::new(x + 0.52, g, z), -std::f32::consts::FRAC_PI_2));
-            run.props.push((Prop::Candle, Vec3::new(x, g + 0.75, z), 0.0));
-            run.spots.push(Spot::Bulb { kind: BulbKind::Candle, pos: Vec3::new(x, g, z) + super::street_props::CANDLE_FLAME });
+            run.props
+                .push((Prop::Table, Vec3::new(x, g, z), rng.range(0.0, 1.0)));
+            run.props.push((
+                Prop::Chair,
+                Vec3::new(x - 0.52, g, z),
+                std::f32::consts::FRAC_PI_2,
+            ));
+            run.props.push((
+                Prop::Chair,
+                Vec3::new(x + 0.52, g, z),
+                -std::f32::consts::FRAC_PI_2,
+            ));
+            run.props
+                .push((Prop::Candle, Vec3::new(x, g + 0.75, z), 0.0));
+            run.spots.push(Spot::Bulb {
+                kind: BulbKind::Candle,
+                pos: Vec3::new(x, g, z) + super::street_props::CANDLE_FLAME,
+            });
         }
     }
     // A wall lantern on the pier left of the shop.
-    if shop.x0 - b0 > 0.7 && holes.iter().all(|h| h.x1 < shop.x0 - 0.6 || h.x0 > shop.x0) && rng.chance(0.75) {
+    if shop.x0 - b0 > 0.7
+        && holes.iter().all(|h| h.x1 < shop.x0 - 0.6 || h.x0 > shop.x0)
+        && rng.chance(0.75)
+    {
         let anchor = Vec3::new(shop.x0 - 0.35, g + 2.75, 0.0);
         run.props.push((Prop::WallLantern, anchor, 0.0));
-        run.spots.push(Spot::Bulb { kind: BulbKind::WallLantern, pos: anchor + super::street_props::WALL_BULB });
+        run.spots.push(Spot::Bulb {
+            kind: BulbKind::WallLantern,
+            pos: anchor + super::street_props::WALL_BULB,
+        });
     }
     holes.push(shop);
 
@@ -286,30 +372,57 @@ fn building(rng: &mut Rng, m: &FacadeMaterials, run: &mut Run, b0: f32, b1: f32,
         let yf = g + GROUND_FLOOR + (s - 1) as f32 * STOREY;
         trim.cuboid(Vec3::new(b0, yf - 0.14, 0.0), Vec3::new(b1, yf + 0.02, 0.1));
     }
-    trim.cuboid(Vec3::new(b0, height - 0.45, 0.0), Vec3::new(b1, height - 0.15, 0.35));
+    trim.cuboid(
+        Vec3::new(b0, height - 0.45, 0.0),
+        Vec3::new(b1, height - 0.15, 0.35),
+    );
     for s in 1..storeys {
         let yf = g + GROUND_FLOOR + (s - 1) as f32 * STOREY;
         for c in 0..cols {
             let x = b0 + w * (c as f32 + 0.5) / cols as f32;
             let balcony = s <= 2 && balcony_cols[c as usize];
             let o = if balcony {
-                Opening { x0: x - 0.6, x1: x + 0.6, y0: yf + 0.05, y1: yf + 2.45 }
+                Opening {
+                    x0: x - 0.6,
+                    x1: x + 0.6,
+                    y0: yf + 0.05,
+                    y1: yf + 2.45,
+                }
             } else {
-                Opening { x0: x - 0.55, x1: x + 0.55, y0: yf + 0.9, y1: yf + 2.5 }
+                Opening {
+                    x0: x - 0.55,
+                    x1: x + 0.55,
+                    y0: yf + 0.9,
+                    y1: yf + 2.5,
+                }
             };
             let depth = 0.3;
             reveals(run.sink.at(wall), &o, depth, true);
             let corner = Vec3::new(o.x0, o.y0, -depth);
             let (ow, oh) = (o.x1 - o.x0, o.y1 - o.y0);
             if rng.chance(0.3) {
-                run.spots.push(Spot::Pane { corner, w: ow, h: oh });
+                run.spots.push(Spot::Pane {
+                    corner,
+                    w: ow,
+                    h: oh,
+                });
             } else {
-                run.sink.at(m.glass).rect(corner, Vec3::X * ow, Vec3::Y * oh);
+                run.sink
+                    .at(m.glass)
+                    .rect(corner, Vec3::X * ow, Vec3::Y * oh);
             }
             if let (Some(sm), false) = (shutter_mat, balcony) {
                 let geo = run.sink.at(sm);
-                geo.rect(Vec3::new(o.x0 - 0.56, o.y0, 0.02), Vec3::X * 0.54, Vec3::Y * oh);
-                geo.rect(Vec3::new(o.x1 + 0.02, o.y0, 0.02), Vec3::X * 0.54, Vec3::Y * oh);
+                geo.rect(
+                    Vec3::new(o.x0 - 0.56, o.y0, 0.02),
+                    Vec3::X * 0.54,
+                    Vec3::Y * oh,
+                );
+                geo.rect(
+                    Vec3::new(o.x1 + 0.02, o.y0, 0.02),
+                    Vec3::X * 0.54,
+                    Vec3::Y * oh,
+                );
             }
             if balcony {
                 balcony_at(rng, m, run, o.x0 - 0.3, o.x1 + 0.3, yf + 0.05);
@@ -317,29 +430,75 @@ fn building(rng: &mut Rng, m: &FacadeMaterials, run: &mut Run, b0: f32, b1: f32,
             holes.push(o);
         }
     }
-    wall_with_holes(run.sink.at(wall), b0, b1, 0.0, height, 0.0, &holes, false);
+    let area = Opening {
+        x0: b0,
+        x1: b1,
+        y0: 0.0,
+        y1: height,
+    };
+    wall_with_holes(run.sink.at(wall), area, 0.0, &holes, false);
 }
 
 /// The lit room behind an open shop front.
-fn shop_interior(rng: &mut Rng, m: &FacadeMaterials, run: &mut Run, shop: &Opening, b0: f32, b1: f32, g: f32) {
+fn shop_interior(
+    rng: &mut Rng,
+    m: &FacadeMaterials,
+    run: &mut Run,
+    shop: &Opening,
+    b0: f32,
+    b1: f32,
+    g: f32,
+) {
     let (front, back) = (-0.3, -5.5);
-    let (rx0, rx1) = ((shop.x0 - 0.8).max(b0 + 0.15), (shop.x1 + 0.8).min(b1 - 0.15));
+    let (rx0, rx1) = (
+        (shop.x0 - 0.8).max(b0 + 0.15),
+        (shop.x1 + 0.8).min(b1 - 0.15),
+    );
     let top = g + 3.4;
     let inner = *rng.pick(&m.interior);
     reveals(run.sink.at(inner), shop, -front, false);
     // Room: inward faces except the floor (wood) and the front (cut around the opening).
-    run.sink.at(inner).aabb(Vec3::new(rx0, g, back), Vec3::new(rx1, top, front), false, 4 | 32);
-    wall_with_holes(run.sink.at(inner), rx0, rx1, g, top, front, std::slice::from_ref(shop), true);
-    run.sink.at(m.floor).rect(Vec3::new(rx0, g, back), Vec3::Z * (front - back), Vec3::X * (rx1 - rx0));
+    run.sink.at(inner).aabb(
+        Vec3::new(rx0, g, back),
+        Vec3::new(rx1, top, front),
+        false,
+        4 | 32,
+    );
+    let area = Opening {
+        x0: rx0,
+        x1: rx1,
+        y0: g,
+        y1: top,
+    };
+    wall_with_holes(
+        run.sink.at(inner),
+        area,
+        front,
+        std::slice::from_ref(shop),
+        true,
+    );
+    run.sink.at(m.floor).rect(
+        Vec3::new(rx0, g, back),
+        Vec3::Z * (front - back),
+        Vec3::X * (rx1 - rx0),
+    );
     let cx = rng.range(rx0 + 0.3, rx1 - 2.0).max(rx0 + 0.1);
-    run.sink.at(m.counter).cuboid(Vec3::new(cx, g, -4.3), Vec3::new(cx + 1.8, g + 1.05, -3.7));
+    run.sink
+        .at(m.counter)
+        .cuboid(Vec3::new(cx, g, -4.3), Vec3::new(cx + 1.8, g + 1.05, -3.7));
     let pendants = if rx1 - rx0 > 3.5 { 3 } else { 2 };
     for k in 0..pendants {
         let x = rx0 + (rx1 - rx0) * (k as f32 + 0.5) / pendants as f32;
         let z = rng.range(-2.6, -1.8);
         let bulb = Vec3::new(x, g + 2.65, z);
-        run.sink.at(m.cord).cuboid(bulb + Vec3::new(-0.006, 0.05, -0.006), Vec3::new(x + 0.006, top, z + 0.006));
-        run.spots.push(Spot::Bulb { kind: BulbKind::Pendant, pos: bulb });
+        run.sink.at(m.cord).cuboid(
+            bulb + Vec3::new(-0.006, 0.05, -0.006),
+            Vec3::new(x + 0.006, top, z + 0.006),
+        );
+        run.spots.push(Spot::Bulb {
+            kind: BulbKind::Pendant,
+            pos: bulb,
+        });
     }
 }
 
@@ -350,24 +509,44 @@ fn awning(rng: &mut Rng, m: &FacadeMaterials, run: &mut Run, x0: f32, x1: f32, g
     let geo = run.sink.at(fabric);
     let slope = Vec3::new(0.0, front - top, out);
     geo.rect(Vec3::new(x0, top, 0.0), slope, Vec3::X * (x1 - x0));
-    geo.rect(Vec3::new(x0, front - 0.25, out), Vec3::X * (x1 - x0), Vec3::Y * 0.25);
+    geo.rect(
+        Vec3::new(x0, front - 0.25, out),
+        Vec3::X * (x1 - x0),
+        Vec3::Y * 0.25,
+    );
     for x in [x0, x1] {
-        geo.triangle(Vec3::new(x, top, 0.0), Vec3::new(x, front, out), Vec3::new(x, front - 0.25, out));
+        geo.triangle(
+            Vec3::new(x, top, 0.0),
+            Vec3::new(x, front, out),
+            Vec3::new(x, front - 0.25, out),
+        );
     }
-    run.garlands.push(sagging(Vec3::new(x0 + 0.1, front - 0.3, out - 0.06), Vec3::new(x1 - 0.1, front - 0.3, out - 0.06), 0.06, 12));
+    run.garlands.push(sagging(
+        Vec3::new(x0 + 0.1, front - 0.3, out - 0.06),
+        Vec3::new(x1 - 0.1, front - 0.3, out - 0.06),
+        0.06,
+        12,
+    ));
 }
 
 /// A balcony slab with alpha-masked railings on three sides, and sometimes a garland.
 fn balcony_at(rng: &mut Rng, m: &FacadeMaterials, run: &mut Run, x0: f32, x1: f32, y: f32) {
     let depth = 0.9;
-    run.sink.at(m.trim).cuboid(Vec3::new(x0, y - 0.15, 0.0), Vec3::new(x1, y, depth));
+    run.sink
+        .at(m.trim)
+        .cuboid(Vec3::new(x0, y - 0.15, 0.0), Vec3::new(x1, y, depth));
     let rail = run.sink.at(m.railing);
     let h = Vec3::Y * 1.0;
     rail.rect(Vec3::new(x0, y, depth - 0.02), Vec3::X * (x1 - x0), h);
     rail.rect(Vec3::new(x0 + 0.02, y, 0.0), h, Vec3::Z * (depth - 0.02));
     rail.rect(Vec3::new(x1 - 0.02, y, 0.0), Vec3::Z * (depth - 0.02), h);
     if rng.chance(0.5) {
-        run.garlands.push(sagging(Vec3::new(x0, y + 1.0, depth + 0.02), Vec3::new(x1, y + 1.0, depth + 0.02), 0.12, 12));
+        run.garlands.push(sagging(
+            Vec3::new(x0, y + 1.0, depth + 0.02),
+            Vec3::new(x1, y + 1.0, depth + 0.02),
+            0.12,
+            12,
+        ));
     }
 }
 

@@ -21,10 +21,20 @@ fn lantern(metal: &mut MeshData, half: f32, height: f32) {
     metal.cuboid(Vec3::new(-half, 0.0, -half), Vec3::new(half, 0.03, half));
     for (sx, sz) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
         let c = Vec3::new(sx * (half - bar), 0.03, sz * (half - bar));
-        metal.aabb(c - Vec3::new(bar, 0.0, bar), c + Vec3::new(bar, height, bar), true, 12);
+        metal.aabb(
+            c - Vec3::new(bar, 0.0, bar),
+            c + Vec3::new(bar, height, bar),
+            true,
+            12,
+        );
     }
     metal.pyramid(Vec3::new(0.0, 0.03 + height, 0.0), half * 1.35, half * 1.1);
-    metal.aabb(Vec3::new(-half * 1.35, height + 0.01, -half * 1.35), Vec3::new(half * 1.35, height + 0.03, half * 1.35), true, 8);
+    metal.aabb(
+        Vec3::new(-half * 1.35, height + 0.01, -half * 1.35),
+        Vec3::new(half * 1.35, height + 0.03, half * 1.35),
+        true,
+        8,
+    );
 }
 
 /// Lamp post standing on the origin; one primitive, glossy metal.
@@ -47,7 +57,10 @@ pub fn wall_lantern() -> MeshData {
     let mut cage = MeshData::new();
     lantern(&mut cage, 0.1, 0.26);
     m.append(&cage, Mat4::from_translation(Vec3::new(0.0, -0.32, 0.42)));
-    m.cuboid(Vec3::new(-0.015, -0.02, 0.405), Vec3::new(0.015, 0.08, 0.435));
+    m.cuboid(
+        Vec3::new(-0.015, -0.02, 0.405),
+        Vec3::new(0.015, 0.08, 0.435),
+    );
     m
 }
 
@@ -67,10 +80,16 @@ pub fn chair() -> (MeshData, MeshData) {
     seat.cuboid(Vec3::new(-0.2, 0.62, -0.23), Vec3::new(0.2, 0.88, -0.2));
     let leg = 0.014;
     for (x, z) in [(-0.18, -0.18), (0.18, -0.18), (0.18, 0.17), (-0.18, 0.17)] {
-        frame.cuboid(Vec3::new(x - leg, 0.0, z - leg), Vec3::new(x + leg, 0.44, z + leg));
+        frame.cuboid(
+            Vec3::new(x - leg, 0.0, z - leg),
+            Vec3::new(x + leg, 0.44, z + leg),
+        );
     }
     for x in [-0.18, 0.18] {
-        frame.cuboid(Vec3::new(x - leg, 0.47, -0.23), Vec3::new(x + leg, 0.9, -0.2));
+        frame.cuboid(
+            Vec3::new(x - leg, 0.47, -0.23),
+            Vec3::new(x + leg, 0.9, -0.2),
+        );
     }
     (seat, frame)
 }
@@ -91,7 +110,13 @@ pub fn planter() -> (MeshData, MeshData) {
     for angle in [0.35f32, 0.35 + std::f32::consts::FRAC_PI_2] {
         let r = Quat::from_rotation_y(angle);
         let (u, v) = (r * Vec3::X * 1.1, Vec3::Y * 1.0);
-        leaves.rect_mapped(Vec3::new(0.0, 0.35, 0.0) - u * 0.5, u, v, Vec2::ZERO, Vec2::ONE);
+        leaves.rect_mapped(
+            Vec3::new(0.0, 0.35, 0.0) - u * 0.5,
+            u,
+            v,
+            Vec2::ZERO,
+            Vec2::ONE,
+        );
     }
     (pot, leaves)
 }

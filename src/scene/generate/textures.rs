@@ -18,7 +18,11 @@ pub fn srgb_to_linear(c: u8) -> f32 {
 
 pub fn linear_to_srgb(x: f32) -> u8 {
     let x = x.clamp(0.0, 1.0);
-    let c = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
+    let c = if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    };
     (c * 255.0).round() as u8
 }
 
@@ -32,7 +36,12 @@ pub struct Image {
 
 impl Image {
     fn new(width: u32, height: u32, has_alpha: bool, fill: [u8; 4]) -> Self {
-        Image { width, height, pixels: fill.repeat((width * height) as usize), has_alpha }
+        Image {
+            width,
+            height,
+            pixels: fill.repeat((width * height) as usize),
+            has_alpha,
+        }
     }
     fn set(&mut self, x: u32, y: u32, c: [u8; 4]) {
         let i = ((y * self.width + x) * 4) as usize;
@@ -40,7 +49,12 @@ impl Image {
     }
     fn get(&self, x: u32, y: u32) -> [u8; 4] {
         let i = ((y * self.width + x) * 4) as usize;
-        [self.pixels[i], self.pixels[i + 1], self.pixels[i + 2], self.pixels[i + 3]]
+        [
+            self.pixels[i],
+            self.pixels[i + 1],
+            self.pixels[i + 2],
+            self.pixels[i + 3],
+        ]
     }
 
     /// Mean linear RGB value (averaged over channels) of the pixel rectangle.
@@ -64,10 +78,24 @@ impl Image {
             image::codecs::png::FilterType::Adaptive,
         );
         let result = if self.has_alpha {
-            enc.write_image(&self.pixels, self.width, self.height, image::ExtendedColorType::Rgba8)
+            enc.write_image(
+                &self.pixels,
+                self.width,
+                self.height,
+                image::ExtendedColorType::Rgba8,
+            )
         } else {
-            let rgb: Vec<u8> = self.pixels.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
-            enc.write_image(&rgb, self.width, self.height, image::ExtendedColorType::Rgb8)
+            let rgb: Vec<u8> = self
+                .pixels
+                .chunks_exact(4)
+                .flat_map(|p| [p[0], p[1], p[2]])
+                .collect();
+            enc.write_image(
+                &rgb,
+                self.width,
+                self.height,
+                image::ExtendedColorType::Rgb8,
+            )
         };
         result.map_err(|e| GenerateError::Texture(e.to_string()))?;
         Ok(out)
@@ -110,27 +138,32 @@ pub struct SignAtlas {
     pub means: Vec<f32>,
 }
 
-/// One sign per atlas row (256×48 texels each): a coloured word in a coloured frame on a
+/// One sign per atlas row (256×64 texels each; rows padded to a power of two): a coloured word in a coloured frame on a
 /// dark ground.
 pub fn sign_atlas(signs: &[(&str, [f32; 3])]) -> SignAtlas {
-    let rows = signs.len().max(1) as u32;
-    let (w, row_h) = (256u32, 48u32);
+    let rows = signs.len().next_power_of_two().max(1) as u32;
+    let (w, row_h) = (256u32, 64u32);
     let mut img = Image::new(w, rows * row_h, false, [8, 6, 6, 255]);
     let mut means = Vec::new();
     for (r, (word, color)) in signs.iter().enumerate() {
         let y0 = r as u32 * row_h;
-        let lit = [linear_to_srgb(color[0]), linear_to_srgb(color[1]), linear_to_srgb(color[2]), 255];
-        for x in 2..w - 2 {
-            for t in [2, 3, row_h - 4, row_h - 3] {
+        let lit = [
+            linear_to_srgb(color[0]),
+            linear_to_srgb(color[1]),
+            linear_to_srgb(color[2]),
+            255,
+        ];
+        for x in 3..w - 3 {
+            for t in [3, 4, row_h - 5, row_h - 4] {
                 img.set(x, y0 + t, lit);
             }
         }
-        for y in 2..row_h - 2 {
-            for t in [2, 3, w - 4, w - 3] {
+        for y in 3..row_h - 3 {
+            for t in [3, 4, w - 5, w - 4] {
                 img.set(t, y0 + y, lit);
             }
         }
-        let scale = 5u32;
+        let scale = 6u32;
         let advance = 6 * scale;
         let text_w = word.len() as u32 * advance - scale;
         let x0 = (w - text_w) / 2;
@@ -138,14 +171,18 @@ pub fn sign_atlas(signs: &[(&str, [f32; 3])]) -> SignAtlas {
             for gy in 0..7 * scale {
                 for gx in 0..5 * scale {
                     if glyph_bit(c, gx / scale, gy / scale) {
-                        img.set(x0 + i as u32 * advance + gx, y0 + 7 + gy, lit);
+                        img.set(x0 + i as u32 * advance + gx, y0 + 11 + gy, lit);
                     }
                 }
             }
         }
         means.push(img.linear_mean(0, y0, w, y0 + row_h));
     }
-    SignAtlas { image: img, rows, means }
+    SignAtlas {
+        image: img,
+        rows,
+        means,
+    }
 }
 
 /// A wrought-iron railing: top and bottom rails, bars, and a ring between each pair of
@@ -177,13 +214,25 @@ pub fn foliage(rng: &mut Rng) -> Image {
         let (a, b) = (rng.range(4.0, 8.0), rng.range(1.8, 3.2));
         let ang = rng.range(0.0, std::f32::consts::PI);
         let shade = rng.range(0.5, 1.0);
-        let c = [(40.0 * shade) as u8, (110.0 * shade) as u8, (35.0 * shade) as u8, 255];
+        let c = [
+            (40.0 * shade) as u8,
+            (110.0 * shade) as u8,
+            (35.0 * shade) as u8,
+            255,
+        ];
         for y in (cy - a) as i32..=(cy + a) as i32 {
             for x in (cx - a) as i32..=(cx + a) as i32 {
                 let (dx, dy) = (x as f32 - cx, y as f32 - cy);
-                let (u, v) = (dx * ang.cos() + dy * ang.sin(), -dx * ang.sin() + dy * ang.cos());
+                let (u, v) = (
+                    dx * ang.cos() + dy * ang.sin(),
+                    -dx * ang.sin() + dy * ang.cos(),
+                );
                 if (u / a).powi(2) + (v / b).powi(2) <= 1.0 {
-                    img.set(x.rem_euclid(n as i32) as u32, y.rem_euclid(n as i32) as u32, c);
+                    img.set(
+                        x.rem_euclid(n as i32) as u32,
+                        y.rem_euclid(n as i32) as u32,
+                        c,
+                    );
                 }
             }
         }
@@ -198,7 +247,10 @@ pub fn cobbles(rng: &mut Rng) -> Image {
     let mut centres = Vec::new();
     for j in 0..cells {
         for i in 0..cells {
-            let c = [(i as f32 + rng.range(0.2, 0.8)) * cell, (j as f32 + rng.range(0.2, 0.8)) * cell];
+            let c = [
+                (i as f32 + rng.range(0.2, 0.8)) * cell,
+                (j as f32 + rng.range(0.2, 0.8)) * cell,
+            ];
             centres.push((c, rng.range(0.75, 1.25)));
         }
     }
@@ -207,8 +259,15 @@ pub fn cobbles(rng: &mut Rng) -> Image {
         for x in 0..n {
             let (mut d1, mut d2, mut shade) = (f32::MAX, f32::MAX, 1.0);
             for (c, s) in &centres {
-                for (ox, oy) in [(0.0, 0.0), (n as f32, 0.0), (-(n as f32), 0.0), (0.0, n as f32), (0.0, -(n as f32))] {
-                    let d = ((x as f32 - c[0] - ox).powi(2) + (y as f32 - c[1] - oy).powi(2)).sqrt();
+                for (ox, oy) in [
+                    (0.0, 0.0),
+                    (n as f32, 0.0),
+                    (-(n as f32), 0.0),
+                    (0.0, n as f32),
+                    (0.0, -(n as f32)),
+                ] {
+                    let d =
+                        ((x as f32 - c[0] - ox).powi(2) + (y as f32 - c[1] - oy).powi(2)).sqrt();
                     if d < d1 {
                         (d2, d1, shade) = (d1, d, *s);
                     } else if d < d2 {
@@ -216,8 +275,21 @@ pub fn cobbles(rng: &mut Rng) -> Image {
                     }
                 }
             }
-            let col = if d2 - d1 < 2.5 { [0.05, 0.045, 0.04] } else { [0.2 * shade, 0.18 * shade, 0.16 * shade] };
-            img.set(x, y, [linear_to_srgb(col[0]), linear_to_srgb(col[1]), linear_to_srgb(col[2]), 255]);
+            let col = if d2 - d1 < 2.5 {
+                [0.05, 0.045, 0.04]
+            } else {
+                [0.2 * shade, 0.18 * shade, 0.16 * shade]
+            };
+            img.set(
+                x,
+                y,
+                [
+                    linear_to_srgb(col[0]),
+                    linear_to_srgb(col[1]),
+                    linear_to_srgb(col[2]),
+                    255,
+                ],
+            );
         }
     }
     img
@@ -234,7 +306,16 @@ pub fn paving(rng: &mut Rng) -> Image {
             let joint = x % s < 2 || y % s < 2;
             let k = shades[((y / s) * slabs + x / s) as usize];
             let v = if joint { 0.12 } else { 0.4 * k };
-            img.set(x, y, [linear_to_srgb(v), linear_to_srgb(v * 0.97), linear_to_srgb(v * 0.92), 255]);
+            img.set(
+                x,
+                y,
+                [
+                    linear_to_srgb(v),
+                    linear_to_srgb(v * 0.97),
+                    linear_to_srgb(v * 0.92),
+                    255,
+                ],
+            );
         }
     }
     img

@@ -60,17 +60,29 @@ impl Material {
     }
 
     pub fn metal(name: &str, rgb: [f32; 3], roughness: f32) -> Self {
-        Material { metallic: 1.0, roughness, lambertian: false, ..Self::diffuse(name, rgb) }
+        Material {
+            metallic: 1.0,
+            roughness,
+            lambertian: false,
+            ..Self::diffuse(name, rgb)
+        }
     }
 
     /// A glossy dielectric (glTF's default specular layer over a diffuse base).
     pub fn glossy(name: &str, rgb: [f32; 3], roughness: f32) -> Self {
-        Material { roughness, lambertian: false, ..Self::diffuse(name, rgb) }
+        Material {
+            roughness,
+            lambertian: false,
+            ..Self::diffuse(name, rgb)
+        }
     }
 
     /// An emitter with a black, Lambertian base (it reflects nothing).
     pub fn emitter(name: &str, radiance: [f32; 3]) -> Self {
-        Material { emission: radiance, ..Self::diffuse(name, [0.0; 3]) }
+        Material {
+            emission: radiance,
+            ..Self::diffuse(name, [0.0; 3])
+        }
     }
 
     pub fn emits(&self) -> bool {
@@ -78,7 +90,8 @@ impl Material {
     }
 
     fn mean_radiance(&self) -> f64 {
-        self.emission.iter().map(|&e| e as f64).sum::<f64>() / 3.0 * self.emissive_texture_mean as f64
+        self.emission.iter().map(|&e| e as f64).sum::<f64>() / 3.0
+            * self.emissive_texture_mean as f64
     }
 }
 
@@ -109,7 +122,13 @@ pub struct Node {
 
 impl Node {
     pub fn mesh(mesh: usize, translation: Vec3) -> Self {
-        Node { mesh: Some(mesh), translation, rotation: Quat::IDENTITY, scale: Vec3::ONE, ..Default::default() }
+        Node {
+            mesh: Some(mesh),
+            translation,
+            rotation: Quat::IDENTITY,
+            scale: Vec3::ONE,
+            ..Default::default()
+        }
     }
     pub fn named(mut self, name: impl Into<String>) -> Self {
         self.name = Some(name.into());
@@ -193,7 +212,10 @@ impl Gltf {
             lights: Vec::new(),
             nodes: Vec::new(),
             uses_emissive_strength: false,
-            stats: Stats { min_light_power: f64::INFINITY, ..Default::default() },
+            stats: Stats {
+                min_light_power: f64::INFINITY,
+                ..Default::default()
+            },
         }
     }
 
@@ -207,12 +229,19 @@ impl Gltf {
         }
         let offset = self.bin.len();
         self.bin.extend_from_slice(bytes);
-        self.buffer_views
-            .push(json!({"buffer": 0, "byteOffset": offset, "byteLength": bytes.len(), "target": target}));
+        self.buffer_views.push(
+            json!({"buffer": 0, "byteOffset": offset, "byteLength": bytes.len(), "target": target}),
+        );
         self.buffer_views.len() - 1
     }
 
-    fn accessor(&mut self, view: usize, component: u32, count: usize, ty: &str) -> Map<String, Value> {
+    fn accessor(
+        &mut self,
+        view: usize,
+        component: u32,
+        count: usize,
+        ty: &str,
+    ) -> Map<String, Value> {
         let mut a = Map::new();
         a.insert("bufferView".into(), json!(view));
         a.insert("componentType".into(), json!(component));
@@ -227,11 +256,19 @@ impl Gltf {
     }
 
     fn vec3_accessor(&mut self, data: &[Vec3], with_bounds: bool) -> usize {
-        let bytes: Vec<u8> = data.iter().flat_map(|v| v.to_array()).flat_map(f32::to_le_bytes).collect();
+        let bytes: Vec<u8> = data
+            .iter()
+            .flat_map(|v| v.to_array())
+            .flat_map(f32::to_le_bytes)
+            .collect();
         let view = self.view(&bytes, 34962);
         let mut a = self.accessor(view, 5126, data.len(), "VEC3");
         if with_bounds {
-            let (lo, hi) = data.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+            let (lo, hi) = data
+                .iter()
+                .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
+                    (lo.min(p), hi.max(p))
+                });
             // Exact f32 values: the validator compares the bounds with the buffer bit for bit.
             a.insert("min".into(), json!(lo.to_array().map(|x| x as f64)));
             a.insert("max".into(), json!(hi.to_array().map(|x| x as f64)));
@@ -254,7 +291,10 @@ impl Gltf {
         let mut pbr = Map::new();
         pbr.insert("baseColorFactor".into(), nums(&m.base_color));
         if let Some(t) = m.base_color_texture {
-            pbr.insert("baseColorTexture".into(), json!({"index": self.emit_texture(t)}));
+            pbr.insert(
+                "baseColorTexture".into(),
+                json!({"index": self.emit_texture(t)}),
+            );
         }
         pbr.insert("metallicFactor".into(), num(m.metallic));
         pbr.insert("roughnessFactor".into(), num(m.roughness));
@@ -263,7 +303,10 @@ impl Gltf {
         v.insert("pbrMetallicRoughness".into(), Value::Object(pbr));
         let mut ext = Map::new();
         if m.lambertian {
-            ext.insert("KHR_materials_specular".into(), json!({"specularFactor": 0.0}));
+            ext.insert(
+                "KHR_materials_specular".into(),
+                json!({"specularFactor": 0.0}),
+            );
             self.uses_specular = true;
         }
         let peak = m.emission.iter().cloned().fold(0.0f32, f32::max);
@@ -271,11 +314,17 @@ impl Gltf {
             let factor = m.emission.map(|e| e / peak);
             v.insert("emissiveFactor".into(), nums(&factor));
             if peak != 1.0 {
-                ext.insert("KHR_materials_emissive_strength".into(), json!({"emissiveStrength": num(peak)}));
+                ext.insert(
+                    "KHR_materials_emissive_strength".into(),
+                    json!({"emissiveStrength": num(peak)}),
+                );
                 self.uses_emissive_strength = true;
             }
             if let Some(t) = m.emissive_texture {
-                v.insert("emissiveTexture".into(), json!({"index": self.emit_texture(t)}));
+                v.insert(
+                    "emissiveTexture".into(),
+                    json!({"index": self.emit_texture(t)}),
+                );
             }
         }
         if let Some(cutoff) = m.alpha_cutoff {
@@ -309,9 +358,11 @@ impl Gltf {
             Filter::Linear => (9729, 9987),
             Filter::Nearest => (9728, 9728),
         };
-        self.samplers.push(json!({"magFilter": f.0, "minFilter": f.1, "wrapS": 10497, "wrapT": 10497}));
+        self.samplers
+            .push(json!({"magFilter": f.0, "minFilter": f.1, "wrapS": 10497, "wrapT": 10497}));
         self.images.push((name, png));
-        self.textures.push(json!({"sampler": self.samplers.len() - 1, "source": self.images.len() - 1}));
+        self.textures
+            .push(json!({"sampler": self.samplers.len() - 1, "source": self.images.len() - 1}));
         self.texture_index[handle] = Some(self.textures.len() - 1);
         self.textures.len() - 1
     }
@@ -319,7 +370,11 @@ impl Gltf {
     /// Declares a mesh of one primitive per (geometry, material) pair; empty parts are
     /// skipped. Returns its handle.
     pub fn mesh(&mut self, name: &str, parts: &[(&MeshData, usize)]) -> usize {
-        let parts = parts.iter().filter(|(g, _)| !g.is_empty()).map(|&(g, m)| (g.clone(), m)).collect();
+        let parts = parts
+            .iter()
+            .filter(|(g, _)| !g.is_empty())
+            .map(|&(g, m)| (g.clone(), m))
+            .collect();
         self.mesh_defs.push((name.to_string(), parts));
         self.mesh_info.push(None);
         self.mesh_defs.len() - 1
@@ -331,20 +386,39 @@ impl Gltf {
         }
         let (name, parts) = std::mem::take(&mut self.mesh_defs[handle]);
         let mut prims = Vec::new();
-        let mut info = MeshInfo { triangles: 0, emissive_triangles: 0, emitters: Vec::new() };
+        let mut info = MeshInfo {
+            triangles: 0,
+            emissive_triangles: 0,
+            emitters: Vec::new(),
+        };
         for (geo, material) in parts {
             let mut attrs = Map::new();
-            attrs.insert("POSITION".into(), json!(self.vec3_accessor(&geo.positions, true)));
-            attrs.insert("NORMAL".into(), json!(self.vec3_accessor(&geo.normals, false)));
+            attrs.insert(
+                "POSITION".into(),
+                json!(self.vec3_accessor(&geo.positions, true)),
+            );
+            attrs.insert(
+                "NORMAL".into(),
+                json!(self.vec3_accessor(&geo.normals, false)),
+            );
             let mat = &self.material_defs[material];
             if mat.base_color_texture.is_some() || mat.emissive_texture.is_some() {
-                let bytes: Vec<u8> = geo.uvs.iter().flat_map(|v| v.to_array()).flat_map(f32::to_le_bytes).collect();
+                let bytes: Vec<u8> = geo
+                    .uvs
+                    .iter()
+                    .flat_map(|v| v.to_array())
+                    .flat_map(f32::to_le_bytes)
+                    .collect();
                 let view = self.view(&bytes, 34962);
                 let a = self.accessor(view, 5126, geo.uvs.len(), "VEC2");
                 attrs.insert("TEXCOORD_0".into(), json!(self.push_accessor(a)));
             }
             let indices = if geo.positions.len() <= u16::MAX as usize {
-                let bytes: Vec<u8> = geo.indices.iter().flat_map(|&i| (i as u16).to_le_bytes()).collect();
+                let bytes: Vec<u8> = geo
+                    .indices
+                    .iter()
+                    .flat_map(|&i| (i as u16).to_le_bytes())
+                    .collect();
                 let view = self.view(&bytes, 34963);
                 self.accessor(view, 5123, geo.indices.len(), "SCALAR")
             } else {
@@ -354,7 +428,8 @@ impl Gltf {
             };
             let indices = self.push_accessor(indices);
             let material_index = self.emit_material(material);
-            prims.push(json!({"attributes": attrs, "indices": indices, "material": material_index}));
+            prims
+                .push(json!({"attributes": attrs, "indices": indices, "material": material_index}));
             let tris = geo.triangle_count() as u64;
             info.triangles += tris;
             let mat = &self.material_defs[material];
@@ -396,7 +471,13 @@ impl Gltf {
     }
 
     /// A `KHR_lights_punctual` light: `spot` is `Some((inner, outer))` cone angles in radians.
-    pub fn punctual_light(&mut self, name: &str, color: [f32; 3], intensity: f32, spot: Option<(f32, f32)>) -> usize {
+    pub fn punctual_light(
+        &mut self,
+        name: &str,
+        color: [f32; 3],
+        intensity: f32,
+        spot: Option<(f32, f32)>,
+    ) -> usize {
         let mut l = json!({"name": name, "color": nums(&color), "intensity": num(intensity), "type": "point"});
         if let Some((inner, outer)) = spot {
             l["type"] = json!("spot");
@@ -424,20 +505,29 @@ impl Gltf {
                 self.stats.light_models += 1;
                 self.stats.emissive_triangles += info.emissive_triangles;
                 let matrix = n.matrix();
-                let power: f64 =
-                    info.emitters.iter().map(|(g, radiance)| std::f64::consts::PI * radiance * g.area(matrix)).sum();
+                let power: f64 = info
+                    .emitters
+                    .iter()
+                    .map(|(g, radiance)| std::f64::consts::PI * radiance * g.area(matrix))
+                    .sum();
                 self.stats.min_light_power = self.stats.min_light_power.min(power);
                 self.stats.max_light_power = self.stats.max_light_power.max(power);
             }
         }
         if let Some(l) = n.light {
-            v.insert("extensions".into(), json!({"KHR_lights_punctual": {"light": l}}));
+            v.insert(
+                "extensions".into(),
+                json!({"KHR_lights_punctual": {"light": l}}),
+            );
         }
         if n.translation != Vec3::ZERO {
             v.insert("translation".into(), nums(&n.translation.to_array()));
         }
         if n.rotation != Quat::IDENTITY {
-            v.insert("rotation".into(), json!(n.rotation.to_array().map(|x| x as f64)));
+            v.insert(
+                "rotation".into(),
+                json!(n.rotation.to_array().map(|x| x as f64)),
+            );
         }
         if n.scale != Vec3::ONE {
             v.insert("scale".into(), nums(&n.scale.to_array()));
@@ -451,11 +541,17 @@ impl Gltf {
     /// written. Everything goes to temporary files first and is renamed only when all of
     /// it has been written.
     pub fn write(self, out: &Path, asset_extras: Value) -> Result<Vec<PathBuf>, GenerateError> {
-        let dir = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-        let stem = out
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .ok_or_else(|| GenerateError::BadOutput { path: out.to_path_buf(), reason: "no usable file name".into() })?;
+        let dir = out
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        let stem =
+            out.file_stem()
+                .and_then(|s| s.to_str())
+                .ok_or_else(|| GenerateError::BadOutput {
+                    path: out.to_path_buf(),
+                    reason: "no usable file name".into(),
+                })?;
         let bin_name = format!("{stem}.bin");
         let mut root = Map::new();
         root.insert(
@@ -471,13 +567,19 @@ impl Gltf {
         }
         if !self.lights.is_empty() {
             used.push("KHR_lights_punctual");
-            root.insert("extensions".into(), json!({"KHR_lights_punctual": {"lights": self.lights}}));
+            root.insert(
+                "extensions".into(),
+                json!({"KHR_lights_punctual": {"lights": self.lights}}),
+            );
         }
         if !used.is_empty() {
             root.insert("extensionsUsed".into(), json!(used));
         }
         root.insert("scene".into(), json!(0));
-        root.insert("scenes".into(), json!([{"name": stem, "nodes": (0..self.nodes.len()).collect::<Vec<_>>()}]));
+        root.insert(
+            "scenes".into(),
+            json!([{"name": stem, "nodes": (0..self.nodes.len()).collect::<Vec<_>>()}]),
+        );
         root.insert("nodes".into(), Value::Array(self.nodes));
         let put = |root: &mut Map<String, Value>, key: &str, v: Vec<Value>| {
             if !v.is_empty() {
@@ -489,11 +591,22 @@ impl Gltf {
         put(&mut root, "materials", self.materials);
         put(&mut root, "textures", self.textures);
         put(&mut root, "samplers", self.samplers);
-        let image_names: Vec<String> = self.images.iter().map(|(n, _)| format!("{stem}_{n}.png")).collect();
-        put(&mut root, "images", image_names.iter().map(|u| json!({"uri": u})).collect());
+        let image_names: Vec<String> = self
+            .images
+            .iter()
+            .map(|(n, _)| format!("{stem}_{n}.png"))
+            .collect();
+        put(
+            &mut root,
+            "images",
+            image_names.iter().map(|u| json!({"uri": u})).collect(),
+        );
         put(&mut root, "accessors", self.accessors);
         put(&mut root, "bufferViews", self.buffer_views);
-        root.insert("buffers".into(), json!([{"uri": bin_name, "byteLength": self.bin.len()}]));
+        root.insert(
+            "buffers".into(),
+            json!([{"uri": bin_name, "byteLength": self.bin.len()}]),
+        );
         let text = render_json(&root);
 
         // Payloads first, the .gltf last: a reader never sees a .gltf whose parts are missing.
@@ -530,8 +643,16 @@ fn render_json(root: &Map<String, Value>) -> Vec<u8> {
     ];
     let compact = |v: &Value| serde_json::to_string(v).expect("JSON values always serialise");
     let mut out = String::from("{\n");
-    let keys: Vec<&str> = ORDER.iter().copied().filter(|k| root.contains_key(*k)).collect();
-    debug_assert_eq!(keys.len(), root.len(), "a top-level key is missing from ORDER");
+    let keys: Vec<&str> = ORDER
+        .iter()
+        .copied()
+        .filter(|k| root.contains_key(*k))
+        .collect();
+    debug_assert_eq!(
+        keys.len(),
+        root.len(),
+        "a top-level key is missing from ORDER"
+    );
     for (i, key) in keys.iter().enumerate() {
         let value = &root[*key];
         out.push_str(&format!("  {}: ", compact(&json!(key))));
@@ -546,7 +667,8 @@ fn render_json(root: &Map<String, Value>) -> Vec<u8> {
                 out.push_str("  ]");
             }
             Value::Object(_) if *key == "asset" => {
-                let pretty = serde_json::to_string_pretty(value).expect("JSON values always serialise");
+                let pretty =
+                    serde_json::to_string_pretty(value).expect("JSON values always serialise");
                 out.push_str(&pretty.replace('\n', "\n  "));
             }
             v => out.push_str(&compact(v)),
@@ -569,10 +691,16 @@ fn write_all_atomically(files: &[(PathBuf, &[u8])]) -> Result<(), GenerateError>
         for (path, bytes) in files {
             let tmp = tmp_path(path);
             written.push(tmp.clone());
-            std::fs::write(&tmp, bytes).map_err(|source| GenerateError::Io { path: path.clone(), source })?;
+            std::fs::write(&tmp, bytes).map_err(|source| GenerateError::Io {
+                path: path.clone(),
+                source,
+            })?;
         }
         for (path, _) in files {
-            std::fs::rename(tmp_path(path), path).map_err(|source| GenerateError::Io { path: path.clone(), source })?;
+            std::fs::rename(tmp_path(path), path).map_err(|source| GenerateError::Io {
+                path: path.clone(),
+                source,
+            })?;
         }
         Ok(())
     })();
