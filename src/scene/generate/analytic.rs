@@ -30,14 +30,14 @@ fn plane(g: &mut Gltf, albedo: f32) {
     g.node(Node::mesh(mesh, Vec3::ZERO).named("plane"));
 }
 
-fn camera(g: &mut Gltf, aspect: f32, height: f32) {
-    let cam = g.camera("camera", 30.0, aspect);
-    // Low enough that the line of sight to the origin passes under the light.
-    g.camera_node(
-        cam,
-        Vec3::new(0.0, 0.6 * height, 2.5 * height.max(1.0)),
-        Vec3::ZERO,
-    );
+/// A steep view of the origin (so the centre pixel's footprint on the plane is small)
+/// whose line of sight passes beside an emitter of half-side `half` at `height`.
+fn camera(g: &mut Gltf, aspect: f32, height: f32, half: f32) {
+    let cam = g.camera("camera", 20.0, aspect);
+    let elevation = (height / (half + 0.25 * height)).atan();
+    let distance = 3.0 * height.max(half);
+    let eye = Vec3::new(0.0, elevation.sin(), elevation.cos()) * distance;
+    g.camera_node(cam, eye, Vec3::ZERO);
 }
 
 /// Irradiance at the point under the centre of a parallel square of half-side `a` at
@@ -82,7 +82,7 @@ pub fn build_plane_quad(o: &Options) -> Result<Built, GenerateError> {
     let mat = g.material(Material::emitter("quad", [radiance; 3]));
     let mesh = g.mesh("emitter", &[(&quad, mat)]);
     g.node(Node::mesh(mesh, Vec3::ZERO).named("emitter"));
-    camera(&mut g, aspect, h);
+    camera(&mut g, aspect, h, a);
 
     let e = square_irradiance(radiance as f64, a as f64, h as f64);
     let mut options = Map::new();
@@ -145,7 +145,7 @@ pub fn build_plane_point(o: &Options) -> Result<Built, GenerateError> {
         scale: Vec3::ONE,
         ..Default::default()
     });
-    camera(&mut g, aspect, h);
+    camera(&mut g, aspect, h, 0.0);
 
     let e = intensity as f64 / (h as f64 * h as f64);
     let mut options = Map::new();

@@ -50,7 +50,7 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
     let albedo = check_range("albedo", o.albedo.unwrap_or(0.7), 0.0, 1.0, "in [0, 1]")?;
     let radiance = check_range(
         "emission",
-        o.emission.unwrap_or(50.0),
+        o.emission.unwrap_or(1000.0),
         0.0,
         1e6,
         "in [0, 1e6]",
