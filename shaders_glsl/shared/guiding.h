@@ -76,11 +76,15 @@ struct GuideRecord {
     float weight;
 };
 
-// Test kernel tests/guiding_sample: one input (uniform pair, leaf) and its result.
+// Test kernel tests/guiding_sample: one input and its result. Mode GUIDE_TEST_SAMPLE
+// samples with the uniform pair u; GUIDE_TEST_EVAL evaluates guide_pdf at the direction
+// of square point u (for integrating the pdf over the sphere on the device).
+#define GUIDE_TEST_SAMPLE 0u
+#define GUIDE_TEST_EVAL 1u
 struct GuideTestSample {
     vec2 u;
     uint leaf;
-    uint pad;
+    uint mode;
 };
 struct GuideTestResult {
     vec3 dir;

@@ -28,6 +28,6 @@ void main() {
         + light_triangles[0].power + light_models[0].power + alias[0].pmf + punctual[0].cos_outer
         + params.scene_radius + float(spatial[0].child) + leaves[0].box_size.z + quads[0].sum.w
         + float(pc.sample_count) + guide_header.bsdf_fraction + guide_records[0].weight
-        + float(guide_test_samples[0].pad) + guide_test_results[0].pdf_eval
+        + float(guide_test_samples[0].mode) + guide_test_results[0].pdf_eval
         + float(guide_test_records[0].pad);
 }

@@ -3,8 +3,9 @@
 //! quadtrees on the square ((cosθ+1)/2, φ/2π)), the refit between training iterations,
 //! the flat arrays the kernels read (`GuideArrays`, layout in
 //! shaders_glsl/shared/guiding.h; the GPU half is shaders_glsl/inc/guiding.glsl), the
-//! training schedule, saving/loading trained trees, a debug view of one leaf, and the
-//! statistics the sampling tests use.
+//! training schedule, saving/loading trained trees, a debug view of one leaf, the
+//! statistics the sampling tests use, and the checks of the guiding test kernels
+//! (`kernel_checks`, run on the CPU mirror here and on the device by the GPU test).
 //!
 //! A render with guiding goes: `SdTree::new(bbox)`; then per training iteration upload
 //! `gpu_arrays()`, render 2^k spp (the kernel samples the sampling trees and records
@@ -16,6 +17,7 @@ mod chi2;
 mod config;
 mod flat;
 mod io;
+pub mod kernel_checks;
 mod quadtree;
 mod refit;
 mod schedule;
