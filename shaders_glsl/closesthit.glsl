@@ -40,7 +40,7 @@ DirectionSampler direction_sampler(Surface s) {
             && bsdf_specular_probability(s.bsdf, surface_to_local(s, s.wo)) >= 0.9;
         if (!nearly_specular) {
             d.leaf = guide_find_leaf(s.p);
-            d.bsdf_fraction = params.bsdf_fraction;
+            d.bsdf_fraction = guide_header.bsdf_fraction;
         }
     }
     return d;

@@ -55,7 +55,7 @@ void record_path(VertexRecord rec[MAX_RECORDED_VERTICES], uint count, inout Rng 
             float value = (l_in.x + l_in.y + l_in.z) / (3.0 * rec[k].pdf);
             guide_record(rec[k].p, rec[k].wi, value, 1.0, vec3(rng_next2(rng), rng_next(rng)));
         }
-        if ((params.guiding_flags & GUIDE_FLAG_RECORD_NEE) != 0u && rec[k].nee_value > 0.0)
+        if ((guide_header.flags & GUIDE_FLAG_RECORD_NEE) != 0u && rec[k].nee_value > 0.0)
             guide_record(rec[k].p, rec[k].nee_dir, rec[k].nee_value, 0.0, vec3(rng_next2(rng), rng_next(rng)));
     }
 }
@@ -94,7 +94,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
 
     VertexRecord rec[MAX_RECORDED_VERTICES];
     uint recorded = 0u;
-    bool record_nee = (params.guiding_flags & GUIDE_FLAG_RECORD_NEE) != 0u;
+    bool record_nee = TRAINING && (guide_header.flags & GUIDE_FLAG_RECORD_NEE) != 0u;
 
     for (uint depth = 1u; depth < params.max_depth; ++depth) {
         TRACE6("vertex %u p=%v3f n=%v3f material %u front=%u emission=%v3f\n", depth, s.p, s.n, s.material, uint(s.front),

@@ -1,19 +1,359 @@
-// Temporary stand-in for the SD-tree include (uniform sphere), replaced by the real one.
-#ifndef INC_GUIDING_GLSL
-#define INC_GUIDING_GLSL
+// SD-tree path guiding on the GPU: find the spatial leaf of a point, sample a direction
+// from its sampling quadtree and evaluate that quadtree's pdf, and record training data
+// into the training quadtrees with float atomics. Layout and conventions are in
+// shared/guiding.h; the CPU mirror of every function here is src/guiding/ (quadtree.rs,
+// sphere.rs, sdtree.rs), which the tests compare against.
+//
+// Exactness: guide_sample returns exactly guide_pdf(leaf, dir) of the direction it
+// returns. Both walk the tree with the same helper functions, the sampled direction is
+// kept inside the sampled cell (see guide_sample), and should that fail the pdf is
+// guide_pdf's own.
+#ifndef LANTERNA_GUIDING_GLSL
+#define LANTERNA_GUIDING_GLSL
 
-uint guide_find_leaf(vec3 p) { return 0u; }
+#include "guiding_buffers.glsl"
 
-vec3 guide_sample(uint leaf, vec2 u, out float pdf) {
-    float z = 1.0 - 2.0 * u.x;
-    float r = sqrt(max(0.0, 1.0 - z * z));
-    float phi = TWO_PI * u.y;
-    pdf = INV_FOUR_PI;
-    return vec3(r * cos(phi), r * sin(phi), z);
+const float GUIDE_PI = 3.14159265358979323846;
+const float GUIDE_INV_4PI = 0.0795774715459476679;
+const float GUIDE_ONE_MINUS_EPS = 0.99999994;  // largest float below 1
+
+// ---- direction <-> square ((cosθ+1)/2, φ/2π), z the polar axis ------------------------
+
+vec2 guide_dir_to_square(vec3 d) {
+    precise float cos_theta = clamp(d.z, -1.0, 1.0);
+    precise float phi = atan(d.y, d.x);
+    if (isnan(phi)) {
+        phi = 0.0;  // atan(0, 0) at the poles is undefined in GLSL
+    }
+    if (phi < 0.0) {
+        phi += 2.0 * GUIDE_PI;
+    }
+    precise vec2 p = vec2((cos_theta + 1.0) * 0.5, phi * (0.5 / GUIDE_PI));
+    p = clamp(p, vec2(0.0), vec2(1.0));
+    // Non-finite directions land in a fixed cell instead of walking the tree with NaN.
+    return any(isnan(p)) ? vec2(0.0) : p;
 }
 
-float guide_pdf(uint leaf, vec3 dir) { return INV_FOUR_PI; }
+vec3 guide_square_to_dir(vec2 p) {
+    precise float cos_theta = 2.0 * p.x - 1.0;
+    precise float sin_theta = sqrt(max(0.0, 1.0 - cos_theta * cos_theta));
+    // φ reduced to [-π, π] first: v - roundEven(v) is exact (Sterbenz), and the smaller angle
+    // keeps more absolute precision than 2πv near 2π.
+    precise float phi = (2.0 * GUIDE_PI) * (p.y - roundEven(p.y));
+    return vec3(sin_theta * cos(phi), sin_theta * sin(phi), cos_theta);
+}
 
-void guide_record(vec3 p, vec3 dir, float value, float statistical_weight, vec3 jitter) {}
+// ---- quadtree walk helpers (shared by sampling and pdf so both do the same float ops) --
+
+// Quadrant of `p` (in its node's [0,1]² frame); `p` becomes its position in the
+// quadrant's frame. Exact in float: scaling by 2 and subtracting 0.5 from [0.5, 1] are.
+uint guide_quadrant(inout vec2 p) {
+    uint q = 0u;
+    if (p.x < 0.5) {
+        p.x = p.x * 2.0;
+    } else {
+        p.x = (p.x - 0.5) * 2.0;
+        q |= 1u;
+    }
+    if (p.y < 0.5) {
+        p.y = p.y * 2.0;
+    } else {
+        p.y = (p.y - 0.5) * 2.0;
+        q |= 2u;
+    }
+    return q;
+}
+
+float guide_node_total(vec4 s) {
+    precise float t = (s.x + s.y) + (s.z + s.w);
+    return t;
+}
+
+// Density factor of quadrant q: 4 sum[q] / total, or 1 in a node without energy (which
+// both sampling and pdf treat as uniform).
+float guide_quadrant_factor(vec4 s, uint q) {
+    precise float total = guide_node_total(s);
+    precise float f = total > 0.0 ? (4.0 * s[q]) / total : 1.0;
+    return f;
+}
+
+bool guide_tree_is_empty(uint root) {
+    return !(guide_node_total(guide_sampling[root].sum) > 0.0);
+}
+
+// ---- sampling and pdf -----------------------------------------------------------------
+
+// Solid-angle pdf of `dir` under leaf `leaf`'s sampling quadtree (uniform 1/4π when the
+// tree has learned nothing yet).
+float guide_pdf(uint leaf, vec3 dir) {
+    uint n = guide_leaves[leaf].sampling_root;
+    if (guide_tree_is_empty(n)) {
+        return GUIDE_INV_4PI;
+    }
+    vec2 p = guide_dir_to_square(dir);
+    precise float density = 1.0;
+    for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
+        GuideQuadNode node = guide_sampling[n];
+        uint q = guide_quadrant(p);
+        density = density * guide_quadrant_factor(node.sum, q);
+        n = node.child[q];
+        if (n == 0u) {
+            break;
+        }
+    }
+    precise float pdf = density * GUIDE_INV_4PI;
+    return pdf;
+}
+
+// Whether walking the tree with `p` ends in the cell at `origin` of edge `size` (the
+// walk's arithmetic is exact; cells at the square's upper border include it).
+bool guide_in_cell(vec2 p, vec2 origin, float size) {
+    vec2 end = origin + vec2(size);
+    return all(greaterThanEqual(p, origin)) && (p.x < end.x || end.x == 1.0)
+        && (p.y < end.y || end.y == 1.0);
+}
+
+// Rescale a uniform number that fell in [lo, lo + width) of [0, 1) back to [0, 1).
+float guide_rescale(float u, float lo, float width) {
+    return min((u - lo) / width, GUIDE_ONE_MINUS_EPS);
+}
+
+// Sample a direction from leaf `leaf`'s sampling quadtree with the uniform pair `u`
+// (hierarchical sample warping: each level reuses the rescaled numbers). `pdf` is the
+// solid-angle pdf of the returned direction, bitwise equal to guide_pdf(leaf, dir).
+vec3 guide_sample(uint leaf, vec2 u, out float pdf) {
+    uint n = guide_leaves[leaf].sampling_root;
+    u = min(u, vec2(GUIDE_ONE_MINUS_EPS));
+    if (guide_tree_is_empty(n)) {
+        pdf = GUIDE_INV_4PI;
+        return guide_square_to_dir(u);
+    }
+    vec2 origin = vec2(0.0);
+    float size = 1.0;
+    precise float density = 1.0;
+    for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
+        GuideQuadNode node = guide_sampling[n];
+        vec4 s = node.sum;
+        float total = guide_node_total(s);
+        uint q;
+        if (total > 0.0) {
+            // Column by its marginal, then the row within the column. A quadrant without
+            // energy gets a split of exactly 0 or 1 and so is never chosen.
+            // (Explicit 1 for an empty side: a division by reciprocal could give 1 - ε.)
+            float lo = s.x + s.z;
+            float split = lo == total ? 1.0 : lo / total;
+            if (u.x < split) {
+                u.x = guide_rescale(u.x, 0.0, split);
+                q = 0u;
+            } else {
+                u.x = guide_rescale(u.x, split, 1.0 - split);
+                q = 1u;
+            }
+            float a = s[q];
+            float b = s[q + 2u];
+            float split_y = b == 0.0 ? 1.0 : a / (a + b);
+            if (u.y < split_y) {
+                u.y = guide_rescale(u.y, 0.0, split_y);
+            } else {
+                u.y = guide_rescale(u.y, split_y, 1.0 - split_y);
+                q |= 2u;
+            }
+        } else {
+            q = guide_quadrant(u);
+        }
+        density = density * guide_quadrant_factor(s, q);
+        size *= 0.5;
+        origin += vec2(float(q & 1u), float(q >> 1u)) * size;
+        n = node.child[q];
+        if (n == 0u) {
+            break;
+        }
+    }
+    // Deep cells are only a few float steps wide, and the round trip through a direction
+    // can move a point near a border into the next cell (whose density may be far
+    // lower). A point that does not map back into its cell is pulled halfway to the
+    // cell's centre and tried again, so the direction lies in the cell that was sampled.
+    vec2 p = origin + u * size;
+    vec2 centre = origin + 0.5 * size;
+    vec3 dir;
+    bool inside = false;
+    for (int attempt = 0; attempt < GUIDE_SAMPLE_ATTEMPTS && !inside; ++attempt) {
+        dir = guide_square_to_dir(p);
+        inside = guide_in_cell(guide_dir_to_square(dir), origin, size);
+        p = 0.5 * (p + centre);
+    }
+    if (inside) {
+        precise float result = density * GUIDE_INV_4PI;
+        pdf = result;
+    } else {
+        pdf = guide_pdf(leaf, dir);
+    }
+    return dir;
+}
+
+// ---- spatial tree -----------------------------------------------------------------------
+
+// The spatial leaf holding `p` (points outside the cube use the nearest leaf).
+uint guide_find_leaf(vec3 p) {
+    vec3 x = clamp((p - guide_header.origin) / guide_header.size, vec3(0.0), vec3(1.0));
+    uint n = 0u;
+    for (int level = 0; level <= GUIDE_MAX_SPATIAL_DEPTH; ++level) {
+        GuideSpatialNode node = guide_spatial[n];
+        if (node.axis == GUIDE_SPATIAL_LEAF) {
+            break;
+        }
+        float c = x[node.axis];
+        if (c < 0.5) {
+            x[node.axis] = c * 2.0;
+            n = node.child;
+        } else {
+            x[node.axis] = (c - 0.5) * 2.0;
+            n = node.child + 1u;
+        }
+    }
+    return guide_spatial[n].child;
+}
+
+// ---- recording ----------------------------------------------------------------------------
+
+// Nearest directional filter: everything goes to the leaf cell holding p.
+void guide_splat_nearest(uint root, vec2 p, float v) {
+    uint n = root;
+    for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
+        uint q = guide_quadrant(p);
+        uint c = guide_training[n].child[q];
+        if (c == 0u || level + 1 == GUIDE_MAX_QUAD_DEPTH) {
+            atomicAdd(guide_training[n].sum[q], v);
+            return;
+        }
+        n = c;
+    }
+}
+
+// Edge length of the training tree's leaf cell holding p.
+float guide_training_cell_size(uint root, vec2 p) {
+    uint n = root;
+    float size = 0.5;
+    for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
+        uint q = guide_quadrant(p);
+        n = guide_training[n].child[q];
+        if (n == 0u) {
+            break;
+        }
+        size *= 0.5;
+    }
+    return size;
+}
+
+// Spread `density` × area over the part of the box [lo, hi] inside the square. Quadrants
+// the box covers entirely take their share in their own sum (the CPU pushes it down);
+// partly covered interior quadrants are visited depth first.
+void guide_splat_rect(uint root, vec2 lo, vec2 hi, float density) {
+    // Go straight down to the deepest node whose cell holds the whole box, so the
+    // depth-first walk only branches where the box straddles cells.
+    uint n = root;
+    vec3 cell = vec3(0.0, 0.0, 1.0);
+    for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
+        float h = cell.z * 0.5;
+        vec2 mid = cell.xy + h;
+        bvec2 lo_high = greaterThanEqual(lo, mid);
+        bvec2 hi_high = greaterThan(hi, mid);
+        if (lo_high != hi_high) {
+            break;
+        }
+        uint q = (lo_high.x ? 1u : 0u) | (lo_high.y ? 2u : 0u);
+        uint c = guide_training[n].child[q];
+        if (c == 0u) {
+            break;
+        }
+        n = c;
+        cell = vec3(cell.xy + vec2(float(q & 1u), float(q >> 1u)) * h, h);
+    }
+    uint stack_node[GUIDE_SPLAT_STACK];
+    vec3 stack_cell[GUIDE_SPLAT_STACK];  // xy origin, z edge length
+    int top = 0;
+    stack_node[0] = n;
+    stack_cell[0] = cell;
+    top = 1;
+    while (top > 0) {
+        --top;
+        n = stack_node[top];
+        cell = stack_cell[top];
+        uvec4 child = guide_training[n].child;
+        float h = cell.z * 0.5;
+        for (uint q = 0u; q < 4u; ++q) {
+            vec2 o = cell.xy + vec2(float(q & 1u), float(q >> 1u)) * h;
+            vec2 len = max(min(hi, o + h) - max(lo, o), vec2(0.0));
+            float area = len.x * len.y;
+            if (!(area > 0.0)) {
+                continue;
+            }
+            bool covered = len.x >= h && len.y >= h;
+            if (child[q] == 0u || covered || top == GUIDE_SPLAT_STACK) {
+                atomicAdd(guide_training[n].sum[q], density * area);
+            } else {
+                stack_node[top] = child[q];
+                stack_cell[top] = vec3(o, h);
+                ++top;
+            }
+        }
+    }
+}
+
+// Box directional filter: a box of the size of the training leaf cell holding p, centred
+// on p, shifted inside the square along u = (cosθ+1)/2 and wrapped around along φ, so
+// the whole value v lands in the tree.
+void guide_splat_box(uint root, vec2 p, float v) {
+    float size = guide_training_cell_size(root, p);
+    vec2 lo = p - 0.5 * size;
+    lo.x = clamp(lo.x, 0.0, 1.0 - size);
+    vec2 hi = lo + size;
+    float density = v / (size * size);
+    guide_splat_rect(root, lo, hi, density);
+    if (lo.y < 0.0) {
+        guide_splat_rect(root, lo + vec2(0.0, 1.0), hi + vec2(0.0, 1.0), density);
+    } else if (hi.y > 1.0) {
+        guide_splat_rect(root, lo - vec2(0.0, 1.0), hi - vec2(0.0, 1.0), density);
+    }
+}
+
+// Record into the training tree of leaf `leaf`: `weight` to its statistical weight and
+// value × weight to the direction's cell(s).
+void guide_record_into(uint leaf, vec3 dir, float value, float weight) {
+    uint root = guide_leaves[leaf].training_root;
+    atomicAdd(guide_training[root - 1u].sum.x, weight);
+    if (!(value > 0.0) || isinf(value)) {
+        return;
+    }
+    vec2 p = guide_dir_to_square(dir);
+    float v = value * weight;
+    if ((guide_header.flags & GUIDE_FLAG_DIRECTIONAL_BOX) != 0u) {
+        guide_splat_box(root, p, v);
+    } else {
+        guide_splat_nearest(root, p, v);
+    }
+}
+
+// Record one training sample taken at `p` (whose spatial leaf is `leaf_at_p`): the
+// incident radiance from `dir` divided by the pdf of `dir`, averaged over RGB, with
+// statistical weight `weight`. `u` (uniform in [0,1)³) jitters the position within the
+// leaf's box when the stochastic spatial filter is on.
+void guide_record_from_leaf(uint leaf_at_p, vec3 p, vec3 dir, float value, float weight, vec3 u) {
+    if (!(weight > 0.0) || isinf(weight)) {
+        return;
+    }
+    uint leaf = leaf_at_p;
+    if ((guide_header.flags & GUIDE_FLAG_SPATIAL_JITTER) != 0u) {
+        // precise: no fused multiply-add, so the CPU mirror picks the same leaf.
+        precise vec3 q = p + (u - 0.5) * guide_leaves[leaf_at_p].box_size;
+        q = clamp(q, guide_header.origin, guide_header.origin + guide_header.size);
+        leaf = guide_find_leaf(q);
+    }
+    guide_record_into(leaf, dir, value, weight);
+}
+
+void guide_record(vec3 p, vec3 dir, float value, float weight, vec3 u) {
+    guide_record_from_leaf(guide_find_leaf(p), p, dir, value, weight, u);
+}
 
 #endif

@@ -1,31 +1,103 @@
-// SD-tree as flat arrays (path guiding). The CPU refits these between passes.
+// SD-tree (Müller et al. 2017, "Practical Path Guiding") as flat arrays. The CPU refits
+// the tree between passes (src/guiding/) and uploads four buffers:
+//   BINDING_GUIDE_SPATIAL   GuideHeader, then GuideSpatialNode[] (one buffer block)
+//   BINDING_GUIDE_LEAVES    GuideLeaf[]
+//   BINDING_GUIDE_SAMPLING  GuideQuadNode[]: every leaf's sampling quadtree (read-only)
+//   BINDING_GUIDE_TRAINING  GuideQuadNode[]: every leaf's training quadtree, each preceded
+//                           by one header node whose sum.x collects the leaf's statistical
+//                           weight (atomic float adds); read back by the CPU after a pass.
+// Directions live on the square ((cosθ+1)/2, φ/2π) with z the polar axis; the map is
+// area-preserving, so pdf(ω) = quadtree density / 4π.
 #ifndef LANTERNA_GUIDING_H
 #define LANTERNA_GUIDING_H
 
+// GuideHeader.flags.
 #define GUIDE_FLAG_RECORD_NEE 1u
 #define GUIDE_FLAG_SPATIAL_JITTER 2u
 #define GUIDE_FLAG_DIRECTIONAL_BOX 4u
 
-// Spatial binary tree node. Leaves have axis == 3 and `child` = leaf index.
+// GuideSpatialNode.axis of a leaf.
+#define GUIDE_SPATIAL_LEAF 3u
+// Loop bounds of the kernels' tree walks; the CPU never builds deeper trees.
+#define GUIDE_MAX_SPATIAL_DEPTH 48
+#define GUIDE_MAX_QUAD_DEPTH 20
+// Tries guide_sample makes to keep a direction inside its cell (see there).
+#define GUIDE_SAMPLE_ATTEMPTS 6
+// Box-splat stack: a depth-first walk pushes at most 3 more nodes than it pops per level.
+#define GUIDE_SPLAT_STACK 64
+
+// Start of the spatial buffer: the cube the spatial tree subdivides, and options.
+struct GuideHeader {
+    vec3 origin;          // cube corner (scene bbox min)
+    float size;           // cube edge (largest bbox extent)
+    uint flags;           // GUIDE_FLAG_*
+    uint leaf_count;
+    float bsdf_fraction;  // probability of sampling the BSDF instead of the quadtree
+    uint pad;
+};
+
+// Spatial binary tree node. Interior: `axis` (0 x, 1 y, 2 z) splits the node's box in
+// half, children are `child` (low half) and `child + 1` (high half). Leaf: axis ==
+// GUIDE_SPATIAL_LEAF and `child` is the leaf index.
 struct GuideSpatialNode {
     uint axis;
-    uint child;      // interior: index of the first child (the second is child + 1)
+    uint child;
 };
 
-// Per spatial leaf: where its quadtrees start, and its box.
+// Per spatial leaf: its quadtrees and its box. The training header node (statistical
+// weight) is guide_training[training_root - 1].
 struct GuideLeaf {
-    uint sampling_root;   // node index in the sampling quadtree array
-    uint training_root;   // node index in the training quadtree array
+    uint sampling_root;   // node index in the sampling array
+    uint training_root;   // node index in the training array
     vec3 box_min;
     vec3 box_size;
+    float sampling_weight;  // statistical weight the sampling quadtree was learned from
 };
 
-// Directional quadtree node over ((cosθ+1)/2, φ/2π): four child sums and children
-// (0 = the child is a leaf). Child order: 0 = (lo u, lo v), 1 = (hi u, lo v),
-// 2 = (lo u, hi v), 3 = (hi u, hi v).
+// Directional quadtree node. Child order: 0 = (lo u, lo v), 1 = (hi u, lo v),
+// 2 = (lo u, hi v), 3 = (hi u, hi v), u = (cosθ+1)/2, v = φ/2π. child[i] is an index into
+// the same array, 0 when quadrant i is a leaf cell (index 0 is never a child: it is a
+// root in the sampling array and a header in the training array). sum[i] is the energy
+// of quadrant i. In a training tree, sum[i] of an interior quadrant holds only energy
+// deposited uniformly over the whole quadrant (box splats covering it); the CPU pushes it
+// down to the leaves when it builds the tree.
 struct GuideQuadNode {
     vec4 sum;
     uvec4 child;
+};
+
+// One training record, for the records mode (the kernel appends, the CPU accumulates)
+// and for test kernels: the radiance arriving at `pos` from `dir` divided by the pdf of
+// `dir` (averaged over RGB), and its statistical weight.
+struct GuideRecord {
+    vec3 pos;
+    float value;
+    vec3 dir;
+    float weight;
+};
+
+// Test kernel tests/guiding_sample: one input and its result. Mode GUIDE_TEST_SAMPLE
+// samples with the uniform pair u; GUIDE_TEST_EVAL evaluates guide_pdf at the direction
+// of square point u (for integrating the pdf over the sphere on the device).
+#define GUIDE_TEST_SAMPLE 0u
+#define GUIDE_TEST_EVAL 1u
+struct GuideTestSample {
+    vec2 u;
+    uint leaf;
+    uint mode;
+};
+struct GuideTestResult {
+    vec3 dir;
+    float pdf;        // returned by guide_sample
+    float pdf_eval;   // guide_pdf(leaf, dir)
+    vec2 square;      // guide_dir_to_square(dir): the cell the kernel's own walk sees
+};
+
+// Test kernel tests/guiding_record: a record with the random numbers of its jitter.
+struct GuideTestRecord {
+    GuideRecord record;
+    vec3 u;
+    uint pad;
 };
 
 #endif

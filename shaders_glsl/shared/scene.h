@@ -110,10 +110,6 @@ struct FrameParams {
     uint punctual_count;
     uint ris_candidates;
     uint ris_source;           // RIS_SOURCE_*
-    float bsdf_fraction;       // guiding: probability of sampling the BSDF
-    uint guiding_flags;        // GUIDE_FLAG_* (guiding.h)
-    vec3 guide_origin;         // SD-tree cube
-    float guide_size;
     uint debug_pixel;          // y * width + x, INVALID_INDEX when not tracing a pixel
     uint debug_sample;         // sample index to trace, INVALID_INDEX for all
     float scene_radius;

@@ -131,6 +131,35 @@ pub struct EstimatorArgs {
     /// alone (a debugging switch: all three converge to the same image).
     #[arg(long, value_enum, default_value = "mis")]
     pub strategy: Strategy,
+    /// Guiding: c in the spatial split threshold c·√(spp of the next iteration / 4)
+    /// (Müller et al.'s default 12000).
+    #[arg(long, default_value_t = 12000.0)]
+    pub guiding_threshold: f32,
+    /// Guiding: memory cap of the SD-tree in MiB (splits stop before it is exceeded).
+    #[arg(long, default_value_t = 256)]
+    pub guiding_memory: u64,
+    /// Guiding: spatial filter of the training records.
+    #[arg(long, value_enum, default_value = "jitter")]
+    pub spatial_filter: SpatialFilterArg,
+    /// Guiding: directional filter of the training records.
+    #[arg(long, value_enum, default_value = "box")]
+    pub directional_filter: DirectionalFilterArg,
+}
+
+/// `--spatial-filter`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum SpatialFilterArg {
+    /// Stochastic box: jitter the record within the leaf's size.
+    Jitter,
+    Nearest,
+}
+
+/// `--directional-filter`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum DirectionalFilterArg {
+    /// Splat over a box the size of the quadtree cell the direction falls in.
+    Box,
+    Nearest,
 }
 
 impl EstimatorArgs {
@@ -148,6 +177,12 @@ impl EstimatorArgs {
             train_fraction: self.train_fraction,
             record_nee: !self.no_record_nee,
             strategy: self.strategy,
+            spatial_jitter: self.spatial_filter == SpatialFilterArg::Jitter,
+            directional_box: self.directional_filter == DirectionalFilterArg::Box,
+            guiding: lanterna::render::GuidingSettings {
+                spatial_threshold: self.guiding_threshold,
+                memory_cap_bytes: self.guiding_memory.saturating_mul(1 << 20),
+            },
             ..RenderSettings::default()
         }
     }

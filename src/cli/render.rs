@@ -4,9 +4,9 @@ use super::common::{self, DeviceArgs, MethodArgs, SceneArgs};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use lanterna::image_io::{self, Image};
-use lanterna::render::{session, RenderStats, Renderer};
+use lanterna::render::{run, session, Renderer};
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -61,6 +61,37 @@ pub struct Args {
     /// indices (reproduce one with --pixel X,Y --sample K).
     #[arg(long, value_name = "N")]
     pub report_outliers: Option<usize>,
+    /// Guided methods: write the trained SD-tree to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub save_guiding: Option<PathBuf>,
+    /// Guided methods: render with the SD-tree in FILE instead of training (it must come
+    /// from the same scene; the whole budget renders with it).
+    #[arg(long, value_name = "FILE")]
+    pub load_guiding: Option<PathBuf>,
+}
+
+/// Saved SD-trees carry the scene's content hash (hex) as a number.
+fn scene_hash_u64(hash: &str) -> u64 {
+    u64::from_str_radix(hash, 16).unwrap_or(0)
+}
+
+fn report_guiding(g: &lanterna::render::GuidingOutcome, training_seconds: f64) {
+    for it in &g.iterations {
+        log::info!(
+            "training iteration {}: {} spp, render {:.2} s, read-back {:.3} s, refit {:.3} s, upload {:.3} s; {} leaves, {:.1} KiB",
+            it.iteration,
+            it.spp,
+            it.render_seconds,
+            it.readback_seconds,
+            it.refit_seconds,
+            it.upload_seconds,
+            it.leaves,
+            it.gpu_bytes as f64 / 1024.0
+        );
+    }
+    if !g.iterations.is_empty() {
+        log::info!("training took {training_seconds:.2} s");
+    }
 }
 
 /// AOV layers.
@@ -171,6 +202,14 @@ pub fn run(args: Args) -> Result<()> {
         settings,
         args.device.shaders(),
     )?;
+    if let Some(path) = &args.load_guiding {
+        anyhow::ensure!(
+            renderer.settings.method.uses_guiding(),
+            "--load-guiding needs --method guided or guided-ris"
+        );
+        let tree = lanterna::guiding::SdTree::load(path, scene_hash_u64(&loaded.scene.hash))?;
+        renderer.preloaded_tree = Some(tree);
+    }
     if let Some((x, y)) = args.pixel {
         return trace_pixel(&mut renderer, x, y, &args, spp);
     }
@@ -196,11 +235,7 @@ pub fn run(args: Args) -> Result<()> {
         );
         b
     };
-    let mut stats = RenderStats::default();
     let render_started = Instant::now();
-    let deadline = args
-        .time
-        .map(|t| render_started + Duration::from_secs_f64(t));
     let mut progress = |done: u64| {
         if args.time.is_some() {
             bar.set_position((render_started.elapsed().as_secs_f64() * 10.0) as u64);
@@ -209,24 +244,41 @@ pub fn run(args: Args) -> Result<()> {
             bar.set_position(done);
         }
     };
-    let count = if args.time.is_some() { None } else { Some(spp) };
-    let done = renderer.render_until(
+    let budget = match args.time {
+        Some(t) => run::Budget::Seconds(t),
+        None => run::Budget::Spp(spp),
+    };
+    let outcome = run::run_method(
+        &mut renderer,
+        budget,
         args.sample_offset,
-        count,
-        deadline,
-        false,
         cancel,
         &mut progress,
-        &mut stats,
     )?;
     bar.finish_and_clear();
-    let render_seconds = render_started.elapsed().as_secs_f64();
+    let render_seconds = outcome.seconds;
+    let stats = outcome.stats;
+    let film = outcome.film;
+    let done = film.spp;
     anyhow::ensure!(
         done > 0,
         "interrupted before the first sample finished; nothing written"
     );
-
-    let film = renderer.film()?;
+    if let Some(g) = &outcome.guiding {
+        report_guiding(g, outcome.training_seconds);
+        if let Some(path) = &args.save_guiding {
+            common::ensure_parent(path)?;
+            let (lo, hi) = renderer.bounds;
+            g.tree
+                .save(
+                    path,
+                    scene_hash_u64(&loaded.scene.hash),
+                    (lo.into(), hi.into()),
+                )
+                .with_context(|| format!("cannot save the SD-tree to {}", path.display()))?;
+            log::info!("saved the SD-tree to {}", path.display());
+        }
+    }
     let mut meta =
         common::render_meta(&renderer.settings, &args.scene, &loaded.scene.hash, &device);
     meta.spp = Some(film.spp);

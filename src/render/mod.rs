@@ -15,7 +15,8 @@ mod settings;
 
 pub use film::Film;
 pub use gpu_scene::GpuScene;
-pub use settings::{LightSource, Method, RenderSettings, Strategy};
+pub use guided::{GuidingOutcome, IterationStats};
+pub use settings::{GuidingSettings, LightSource, Method, RenderSettings, Strategy};
 
 use crate::gpu;
 use crate::lights::LightTable;
@@ -88,18 +89,56 @@ pub struct GuideBuffers {
     pub leaves: Buffer,
     pub sampling: Buffer,
     pub training: Buffer,
+    /// Nodes in the training buffer (for the read-back).
+    pub training_nodes: usize,
 }
 
 impl GuideBuffers {
-    /// Placeholders for methods that do not guide.
+    /// Placeholders for methods that do not guide (a zero header, nothing else).
     pub fn empty(device: &Arc<Device>) -> vk::Result<GuideBuffers> {
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
         Ok(GuideBuffers {
-            spatial: Buffer::zeroed(device, 16, usage, "guide spatial (unused)")?,
-            leaves: Buffer::zeroed(device, 16, usage, "guide leaves (unused)")?,
-            sampling: Buffer::zeroed(device, 16, usage, "guide sampling (unused)")?,
-            training: Buffer::zeroed(device, 16, usage, "guide training (unused)")?,
+            spatial: Buffer::zeroed(device, 64, usage, "guide spatial (unused)")?,
+            leaves: Buffer::zeroed(device, 64, usage, "guide leaves (unused)")?,
+            sampling: Buffer::zeroed(device, 64, usage, "guide sampling (unused)")?,
+            training: Buffer::zeroed(device, 64, usage, "guide training (unused)")?,
+            training_nodes: 0,
         })
+    }
+
+    /// Upload an SD-tree's arrays.
+    pub fn upload(
+        device: &Arc<Device>,
+        arrays: &crate::guiding::GuideArrays,
+    ) -> vk::Result<GuideBuffers> {
+        let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
+        Ok(GuideBuffers {
+            spatial: Buffer::from_slice(
+                device,
+                &arrays.spatial_buffer(),
+                usage,
+                "guide spatial tree",
+            )?,
+            leaves: Buffer::from_slice(device, &arrays.leaves, usage, "guide leaves")?,
+            sampling: Buffer::from_slice(
+                device,
+                &arrays.sampling,
+                usage,
+                "guide sampling quadtrees",
+            )?,
+            training: Buffer::from_slice(
+                device,
+                &arrays.training,
+                usage | raw::BufferUsageFlags::TRANSFER_SRC,
+                "guide training quadtrees",
+            )?,
+            training_nodes: arrays.training.len(),
+        })
+    }
+
+    /// Read the training quadtrees back after a pass.
+    pub fn read_training(&self) -> vk::Result<Vec<gpu::GuideQuadNode>> {
+        self.training.read(self.training_nodes)
     }
 }
 
@@ -122,9 +161,12 @@ pub struct Renderer {
     aov: Buffer,
     outliers: Buffer,
     guide: GuideBuffers,
-    /// Current guiding-related params.
-    guide_origin: [f32; 3],
-    guide_size: f32,
+    /// A trained SD-tree to render with instead of training (`--load-guiding`).
+    pub preloaded_tree: Option<crate::guiding::SdTree>,
+    /// Scene bounds (the SD-tree's cube is made from them).
+    pub bounds: (glam::Vec3, glam::Vec3),
+    /// The scene's content hash (ties saved SD-trees to it).
+    pub scene_hash: String,
     /// Samples per full-image dispatch that fit the time target, from measurements.
     seconds_per_sample: Option<f64>,
     /// Samples accumulated in the film, and the first sample index.
@@ -189,8 +231,7 @@ impl Renderer {
         let aov = Buffer::zeroed(&device, aov_floats * 4, usage, "aovs")?;
         let outliers = Buffer::zeroed(&device, outlier_floats * 4, usage, "outliers")?;
         let guide = GuideBuffers::empty(&device)?;
-        let lo = scene.bounds_min;
-        let size = (scene.bounds_max - lo).max_element().max(1e-3);
+
         let mut r = Renderer {
             device,
             gpu_scene,
@@ -209,8 +250,9 @@ impl Renderer {
             aov,
             outliers,
             guide,
-            guide_origin: lo.into(),
-            guide_size: size,
+            preloaded_tree: None,
+            bounds: (scene.bounds_min, scene.bounds_max),
+            scene_hash: scene.hash.clone(),
             seconds_per_sample: None,
             film_spp: 0,
             film_offset: 0,
@@ -231,16 +273,7 @@ impl Renderer {
                 (gpu::CAMERA_ORTHOGRAPHIC, 0.0, [xmag, ymag])
             }
         };
-        let mut flags = 0;
-        if s.record_nee {
-            flags |= gpu::GUIDE_FLAG_RECORD_NEE;
-        }
-        if s.spatial_jitter {
-            flags |= gpu::GUIDE_FLAG_SPATIAL_JITTER;
-        }
-        if s.directional_box {
-            flags |= gpu::GUIDE_FLAG_DIRECTIONAL_BOX;
-        }
+
         gpu::FrameParams {
             camera_to_world: self.camera.rigid_to_world().to_cols_array_2d(),
             camera_type,
@@ -259,14 +292,7 @@ impl Renderer {
                 LightSource::Uniform => gpu::RIS_SOURCE_UNIFORM,
                 LightSource::Power => gpu::RIS_SOURCE_POWER,
             },
-            bsdf_fraction: if s.method.uses_guiding() {
-                s.bsdf_fraction
-            } else {
-                1.0
-            },
-            guiding_flags: flags,
-            guide_origin: self.guide_origin,
-            guide_size: self.guide_size,
+
             debug_pixel: self.debug_pixel,
             debug_sample: self.debug_sample,
             scene_radius: self.scene_radius,
@@ -304,18 +330,10 @@ impl Renderer {
         self.upload_params()
     }
 
-    /// Replace the guiding buffers (after a refit); `origin`/`size` give the SD-tree cube.
-    pub fn set_guide_buffers(
-        &mut self,
-        buffers: GuideBuffers,
-        origin: [f32; 3],
-        size: f32,
-    ) -> Result<()> {
+    /// Replace the guiding buffers (after a refit).
+    pub fn set_guide_buffers(&mut self, buffers: GuideBuffers) {
         self.guide = buffers;
-        self.guide_origin = origin;
-        self.guide_size = size;
         self.set = None;
-        self.upload_params()
     }
 
     pub fn guide_buffers(&self) -> &GuideBuffers {
@@ -458,6 +476,11 @@ impl Renderer {
             aovs: self.settings.aovs,
             debug: false,
         }
+    }
+
+    /// Samples per pixel in the film.
+    pub fn film_spp(&self) -> u64 {
+        self.film_spp
     }
 
     /// Clear the film (and its sample count), the AOVs and the outliers.

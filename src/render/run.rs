@@ -24,6 +24,8 @@ pub struct RunOutcome {
     pub seconds: f64,
     /// Wall seconds spent training (guided methods).
     pub training_seconds: f64,
+    /// Training iterations and the tree (guided methods).
+    pub guiding: Option<super::GuidingOutcome>,
 }
 
 /// Render `budget` with the renderer's method, starting at sample index `first`.
@@ -62,5 +64,6 @@ pub fn run_method(
         stats,
         seconds: started.elapsed().as_secs_f64(),
         training_seconds: 0.0,
+        guiding: None,
     })
 }

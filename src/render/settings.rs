@@ -82,6 +82,24 @@ pub enum Strategy {
     Bsdf,
 }
 
+/// SD-tree options beyond the kernel's.
+#[derive(Clone, Debug)]
+pub struct GuidingSettings {
+    /// c in the spatial split threshold c·√(spp of the coming iteration / 4).
+    pub spatial_threshold: f32,
+    /// Stop splitting before the SD-tree's buffers exceed this.
+    pub memory_cap_bytes: u64,
+}
+
+impl Default for GuidingSettings {
+    fn default() -> Self {
+        GuidingSettings {
+            spatial_threshold: 12000.0,
+            memory_cap_bytes: crate::guiding::DEFAULT_MEMORY_CAP_BYTES,
+        }
+    }
+}
+
 /// Parameters of one render that the kernel sees.
 #[derive(Clone, Debug)]
 pub struct RenderSettings {
@@ -109,6 +127,7 @@ pub struct RenderSettings {
     pub strategy: Strategy,
     /// Accumulate first-hit AOVs and per-pixel outliers (costs memory and a little time).
     pub aovs: bool,
+    pub guiding: GuidingSettings,
 }
 
 impl Default for RenderSettings {
@@ -129,6 +148,7 @@ impl Default for RenderSettings {
             directional_box: true,
             strategy: Strategy::Mis,
             aovs: false,
+            guiding: GuidingSettings::default(),
         }
     }
 }

@@ -1,0 +1,133 @@
+//! Options of the SD-tree: the refit rules of Müller et al. 2017 (spatial split threshold
+//! c, directional subdivision threshold ρ, quadtree depth cap), the memory cap, the
+//! training filters, and the two renderer-side switches the kernels read from the
+//! guiding header (record NEE contributions, BSDF sampling fraction). Defaults are the
+//! reference implementation's, except the filters, which default to the stochastic
+//! spatial box and the directional box (the configuration of the paper's best results).
+
+use super::GuidingError;
+
+/// How a training record is placed in space.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum SpatialFilter {
+    /// Into the leaf holding the vertex.
+    Nearest,
+    /// Into the leaf holding the vertex jittered uniformly within a box of the size of
+    /// its leaf (clamped to the tree's cube): a stochastic box filter.
+    #[default]
+    StochasticBox,
+}
+
+/// How a training record is placed on the directional square.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum DirectionalFilter {
+    /// Into the quadtree cell holding the direction.
+    Nearest,
+    /// Spread over a box of the size of the cell holding the direction, centred on it.
+    #[default]
+    Box,
+}
+
+/// SD-tree options.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GuidingConfig {
+    /// c: a spatial leaf splits while its statistical weight exceeds
+    /// c·√(spp of the coming iteration / 4) (reference: `sTreeThreshold` = 12000).
+    pub spatial_threshold: f32,
+    /// ρ: a quadrant subdivides while its share of the tree's energy exceeds ρ.
+    pub rho: f32,
+    /// Deepest quadtree node level (the root is level 1; reference: 20).
+    pub max_quad_depth: u32,
+    /// Deepest spatial leaf (the root is depth 0).
+    pub max_spatial_depth: u32,
+    /// Spatial splits stop before the GPU arrays would exceed this many bytes.
+    pub memory_cap_bytes: u64,
+    pub spatial_filter: SpatialFilter,
+    pub directional_filter: DirectionalFilter,
+    /// Whether NEE contributions train the tree (read by the render kernel).
+    pub record_nee: bool,
+    /// Probability of sampling the BSDF rather than the quadtree (read by the kernel).
+    pub bsdf_fraction: f32,
+}
+
+/// Default `--guiding-memory`: 256 MiB of GPU arrays is thousands of well-resolved leaves.
+pub const DEFAULT_MEMORY_CAP_BYTES: u64 = 256 << 20;
+
+impl Default for GuidingConfig {
+    fn default() -> Self {
+        Self {
+            spatial_threshold: 12000.0,
+            rho: 0.01,
+            max_quad_depth: 20,
+            max_spatial_depth: crate::gpu::GUIDE_MAX_SPATIAL_DEPTH,
+            memory_cap_bytes: DEFAULT_MEMORY_CAP_BYTES,
+            spatial_filter: SpatialFilter::default(),
+            directional_filter: DirectionalFilter::default(),
+            record_nee: true,
+            bsdf_fraction: 0.5,
+        }
+    }
+}
+
+impl GuidingConfig {
+    /// Reject options the trees or the kernels cannot honour.
+    pub fn validate(&self) -> Result<(), GuidingError> {
+        let bad = |what: String| Err(GuidingError::Config(what));
+        if !(self.spatial_threshold > 0.0 && self.spatial_threshold.is_finite()) {
+            return bad(format!(
+                "spatial threshold must be positive, got {}",
+                self.spatial_threshold
+            ));
+        }
+        if !(self.rho > 0.0 && self.rho < 1.0) {
+            return bad(format!("rho must be in (0, 1), got {}", self.rho));
+        }
+        let max_quad = crate::gpu::GUIDE_MAX_QUAD_DEPTH;
+        if self.max_quad_depth == 0 || self.max_quad_depth > max_quad {
+            return bad(format!(
+                "quadtree depth must be in 1..={max_quad}, got {}",
+                self.max_quad_depth
+            ));
+        }
+        let max_spatial = crate::gpu::GUIDE_MAX_SPATIAL_DEPTH;
+        if self.max_spatial_depth > max_spatial {
+            return bad(format!(
+                "spatial depth must be at most {max_spatial}, got {}",
+                self.max_spatial_depth
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.bsdf_fraction) {
+            return bad(format!(
+                "BSDF fraction must be in [0, 1], got {}",
+                self.bsdf_fraction
+            ));
+        }
+        Ok(())
+    }
+
+    /// The spatial split threshold for an iteration rendering `spp` samples per pixel.
+    /// The reference refines with `√(2^k · sppPerPass / 4) · c` before iteration k, which
+    /// renders 2^k passes of sppPerPass samples: c·√(spp/4) with its defaults giving
+    /// c·√(2^k) at 4 spp per pass.
+    pub fn split_threshold(&self, spp: u32) -> f32 {
+        (f64::from(self.spatial_threshold) * (f64::from(spp) / 4.0).sqrt()) as f32
+    }
+
+    /// `GUIDE_FLAG_*` bits of the guiding header.
+    pub fn flags(&self) -> u32 {
+        use crate::gpu::{
+            GUIDE_FLAG_DIRECTIONAL_BOX, GUIDE_FLAG_RECORD_NEE, GUIDE_FLAG_SPATIAL_JITTER,
+        };
+        let mut f = 0;
+        if self.record_nee {
+            f |= GUIDE_FLAG_RECORD_NEE;
+        }
+        if self.spatial_filter == SpatialFilter::StochasticBox {
+            f |= GUIDE_FLAG_SPATIAL_JITTER;
+        }
+        if self.directional_filter == DirectionalFilter::Box {
+            f |= GUIDE_FLAG_DIRECTIONAL_BOX;
+        }
+        f
+    }
+}

@@ -1,0 +1,351 @@
+//! The SD-tree as the four GPU buffers of shaders_glsl/shared/guiding.h, and back:
+//! flattening for upload, taking in the training buffer read back after a pass, and
+//! rebuilding a tree from arrays (the file format stores exactly these arrays).
+//!
+//! Layout: the spatial buffer is a `GuideHeader` followed by the `GuideSpatialNode`s
+//! (node 0 is the root); `GuideLeaf` i describes leaf i; the sampling buffer holds each
+//! distinct sampling tree once, contiguously, root first; the training buffer holds, per
+//! leaf in order, one header node (sum.x = statistical weight) and then its training
+//! tree, root first. Child indices are absolute indices into their own array.
+
+use super::quadtree::{QuadNode, QuadTree};
+use super::sdtree::{Leaf, SdTree, SpatialNode};
+use super::{GuidingConfig, GuidingError};
+use crate::gpu::{GuideHeader, GuideLeaf, GuideQuadNode, GuideSpatialNode, GUIDE_SPATIAL_LEAF};
+use glam::Vec3;
+use std::collections::{HashMap, HashSet};
+use std::sync::Arc;
+
+pub(crate) const HEADER_BYTES: u64 = std::mem::size_of::<GuideHeader>() as u64;
+pub(crate) const SPATIAL_NODE_BYTES: u64 = std::mem::size_of::<GuideSpatialNode>() as u64;
+pub(crate) const LEAF_BYTES: u64 = std::mem::size_of::<GuideLeaf>() as u64;
+pub(crate) const QUAD_NODE_BYTES: u64 = std::mem::size_of::<GuideQuadNode>() as u64;
+
+/// The contents of the four guiding buffers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GuideArrays {
+    pub header: GuideHeader,
+    pub spatial: Vec<GuideSpatialNode>,
+    pub leaves: Vec<GuideLeaf>,
+    pub sampling: Vec<GuideQuadNode>,
+    /// Initial contents of the training buffer (sums as the CPU has them: zero right
+    /// after a refit).
+    pub training: Vec<GuideQuadNode>,
+}
+
+impl GuideArrays {
+    /// Bytes of the spatial buffer (BINDING_GUIDE_SPATIAL): header, then nodes.
+    pub fn spatial_buffer(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(self.spatial_buffer_len() as usize);
+        out.extend_from_slice(bytemuck::bytes_of(&self.header));
+        out.extend_from_slice(bytemuck::cast_slice(&self.spatial));
+        out
+    }
+
+    pub fn spatial_buffer_len(&self) -> u64 {
+        HEADER_BYTES + SPATIAL_NODE_BYTES * self.spatial.len() as u64
+    }
+
+    /// Bytes of all four buffers.
+    pub fn byte_size(&self) -> u64 {
+        self.spatial_buffer_len()
+            + LEAF_BYTES * self.leaves.len() as u64
+            + QUAD_NODE_BYTES * (self.sampling.len() + self.training.len()) as u64
+    }
+}
+
+fn to_gpu_node(n: &QuadNode, base: u32) -> GuideQuadNode {
+    GuideQuadNode {
+        sum: n.sum,
+        child: n.child.map(|c| if c == 0 { 0 } else { base + c }),
+    }
+}
+
+/// The tree rooted at absolute index `root` of `nodes`, renumbered root first and then
+/// in array order (so a contiguous root-first tree keeps its numbering).
+/// Also returns the absolute indices the tree occupies.
+fn unflatten(
+    nodes: &[GuideQuadNode],
+    root: u32,
+    what: &str,
+) -> Result<(QuadTree, Vec<u32>), GuidingError> {
+    let bad = |m: String| GuidingError::BadArrays(format!("{what}: {m}"));
+    let len = nodes.len();
+    if root as usize >= len {
+        return Err(bad(format!("root {root} out of range ({len} nodes)")));
+    }
+    let mut reached = vec![root];
+    let mut seen = HashSet::from([root]);
+    let mut i = 0;
+    while i < reached.len() {
+        for &c in &nodes[reached[i] as usize].child {
+            if c == 0 {
+                continue;
+            }
+            if c as usize >= len || !seen.insert(c) {
+                return Err(bad(format!("bad child index {c}")));
+            }
+            reached.push(c);
+        }
+        i += 1;
+    }
+    reached[1..].sort_unstable();
+    let index: HashMap<u32, u32> = reached
+        .iter()
+        .enumerate()
+        .map(|(r, &a)| (a, r as u32))
+        .collect();
+    let local = reached
+        .iter()
+        .map(|&a| {
+            let n = &nodes[a as usize];
+            QuadNode {
+                sum: n.sum,
+                child: n.child.map(|c| if c == 0 { 0 } else { index[&c] }),
+            }
+        })
+        .collect();
+    Ok((QuadTree::from_nodes(local).map_err(bad)?, reached))
+}
+
+impl SdTree {
+    /// Where each leaf's trees go in the flat arrays: (sampling root per leaf, number of
+    /// sampling nodes, training root per leaf, number of training nodes).
+    fn layout(&self) -> (Vec<u32>, usize, Vec<u32>, usize) {
+        let mut bases: HashMap<*const QuadTree, u32> = HashMap::new();
+        let mut sampling_roots = Vec::with_capacity(self.leaves.len());
+        let mut sampling_len = 0usize;
+        let mut training_roots = Vec::with_capacity(self.leaves.len());
+        let mut training_len = 0usize;
+        for leaf in &self.leaves {
+            let base = *bases.entry(Arc::as_ptr(&leaf.sampling)).or_insert_with(|| {
+                let base = sampling_len as u32;
+                sampling_len += leaf.sampling.node_count();
+                base
+            });
+            sampling_roots.push(base);
+            training_roots.push(training_len as u32 + 1);
+            training_len += 1 + leaf.training.node_count();
+        }
+        (sampling_roots, sampling_len, training_roots, training_len)
+    }
+
+    pub(crate) fn sampling_node_count(&self) -> usize {
+        self.layout().1
+    }
+
+    pub(crate) fn training_node_count(&self) -> usize {
+        self.layout().3
+    }
+
+    /// Bytes of the four GPU buffers `gpu_arrays` would fill.
+    pub fn gpu_bytes(&self) -> u64 {
+        let (_, sampling, _, training) = self.layout();
+        HEADER_BYTES
+            + SPATIAL_NODE_BYTES * self.nodes.len() as u64
+            + LEAF_BYTES * self.leaves.len() as u64
+            + QUAD_NODE_BYTES * (sampling + training) as u64
+    }
+
+    /// The GPU buffers' contents.
+    pub fn gpu_arrays(&self) -> GuideArrays {
+        let (sampling_roots, sampling_len, training_roots, training_len) = self.layout();
+        let header = GuideHeader {
+            origin: self.origin.to_array(),
+            size: self.size,
+            flags: self.config.flags(),
+            leaf_count: self.leaves.len() as u32,
+            bsdf_fraction: self.config.bsdf_fraction,
+            pad: 0,
+        };
+        let spatial = self
+            .nodes
+            .iter()
+            .map(|n| match *n {
+                SpatialNode::Interior { axis, first } => GuideSpatialNode { axis, child: first },
+                SpatialNode::Leaf { leaf } => GuideSpatialNode {
+                    axis: GUIDE_SPATIAL_LEAF,
+                    child: leaf,
+                },
+            })
+            .collect();
+        let mut sampling = Vec::with_capacity(sampling_len);
+        let mut training = Vec::with_capacity(training_len);
+        let mut leaves = Vec::with_capacity(self.leaves.len());
+        for (i, leaf) in self.leaves.iter().enumerate() {
+            let base = sampling_roots[i];
+            if base as usize == sampling.len() {
+                sampling.extend(leaf.sampling.nodes().iter().map(|n| to_gpu_node(n, base)));
+            }
+            training.push(GuideQuadNode {
+                sum: [leaf.training_weight, 0.0, 0.0, 0.0],
+                child: [0; 4],
+            });
+            let root = training_roots[i];
+            training.extend(leaf.training.nodes().iter().map(|n| to_gpu_node(n, root)));
+            leaves.push(GuideLeaf {
+                sampling_root: base,
+                training_root: root,
+                box_min: leaf.box_min.to_array(),
+                box_size: leaf.box_size.to_array(),
+                sampling_weight: leaf.sampling_weight,
+            });
+        }
+        GuideArrays {
+            header,
+            spatial,
+            leaves,
+            sampling,
+            training,
+        }
+    }
+
+    /// Take in the training buffer read back after a pass: it replaces the training
+    /// sums and weights (it started as `gpu_arrays().training`, so records made on the
+    /// CPU before the upload are in it). Its topology must be the one uploaded.
+    pub fn load_training_readback(
+        &mut self,
+        training: &[GuideQuadNode],
+    ) -> Result<(), GuidingError> {
+        let (_, _, roots, len) = self.layout();
+        if training.len() != len {
+            return Err(GuidingError::TrainingMismatch(format!(
+                "{} nodes read back, {len} uploaded",
+                training.len()
+            )));
+        }
+        for (leaf, &root) in self.leaves.iter().zip(&roots) {
+            let nodes = &training[root as usize..root as usize + leaf.training.node_count()];
+            let same = nodes
+                .iter()
+                .zip(leaf.training.nodes())
+                .all(|(g, c)| g.child == to_gpu_node(c, root).child);
+            if !same {
+                return Err(GuidingError::TrainingMismatch(format!(
+                    "the training tree at node {root} has another topology than the one uploaded"
+                )));
+            }
+        }
+        for (leaf, &root) in self.leaves.iter_mut().zip(&roots) {
+            leaf.training_weight = training[root as usize - 1].sum[0];
+            let nodes = &training[root as usize..root as usize + leaf.training.node_count()];
+            leaf.training.set_sums(nodes.iter().map(|n| n.sum));
+        }
+        Ok(())
+    }
+
+    /// A tree from GPU arrays (the file format; also the flattening round trip). The
+    /// arrays are checked: any inconsistency is an error, never a panic.
+    pub fn from_gpu_arrays(
+        arrays: &GuideArrays,
+        config: &GuidingConfig,
+    ) -> Result<SdTree, GuidingError> {
+        config.validate()?;
+        let bad = |m: String| Err(GuidingError::BadArrays(m));
+        let h = &arrays.header;
+        let origin = Vec3::from_array(h.origin);
+        if !(origin.is_finite() && h.size.is_finite() && h.size > 0.0) {
+            return bad(format!("bad cube {:?} size {}", h.origin, h.size));
+        }
+        if h.leaf_count as usize != arrays.leaves.len() {
+            return bad(format!(
+                "header says {} leaves, {} given",
+                h.leaf_count,
+                arrays.leaves.len()
+            ));
+        }
+        if arrays.spatial.is_empty() {
+            return bad("no spatial root".into());
+        }
+        // Spatial tree: every node reached once from the root, every leaf used once.
+        let mut nodes = vec![SpatialNode::Leaf { leaf: 0 }; arrays.spatial.len()];
+        let mut node_seen = vec![false; arrays.spatial.len()];
+        let mut leaf_depth = vec![None; arrays.leaves.len()];
+        let mut stack = vec![(0u32, 0u32)];
+        node_seen[0] = true;
+        while let Some((n, depth)) = stack.pop() {
+            let g = arrays.spatial[n as usize];
+            if g.axis == GUIDE_SPATIAL_LEAF {
+                match leaf_depth.get_mut(g.child as usize) {
+                    Some(d @ None) => *d = Some(depth),
+                    _ => {
+                        return bad(format!(
+                            "spatial node {n}: bad or repeated leaf {}",
+                            g.child
+                        ))
+                    }
+                }
+                nodes[n as usize] = SpatialNode::Leaf { leaf: g.child };
+                continue;
+            }
+            if g.axis > 2 || depth >= crate::gpu::GUIDE_MAX_SPATIAL_DEPTH {
+                return bad(format!("spatial node {n}: bad axis {} or too deep", g.axis));
+            }
+            for c in [g.child, g.child.wrapping_add(1)] {
+                match node_seen.get_mut(c as usize) {
+                    Some(s @ false) => *s = true,
+                    _ => return bad(format!("spatial node {n}: bad child {c}")),
+                }
+                stack.push((c, depth + 1));
+            }
+            nodes[n as usize] = SpatialNode::Interior {
+                axis: g.axis,
+                first: g.child,
+            };
+        }
+        if node_seen.iter().any(|s| !s) || leaf_depth.iter().any(Option::is_none) {
+            return bad("unreachable spatial nodes or leaves".into());
+        }
+        let mut shared: HashMap<u32, Arc<QuadTree>> = HashMap::new();
+        // Training trees and their headers must not overlap: the GPU adds into them.
+        let mut training_used = vec![false; arrays.training.len()];
+        let mut leaves = Vec::with_capacity(arrays.leaves.len());
+        for (i, g) in arrays.leaves.iter().enumerate() {
+            let what = format!("leaf {i}");
+            let (box_min, box_size) = (Vec3::from_array(g.box_min), Vec3::from_array(g.box_size));
+            if !(box_min.is_finite() && box_size.is_finite() && box_size.min_element() > 0.0) {
+                return bad(format!("{what}: bad box"));
+            }
+            let sampling = match shared.get(&g.sampling_root) {
+                Some(t) => t.clone(),
+                None => {
+                    let t = Arc::new(unflatten(&arrays.sampling, g.sampling_root, &what)?.0);
+                    shared.insert(g.sampling_root, t.clone());
+                    t
+                }
+            };
+            if g.training_root == 0 {
+                return bad(format!(
+                    "{what}: training root 0 leaves no room for its header"
+                ));
+            }
+            let (training, used) = unflatten(&arrays.training, g.training_root, &what)?;
+            for a in used.into_iter().chain([g.training_root - 1]) {
+                if std::mem::replace(&mut training_used[a as usize], true) {
+                    return bad(format!("{what}: training trees overlap at node {a}"));
+                }
+            }
+            let training_weight = arrays.training[g.training_root as usize - 1].sum[0];
+            if !(g.sampling_weight.is_finite() && training_weight.is_finite()) {
+                return bad(format!("{what}: non-finite weight"));
+            }
+            leaves.push(Leaf {
+                box_min,
+                box_size,
+                depth: leaf_depth[i].unwrap_or(0),
+                sampling,
+                sampling_weight: g.sampling_weight,
+                training,
+                training_weight,
+            });
+        }
+        Ok(SdTree {
+            config: config.clone(),
+            origin,
+            size: h.size,
+            nodes,
+            leaves,
+            iterations: 0,
+        })
+    }
+}

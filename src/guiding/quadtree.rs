@@ -1,0 +1,696 @@
+//! The directional quadtree ("D-tree") of one spatial leaf: a hierarchy over the square
+//! ((cosθ+1)/2, φ/2π) whose nodes hold the energy of their four quadrants. Sampling,
+//! pdf and recording mirror shaders_glsl/inc/guiding.glsl operation for operation (the
+//! GPU results are checked against these), and `build` / `refined` implement the
+//! reference's refit of one tree: sums are completed bottom-up after a training pass,
+//! and the next training tree's topology subdivides every quadrant holding more than ρ
+//! of the energy (recursively, up to the depth cap) and collapses the others.
+
+use super::sphere::{dir_to_square, square_to_dir, INV_4PI, ONE_MINUS_EPS};
+use crate::gpu::{GUIDE_MAX_QUAD_DEPTH, GUIDE_SAMPLE_ATTEMPTS, GUIDE_SPLAT_STACK};
+use glam::Vec3;
+
+/// One node: the energy of its quadrants and their children (indices into the same
+/// tree; 0 = the quadrant is a leaf cell, since the root is nobody's child). Quadrant
+/// q covers u ∈ [q&1, (q&1)+1)/2, v ∈ [q>>1, (q>>1)+1)/2 of the node.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct QuadNode {
+    pub sum: [f32; 4],
+    pub child: [u32; 4],
+}
+
+/// A leaf cell of a tree: where it is, and the probability mass the tree gives it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cell {
+    pub origin: [f32; 2],
+    pub size: f32,
+    /// Level of the node owning the cell (the root is level 1).
+    pub level: u32,
+    pub prob: f64,
+}
+
+/// A directional quadtree. Node 0 is the root.
+#[derive(Clone, Debug, PartialEq)]
+pub struct QuadTree {
+    nodes: Vec<QuadNode>,
+}
+
+/// Quadrant of `p` in its node's [0,1]² frame; `p` moves into the quadrant's frame.
+/// Exact in float (doubling, and subtracting 0.5 from [0.5, 1]).
+pub(crate) fn quadrant(p: &mut [f32; 2]) -> usize {
+    let mut q = 0;
+    if p[0] < 0.5 {
+        p[0] *= 2.0;
+    } else {
+        p[0] = (p[0] - 0.5) * 2.0;
+        q |= 1;
+    }
+    if p[1] < 0.5 {
+        p[1] *= 2.0;
+    } else {
+        p[1] = (p[1] - 0.5) * 2.0;
+        q |= 2;
+    }
+    q
+}
+
+/// The float total of a node's sums, in the kernel's order.
+pub(crate) fn node_total(s: &[f32; 4]) -> f32 {
+    (s[0] + s[1]) + (s[2] + s[3])
+}
+
+/// 4·sum[q]/total, or 1 in a node without energy (treated as uniform).
+fn quadrant_factor(s: &[f32; 4], q: usize) -> f32 {
+    let total = node_total(s);
+    if total > 0.0 {
+        (4.0 * s[q]) / total
+    } else {
+        1.0
+    }
+}
+
+fn rescale(u: f32, lo: f32, width: f32) -> f32 {
+    ((u - lo) / width).min(ONE_MINUS_EPS)
+}
+
+fn quadrant_origin(q: usize, h: f32) -> [f32; 2] {
+    [(q & 1) as f32 * h, (q >> 1) as f32 * h]
+}
+
+impl Default for QuadTree {
+    fn default() -> Self {
+        Self::empty()
+    }
+}
+
+impl QuadTree {
+    /// A root without energy: sampling is uniform over the sphere.
+    pub fn empty() -> Self {
+        Self {
+            nodes: vec![QuadNode::default()],
+        }
+    }
+
+    /// The topology a training tree starts with before anything was learned: the
+    /// refinement of an empty tree (uniform cells of ¼^level energy share each).
+    pub fn initial(rho: f32, max_depth: u32) -> Self {
+        Self::empty().refined(rho, max_depth)
+    }
+
+    /// A tree from raw nodes, checked to be a tree (every node but the root reachable
+    /// exactly once, in range, no deeper than the kernels walk) with finite,
+    /// non-negative sums.
+    pub fn from_nodes(nodes: Vec<QuadNode>) -> Result<Self, String> {
+        if nodes.is_empty() {
+            return Err("quadtree without a root".into());
+        }
+        let mut seen = vec![false; nodes.len()];
+        seen[0] = true;
+        let mut stack = vec![(0usize, 1u32)];
+        while let Some((n, level)) = stack.pop() {
+            if level > GUIDE_MAX_QUAD_DEPTH {
+                return Err(format!(
+                    "quadtree deeper than {GUIDE_MAX_QUAD_DEPTH} levels"
+                ));
+            }
+            for (i, &c) in nodes[n].child.iter().enumerate() {
+                let s = nodes[n].sum[i];
+                if !(s.is_finite() && s >= 0.0) {
+                    return Err(format!("quadtree node {n} has energy {s}"));
+                }
+                if c == 0 {
+                    continue;
+                }
+                let c = c as usize;
+                if c >= nodes.len() || seen[c] {
+                    return Err(format!("quadtree node {n} has a bad child index {c}"));
+                }
+                seen[c] = true;
+                stack.push((c, level + 1));
+            }
+        }
+        if let Some(orphan) = seen.iter().position(|s| !s) {
+            return Err(format!("quadtree node {orphan} is unreachable"));
+        }
+        Ok(Self { nodes })
+    }
+
+    pub fn nodes(&self) -> &[QuadNode] {
+        &self.nodes
+    }
+
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// The energy of the whole tree (after `build`), in the kernel's float order.
+    pub fn total(&self) -> f32 {
+        node_total(&self.nodes[0].sum)
+    }
+
+    /// Whether sampling falls back to uniform (nothing learned).
+    pub fn is_empty(&self) -> bool {
+        let total = self.total();
+        total.is_nan() || total <= 0.0
+    }
+
+    /// Number of node levels (a lone root is 1).
+    pub fn depth(&self) -> u32 {
+        let mut deepest = 1;
+        let mut stack = vec![(0usize, 1u32)];
+        while let Some((n, level)) = stack.pop() {
+            deepest = deepest.max(level);
+            for &c in &self.nodes[n].child {
+                if c != 0 {
+                    stack.push((c as usize, level + 1));
+                }
+            }
+        }
+        deepest
+    }
+
+    /// Density on the square at `p` (integrates to 1 over the square).
+    pub fn density(&self, mut p: [f32; 2]) -> f32 {
+        if self.is_empty() {
+            return 1.0;
+        }
+        let mut n = 0;
+        let mut density = 1.0f32;
+        for _ in 0..GUIDE_MAX_QUAD_DEPTH {
+            let node = &self.nodes[n];
+            let q = quadrant(&mut p);
+            density *= quadrant_factor(&node.sum, q);
+            n = node.child[q] as usize;
+            if n == 0 {
+                break;
+            }
+        }
+        density
+    }
+
+    /// Solid-angle pdf of `dir` (`guide_pdf`).
+    pub fn pdf(&self, dir: Vec3) -> f32 {
+        if self.is_empty() {
+            return INV_4PI;
+        }
+        self.density(dir_to_square(dir)) * INV_4PI
+    }
+
+    /// Sample a direction with the uniform pair `u` (`guide_sample`): the direction and
+    /// its solid-angle pdf, bitwise equal to `self.pdf(dir)`.
+    pub fn sample(&self, u: [f32; 2]) -> (Vec3, f32) {
+        let mut u = [u[0].min(ONE_MINUS_EPS), u[1].min(ONE_MINUS_EPS)];
+        if self.is_empty() {
+            return (square_to_dir(u), INV_4PI);
+        }
+        let mut origin = [0.0f32; 2];
+        let mut size = 1.0f32;
+        let mut density = 1.0f32;
+        let mut n = 0;
+        for _ in 0..GUIDE_MAX_QUAD_DEPTH {
+            let node = &self.nodes[n];
+            let s = &node.sum;
+            let total = node_total(s);
+            let mut q;
+            if total > 0.0 {
+                let lo = s[0] + s[2];
+                let split = if lo == total { 1.0 } else { lo / total };
+                if u[0] < split {
+                    u[0] = rescale(u[0], 0.0, split);
+                    q = 0;
+                } else {
+                    u[0] = rescale(u[0], split, 1.0 - split);
+                    q = 1;
+                }
+                let (a, b) = (s[q], s[q + 2]);
+                let split_y = if b == 0.0 { 1.0 } else { a / (a + b) };
+                if u[1] < split_y {
+                    u[1] = rescale(u[1], 0.0, split_y);
+                } else {
+                    u[1] = rescale(u[1], split_y, 1.0 - split_y);
+                    q |= 2;
+                }
+            } else {
+                q = quadrant(&mut u);
+            }
+            density *= quadrant_factor(s, q);
+            size *= 0.5;
+            let o = quadrant_origin(q, size);
+            origin = [origin[0] + o[0], origin[1] + o[1]];
+            n = node.child[q] as usize;
+            if n == 0 {
+                break;
+            }
+        }
+        // Keep the direction in the sampled cell (see `guide_sample`).
+        let mut p = [origin[0] + u[0] * size, origin[1] + u[1] * size];
+        let centre = [origin[0] + 0.5 * size, origin[1] + 0.5 * size];
+        let end = [origin[0] + size, origin[1] + size];
+        let mut dir = Vec3::ZERO;
+        let mut inside = false;
+        for _ in 0..GUIDE_SAMPLE_ATTEMPTS {
+            dir = square_to_dir(p);
+            let back = dir_to_square(dir);
+            inside = (0..2).all(|k| back[k] >= origin[k] && (back[k] < end[k] || end[k] == 1.0));
+            if inside {
+                break;
+            }
+            p = [0.5 * (p[0] + centre[0]), 0.5 * (p[1] + centre[1])];
+        }
+        let pdf = if inside {
+            density * INV_4PI
+        } else {
+            self.pdf(dir)
+        };
+        (dir, pdf)
+    }
+
+    /// Every leaf cell with the probability the tree's sampling gives it (in f64).
+    pub fn cells(&self) -> Vec<Cell> {
+        let mut out = Vec::new();
+        let mut stack = vec![(0usize, [0.0f32; 2], 1.0f32, 1u32, 1.0f64)];
+        while let Some((n, origin, size, level, prob)) = stack.pop() {
+            let node = &self.nodes[n];
+            let total: f64 = node.sum.iter().map(|&s| f64::from(s)).sum();
+            let h = size * 0.5;
+            for q in 0..4 {
+                let p = if total > 0.0 {
+                    prob * f64::from(node.sum[q]) / total
+                } else {
+                    prob * 0.25
+                };
+                let o = quadrant_origin(q, h);
+                let o = [origin[0] + o[0], origin[1] + o[1]];
+                match node.child[q] {
+                    0 => out.push(Cell {
+                        origin: o,
+                        size: h,
+                        level,
+                        prob: p,
+                    }),
+                    c => stack.push((c as usize, o, h, level + 1, p)),
+                }
+            }
+        }
+        out
+    }
+
+    /// Probability the tree's sampling gives the rectangle [lo, hi] of the square.
+    pub fn mass_in_rect(&self, lo: [f64; 2], hi: [f64; 2]) -> f64 {
+        self.cells()
+            .iter()
+            .map(|c| {
+                let (o, s) = (
+                    [f64::from(c.origin[0]), f64::from(c.origin[1])],
+                    f64::from(c.size),
+                );
+                let lx = (hi[0].min(o[0] + s) - lo[0].max(o[0])).max(0.0);
+                let ly = (hi[1].min(o[1] + s) - lo[1].max(o[1])).max(0.0);
+                c.prob * lx * ly / (s * s)
+            })
+            .sum()
+    }
+
+    /// The leaf cell holding `p`: (origin, edge length).
+    pub fn cell_at(&self, mut p: [f32; 2]) -> ([f32; 2], f32) {
+        let mut n = 0;
+        let mut origin = [0.0f32; 2];
+        let mut size = 1.0f32;
+        for _ in 0..GUIDE_MAX_QUAD_DEPTH {
+            let q = quadrant(&mut p);
+            size *= 0.5;
+            let o = quadrant_origin(q, size);
+            origin = [origin[0] + o[0], origin[1] + o[1]];
+            n = self.nodes[n].child[q] as usize;
+            if n == 0 {
+                break;
+            }
+        }
+        (origin, size)
+    }
+
+    /// Edge length of the leaf cell holding `p` (as `guide_training_cell_size` walks it).
+    pub fn cell_size_at(&self, mut p: [f32; 2]) -> f32 {
+        let mut n = 0;
+        let mut size = 0.5f32;
+        for _ in 0..GUIDE_MAX_QUAD_DEPTH {
+            let q = quadrant(&mut p);
+            n = self.nodes[n].child[q] as usize;
+            if n == 0 {
+                break;
+            }
+            size *= 0.5;
+        }
+        size
+    }
+
+    /// Nearest directional filter (`guide_splat_nearest`).
+    pub(crate) fn splat_nearest(&mut self, mut p: [f32; 2], v: f32) {
+        let mut n = 0;
+        for level in 0..GUIDE_MAX_QUAD_DEPTH {
+            let q = quadrant(&mut p);
+            let c = self.nodes[n].child[q] as usize;
+            if c == 0 || level + 1 == GUIDE_MAX_QUAD_DEPTH {
+                self.nodes[n].sum[q] += v;
+                return;
+            }
+            n = c;
+        }
+    }
+
+    /// `density` × area over the part of [lo, hi] inside the square (`guide_splat_rect`):
+    /// fully covered quadrants keep their share in their own sum.
+    fn splat_rect(&mut self, lo: [f32; 2], hi: [f32; 2], density: f32) {
+        // Straight down to the deepest node whose cell holds the whole box.
+        let (mut n, mut origin, mut size) = (0usize, [0.0f32; 2], 1.0f32);
+        for _ in 0..GUIDE_MAX_QUAD_DEPTH {
+            let h = size * 0.5;
+            let mid = [origin[0] + h, origin[1] + h];
+            let lo_high = [lo[0] >= mid[0], lo[1] >= mid[1]];
+            let hi_high = [hi[0] > mid[0], hi[1] > mid[1]];
+            if lo_high != hi_high {
+                break;
+            }
+            let q = usize::from(lo_high[0]) | (usize::from(lo_high[1]) << 1);
+            let c = self.nodes[n].child[q] as usize;
+            if c == 0 {
+                break;
+            }
+            let o = quadrant_origin(q, h);
+            (n, origin, size) = (c, [origin[0] + o[0], origin[1] + o[1]], h);
+        }
+        // A fixed stack like the kernel's (and no allocation per record).
+        let mut stack = [(0usize, [0.0f32; 2], 0.0f32); GUIDE_SPLAT_STACK as usize];
+        stack[0] = (n, origin, size);
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let (n, origin, size) = stack[top];
+            let child = self.nodes[n].child;
+            let h = size * 0.5;
+            for (q, &c) in child.iter().enumerate() {
+                let o = quadrant_origin(q, h);
+                let o = [origin[0] + o[0], origin[1] + o[1]];
+                let lx = ((hi[0].min(o[0] + h)) - lo[0].max(o[0])).max(0.0);
+                let ly = ((hi[1].min(o[1] + h)) - lo[1].max(o[1])).max(0.0);
+                let area = lx * ly;
+                if area.is_nan() || area <= 0.0 {
+                    continue;
+                }
+                let covered = lx >= h && ly >= h;
+                if c == 0 || covered || top == stack.len() {
+                    self.nodes[n].sum[q] += density * area;
+                } else {
+                    stack[top] = (c as usize, o, h);
+                    top += 1;
+                }
+            }
+        }
+    }
+
+    /// Box directional filter (`guide_splat_box`): a box the size of the cell holding
+    /// `p`, shifted inside the square along u and wrapped around along v (φ).
+    pub(crate) fn splat_box(&mut self, p: [f32; 2], v: f32) {
+        let size = self.cell_size_at(p);
+        let mut lo = [p[0] - 0.5 * size, p[1] - 0.5 * size];
+        lo[0] = lo[0].clamp(0.0, 1.0 - size);
+        let hi = [lo[0] + size, lo[1] + size];
+        let density = v / (size * size);
+        self.splat_rect(lo, hi, density);
+        if lo[1] < 0.0 {
+            self.splat_rect([lo[0], lo[1] + 1.0], [hi[0], hi[1] + 1.0], density);
+        } else if hi[1] > 1.0 {
+            self.splat_rect([lo[0], lo[1] - 1.0], [hi[0], hi[1] - 1.0], density);
+        }
+    }
+
+    /// Replace the sums node by node (a GPU readback of the same topology).
+    pub(crate) fn set_sums(&mut self, sums: impl Iterator<Item = [f32; 4]>) {
+        for (node, s) in self.nodes.iter_mut().zip(sums) {
+            node.sum = s;
+        }
+    }
+
+    /// Complete the sums after training: energy deposited on an interior quadrant is
+    /// spread uniformly over its subtree, then every interior quadrant gets the total of
+    /// its subtree. Non-finite or negative sums (overflowed atomics) are dropped; returns
+    /// how many were.
+    pub(crate) fn build(&mut self) -> u32 {
+        let mut dropped = 0;
+        for node in &mut self.nodes {
+            for s in &mut node.sum {
+                if !(s.is_finite() && *s >= 0.0) {
+                    *s = 0.0;
+                    dropped += 1;
+                }
+            }
+        }
+        self.settle(0, 0.0);
+        dropped
+    }
+
+    /// Settle node `n`, which also receives `inherited` spread uniformly over it; returns
+    /// its total.
+    fn settle(&mut self, n: usize, inherited: f64) -> f64 {
+        let mut total = 0.0;
+        for q in 0..4 {
+            let own = f64::from(self.nodes[n].sum[q]) + inherited * 0.25;
+            let value = match self.nodes[n].child[q] {
+                0 => own,
+                c => self.settle(c as usize, own),
+            };
+            self.nodes[n].sum[q] = value as f32;
+            total += value;
+        }
+        total
+    }
+
+    /// The topology of the next training tree (all sums zero): a quadrant is
+    /// subdivided while its share of this tree's energy exceeds `rho` and its node is
+    /// above level `max_depth`. Quadrants that were leaves here subdivide as if their
+    /// energy were uniform; subtrees below the threshold collapse. An empty tree gives
+    /// uniform shares (¼ per level), as the reference does.
+    pub fn refined(&self, rho: f32, max_depth: u32) -> QuadTree {
+        #[derive(Clone, Copy)]
+        enum Source {
+            Node(usize),
+            Uniform(f32),
+        }
+        let total = f64::from(self.total());
+        let mut out = QuadTree {
+            nodes: vec![QuadNode::default()],
+        };
+        let mut stack = vec![(0usize, Source::Node(0), 1u32)];
+        while let Some((new, source, level)) = stack.pop() {
+            let (sums, children) = match source {
+                Source::Node(o) => (self.nodes[o].sum, self.nodes[o].child),
+                Source::Uniform(s) => ([s * 0.25; 4], [0; 4]),
+            };
+            for q in 0..4 {
+                let fraction = if total > 0.0 {
+                    f64::from(sums[q]) / total
+                } else {
+                    0.25f64.powi(level as i32)
+                };
+                if level < max_depth && fraction > f64::from(rho) {
+                    let next = match children[q] {
+                        0 => Source::Uniform(sums[q]),
+                        c => Source::Node(c as usize),
+                    };
+                    let index = out.nodes.len();
+                    out.nodes.push(QuadNode::default());
+                    out.nodes[new].child[q] = index as u32;
+                    stack.push((index, next, level + 1));
+                }
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small deterministic generator for the tests (SplitMix64 → floats in [0,1)).
+    pub(crate) struct TestRng(u64);
+    impl TestRng {
+        pub fn new(seed: u64) -> Self {
+            Self(seed)
+        }
+        pub fn next_u64(&mut self) -> u64 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        }
+        pub fn f32(&mut self) -> f32 {
+            (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
+    /// A tree trained on a lobe around +z plus a weaker lobe elsewhere.
+    fn trained_tree(seed: u64) -> QuadTree {
+        let mut rng = TestRng::new(seed);
+        let mut tree = QuadTree::initial(0.01, 20);
+        for round in 0..3 {
+            for _ in 0..20000 {
+                let (u, v) = (rng.f32(), rng.f32());
+                let p = if rng.f32() < 0.7 {
+                    [0.9 + 0.1 * u, 0.3 + 0.05 * v]
+                } else {
+                    [u, v]
+                };
+                tree.splat_box(p, 1.0 + rng.f32());
+            }
+            tree.build();
+            if round < 2 {
+                let sampling = tree.clone();
+                tree = sampling.refined(0.01, 20);
+            }
+        }
+        tree
+    }
+
+    #[test]
+    fn initial_tree_is_uniform_depth_four() {
+        let t = QuadTree::initial(0.01, 20);
+        // ¼, 1/16, 1/64 exceed ρ = 0.01, 1/256 does not: 1 + 4 + 16 + 64 nodes.
+        assert_eq!(t.node_count(), 85);
+        assert_eq!(t.depth(), 4);
+        assert!(t.cells().iter().all(|c| c.size == 1.0 / 16.0));
+    }
+
+    #[test]
+    fn sample_pdf_is_bitwise_pdf() {
+        let tree = trained_tree(1);
+        assert!(tree.depth() > 5);
+        let mut rng = TestRng::new(2);
+        for _ in 0..100000 {
+            let (d, pdf) = tree.sample([rng.f32(), rng.f32()]);
+            assert_eq!(pdf.to_bits(), tree.pdf(d).to_bits());
+            assert!(pdf > 0.0);
+        }
+    }
+
+    #[test]
+    fn build_conserves_box_splat_energy() {
+        let mut tree = QuadTree::initial(0.01, 20).refined(0.01, 20);
+        let mut rng = TestRng::new(3);
+        let mut expected = 0.0f64;
+        for _ in 0..1000 {
+            let v = rng.f32();
+            expected += f64::from(v);
+            tree.splat_box([rng.f32(), rng.f32()], v);
+        }
+        assert_eq!(tree.build(), 0);
+        assert!((f64::from(tree.total()) - expected).abs() < 1e-4 * expected);
+    }
+
+    #[test]
+    fn box_splat_wraps_phi_and_stays_inside_u() {
+        let mut tree = QuadTree::initial(0.01, 20);
+        // Cells are 1/16: a box centred at v = 0 puts half its energy near v = 1.
+        tree.splat_box([0.5, 0.0], 1.0);
+        tree.build();
+        let top = tree.mass_in_rect([0.0, 0.5], [1.0, 1.0]);
+        assert!((top - 0.5).abs() < 1e-6, "{top}");
+        // At the u = 0 border the box is shifted inside: all energy in the first column.
+        let mut tree = QuadTree::initial(0.01, 20);
+        tree.splat_box([0.0, 0.5], 1.0);
+        tree.build();
+        assert!((tree.total() - 1.0).abs() < 1e-6);
+        assert!((tree.mass_in_rect([0.0, 0.0], [1.0 / 16.0, 1.0]) - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn refine_subdivides_by_rho() {
+        // All energy in one 1/16 cell of the initial tree. The path to it is kept (share
+        // 1 > ρ); below it the energy counts as uniform: quarters of 1/4, 1/16, 1/64 of
+        // the total exceed ρ = 0.01, 1/256 does not, so 4 more levels appear; every
+        // other quadrant (no energy) collapses.
+        let mut tree = QuadTree::initial(0.01, 20);
+        tree.splat_nearest([0.03, 0.03], 1.0);
+        tree.build();
+        let next = tree.refined(0.01, 20);
+        assert_eq!(next.depth(), 8);
+        assert_eq!(next.node_count(), 4 + 1 + 4 + 16 + 64);
+        assert_eq!(next.cells().len(), 3 * 4 + 64 * 4);
+        // A depth cap stops there.
+        assert_eq!(tree.refined(0.01, 7).depth(), 7);
+    }
+
+    #[test]
+    fn refine_respects_depth_cap_and_collapses() {
+        // Energy concentrated at one point refines 4 levels per refit, up to level 20.
+        let p1 = [0.123, 0.456];
+        let mut tree = QuadTree::initial(0.01, 20);
+        let mut depths = Vec::new();
+        for _ in 0..6 {
+            tree.splat_nearest(p1, 1.0);
+            tree.build();
+            tree = tree.refined(0.01, 20);
+            depths.push(tree.depth());
+        }
+        assert_eq!(depths, [8, 12, 16, 20, 20, 20]);
+        assert_eq!(tree.cell_size_at(p1), 0.5f32.powi(20));
+        // When the energy moves to another root quadrant, the fine region collapses.
+        let p2 = [0.9, 0.9];
+        tree.splat_nearest(p2, 1.0);
+        tree.build();
+        let next = tree.refined(0.01, 20);
+        assert_eq!(next.cell_size_at(p1), 0.5);
+        assert_eq!(next.cell_size_at(p2), 1.0 / 32.0);
+    }
+
+    #[test]
+    fn refine_threshold_is_strict_share_of_total() {
+        // Root quadrant 0 holds 2% and quadrant 3 holds 98%: with ρ = 0.02 quadrant 0
+        // (exactly ρ) stays a leaf; with ρ = 0.019 it subdivides once more (its quarters
+        // hold 0.5% < ρ).
+        let mut tree = QuadTree::empty();
+        tree.nodes[0].sum = [0.02, 0.0, 0.0, 0.98];
+        let a = tree.refined(0.02, 20);
+        assert_eq!(a.nodes()[0].child[0], 0);
+        assert_eq!(a.nodes()[0].child[1], 0);
+        assert_ne!(a.nodes()[0].child[3], 0);
+        let b = tree.refined(0.019, 20);
+        let c = b.nodes()[0].child[0] as usize;
+        assert_ne!(c, 0);
+        assert_eq!(b.nodes()[c].child, [0; 4]);
+    }
+
+    #[test]
+    fn pdf_integrates_to_one() {
+        let tree = trained_tree(5);
+        let n = 2048;
+        let mut sum = 0.0f64;
+        for i in 0..n {
+            for j in 0..n {
+                let p = [(i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32];
+                sum += f64::from(tree.density(p));
+            }
+        }
+        let integral = sum / (n * n) as f64;
+        // Cells deeper than the grid's 2^-11 make the midpoint rule approximate.
+        assert!((integral - 1.0).abs() < 1e-3, "{integral}");
+        let cells: f64 = tree.cells().iter().map(|c| c.prob).sum();
+        assert!((cells - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn from_nodes_rejects_non_trees() {
+        let t = QuadTree::initial(0.01, 20);
+        assert!(QuadTree::from_nodes(t.nodes().to_vec()).is_ok());
+        let mut bad = t.nodes().to_vec();
+        bad[1].child[0] = 1; // cycle
+        assert!(QuadTree::from_nodes(bad).is_err());
+        let mut bad = t.nodes().to_vec();
+        bad[0].child[0] = 999;
+        assert!(QuadTree::from_nodes(bad).is_err());
+        let mut bad = t.nodes().to_vec();
+        bad[3].sum[2] = f32::NAN;
+        assert!(QuadTree::from_nodes(bad).is_err());
+    }
+}

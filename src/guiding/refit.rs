@@ -1,0 +1,307 @@
+//! The refit between training iterations (Müller et al. 2017, §3–4, and the rules of
+//! the reference implementation): every leaf's training tree is built and becomes its
+//! sampling tree; the next training trees start empty with the topology refined from
+//! those (subdivide while a quadrant's share of the energy exceeds ρ, collapse below,
+//! depth cap); and a spatial leaf splits in half, recursively, while its statistical
+//! weight exceeds c·√(spp/4), each half assumed to have received half the weight. Splits
+//! go to the heaviest leaves first and stop before the GPU arrays would exceed the
+//! memory cap; the two halves share the parent's sampling tree.
+
+use super::flat::{LEAF_BYTES, QUAD_NODE_BYTES, SPATIAL_NODE_BYTES};
+use super::sdtree::{SdTree, SpatialNode};
+use std::collections::BinaryHeap;
+
+/// What a refit did, and the size of the result.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RefitStats {
+    /// Statistical weight above which a leaf split.
+    pub split_threshold: f32,
+    pub splits: u32,
+    /// Splits that were wanted but refused by the memory cap or the depth cap.
+    pub refused_splits: u32,
+    pub leaves: usize,
+    pub spatial_nodes: usize,
+    /// Nodes in the GPU sampling array (shared trees counted once).
+    pub sampling_nodes: usize,
+    /// Nodes in the GPU training array (headers included).
+    pub training_nodes: usize,
+    pub max_quad_depth: u32,
+    /// Bytes of the four GPU buffers.
+    pub gpu_bytes: u64,
+    /// Non-finite or negative training sums that were dropped (overflowed atomics).
+    pub dropped_sums: u32,
+    /// Total statistical weight the finished iteration recorded.
+    pub recorded_weight: f64,
+}
+
+impl SdTree {
+    /// Refit after a training iteration; `next_spp` is the samples per pixel the coming
+    /// iteration renders (it scales the spatial threshold; see
+    /// `GuidingConfig::split_threshold`). The caller then uploads `gpu_arrays()`.
+    pub fn refit(&mut self, next_spp: u32) -> RefitStats {
+        let rho = self.config.rho;
+        let max_depth = self.config.max_quad_depth;
+        let mut stats = RefitStats::default();
+
+        // Sampling trees := the finished iteration's statistics; training trees start
+        // over with the refined topology.
+        for leaf in &mut self.leaves {
+            let mut built = std::mem::take(&mut leaf.training);
+            stats.dropped_sums += built.build();
+            stats.recorded_weight += f64::from(leaf.training_weight);
+            leaf.training = built.refined(rho, max_depth);
+            leaf.sampling = std::sync::Arc::new(built);
+            leaf.sampling_weight = leaf.training_weight;
+            leaf.training_weight = 0.0;
+        }
+
+        let threshold = self.config.split_threshold(next_spp);
+        stats.split_threshold = threshold;
+        self.split_leaves(threshold, &mut stats);
+
+        self.iterations += 1;
+        stats.leaves = self.leaves.len();
+        stats.spatial_nodes = self.nodes.len();
+        stats.sampling_nodes = self.sampling_node_count();
+        stats.training_nodes = self.training_node_count();
+        stats.max_quad_depth = self
+            .leaves
+            .iter()
+            .map(|l| l.sampling.depth())
+            .max()
+            .unwrap_or(1);
+        stats.gpu_bytes = self.gpu_bytes();
+        stats
+    }
+
+    fn split_leaves(&mut self, threshold: f32, stats: &mut RefitStats) {
+        let mut node_of_leaf = vec![0u32; self.leaves.len()];
+        for (n, node) in self.nodes.iter().enumerate() {
+            if let SpatialNode::Leaf { leaf } = node {
+                node_of_leaf[*leaf as usize] = n as u32;
+            }
+        }
+        let mut bytes = self.gpu_bytes();
+        let cap = self.config.memory_cap_bytes;
+        // Heaviest first; ties by leaf index, for determinism. Positive floats order
+        // like their bits.
+        let mut heap: BinaryHeap<(u32, std::cmp::Reverse<u32>)> = self
+            .leaves
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| l.sampling_weight > threshold)
+            .map(|(i, l)| (l.sampling_weight.to_bits(), std::cmp::Reverse(i as u32)))
+            .collect();
+        while let Some((weight_bits, std::cmp::Reverse(leaf))) = heap.pop() {
+            let l = &self.leaves[leaf as usize];
+            let cost = 2 * SPATIAL_NODE_BYTES
+                + LEAF_BYTES
+                + QUAD_NODE_BYTES * (l.training.node_count() as u64 + 1);
+            if l.depth >= self.config.max_spatial_depth || bytes + cost > cap {
+                stats.refused_splits += 1;
+                continue;
+            }
+            bytes += cost;
+            let new_leaf = self.split(leaf, node_of_leaf[leaf as usize]);
+            stats.splits += 1;
+            let first = self.nodes.len() as u32 - 2;
+            node_of_leaf[leaf as usize] = first;
+            node_of_leaf.push(first + 1);
+            // Each half is assumed to have received half the weight.
+            let half = f32::from_bits(weight_bits) * 0.5;
+            if half > threshold {
+                heap.push((half.to_bits(), std::cmp::Reverse(leaf)));
+                heap.push((half.to_bits(), std::cmp::Reverse(new_leaf)));
+            }
+        }
+    }
+
+    /// Split leaf `leaf` (spatial node `node`) in half along `depth % 3`: the low half
+    /// keeps the leaf index, the high half is a new leaf. Returns the new leaf's index.
+    fn split(&mut self, leaf: u32, node: u32) -> u32 {
+        let first = self.nodes.len() as u32;
+        let new_leaf = self.leaves.len() as u32;
+        let low = &mut self.leaves[leaf as usize];
+        let axis = low.depth % 3;
+        low.depth += 1;
+        low.box_size[axis as usize] *= 0.5;
+        let mut high = low.clone();
+        high.box_min[axis as usize] += high.box_size[axis as usize];
+        self.leaves.push(high);
+        self.nodes[node as usize] = SpatialNode::Interior { axis, first };
+        self.nodes.push(SpatialNode::Leaf { leaf });
+        self.nodes.push(SpatialNode::Leaf { leaf: new_leaf });
+        new_leaf
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::guiding::GuidingConfig;
+    use glam::Vec3;
+
+    fn tree(config: &GuidingConfig) -> SdTree {
+        SdTree::new(
+            Vec3::new(-1.0, -2.0, -1.0),
+            Vec3::new(3.0, 1.0, 0.0),
+            config,
+        )
+        .unwrap()
+    }
+
+    /// Record `n` weight-1 samples at `p` with a fixed direction.
+    fn record_at(t: &mut SdTree, p: Vec3, n: u32) {
+        for i in 0..n {
+            let u = [
+                (i % 7) as f32 / 7.0,
+                (i % 11) as f32 / 11.0,
+                (i % 13) as f32 / 13.0,
+            ];
+            t.record(p, Vec3::new(0.3, 0.4, 0.866), 1.0, 1.0, u);
+        }
+    }
+
+    #[test]
+    fn cube_and_threshold_scaling() {
+        let config = GuidingConfig::default();
+        let t = tree(&config);
+        assert_eq!(t.cube(), (Vec3::new(-1.0, -2.0, -1.0), 4.0));
+        // The reference at its default 4 spp per pass: c·√(2^k) before iteration k.
+        for k in 0..8 {
+            let spp = 4 << k;
+            let expected = 12000.0 * 2f32.powi(k).sqrt();
+            assert!((config.split_threshold(spp) - expected).abs() < 1e-3 * expected);
+        }
+        // One sample per pixel in iteration 0 of lanterna's schedule: half of c.
+        assert_eq!(config.split_threshold(1), 6000.0);
+    }
+
+    #[test]
+    fn split_threshold_is_strict_and_recursive() {
+        let config = GuidingConfig {
+            spatial_filter: crate::guiding::SpatialFilter::Nearest,
+            ..GuidingConfig::default()
+        };
+        // Threshold at 4 spp is exactly c = 12000.
+        let mut t = tree(&config);
+        record_at(&mut t, Vec3::ZERO, 12000);
+        let s = t.refit(4);
+        assert_eq!((s.splits, t.leaves().len()), (0, 1));
+        record_at(&mut t, Vec3::ZERO, 12001);
+        let s = t.refit(4);
+        assert_eq!((s.splits, t.leaves().len()), (1, 2));
+        // 4c: the leaf and both halves (2c each) split; the quarters (exactly c) do not.
+        let mut t = tree(&config);
+        record_at(&mut t, Vec3::ZERO, 4 * 12000);
+        let s = t.refit(4);
+        assert_eq!((s.splits, t.leaves().len()), (3, 4));
+        // Axes cycle x, y, z: the four leaves split the cube in x, then y.
+        let mut boxes: Vec<_> = t
+            .leaves()
+            .iter()
+            .map(|l| (l.box_min.to_array(), l.box_size.to_array()))
+            .collect();
+        boxes.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        assert_eq!(
+            boxes,
+            vec![
+                ([-1.0, -2.0, -1.0], [2.0, 2.0, 4.0]),
+                ([-1.0, 0.0, -1.0], [2.0, 2.0, 4.0]),
+                ([1.0, -2.0, -1.0], [2.0, 2.0, 4.0]),
+                ([1.0, 0.0, -1.0], [2.0, 2.0, 4.0]),
+            ]
+        );
+        // The halves share the parent's sampling tree until the next refit.
+        assert!(std::sync::Arc::ptr_eq(
+            &t.leaves()[0].sampling,
+            &t.leaves()[1].sampling
+        ));
+        // Lookup agrees with the boxes.
+        for (i, l) in t.leaves().iter().enumerate() {
+            assert_eq!(t.find_leaf(l.box_min + 0.5 * l.box_size), i as u32);
+        }
+        // A larger spp raises the bar: the same weight at 64 spp (4c) splits nothing.
+        let mut t = tree(&config);
+        record_at(&mut t, Vec3::ZERO, 4 * 12000);
+        assert_eq!(t.refit(64).splits, 0);
+    }
+
+    #[test]
+    fn sampling_is_last_iteration_and_training_starts_empty() {
+        let config = GuidingConfig::default();
+        let mut t = tree(&config);
+        assert!(t.leaves()[0].sampling.is_empty());
+        record_at(&mut t, Vec3::ZERO, 100);
+        let before = t.leaves()[0].training.clone();
+        t.refit(2);
+        let l = &t.leaves()[0];
+        assert_eq!(l.sampling_weight, 100.0);
+        assert!((l.sampling.total() - 100.0).abs() < 1e-3);
+        assert_eq!(l.training_weight, 0.0);
+        assert_eq!(l.training.total(), 0.0);
+        let mut built = before;
+        built.build();
+        assert_eq!(*l.sampling, built);
+        assert_eq!(l.training, built.refined(config.rho, config.max_quad_depth));
+        // A second iteration without records: sampling becomes empty (uniform) again.
+        t.refit(4);
+        assert!(t.leaves()[0].sampling.is_empty());
+    }
+
+    #[test]
+    fn memory_cap_stops_splits() {
+        let uncapped = GuidingConfig {
+            spatial_filter: crate::guiding::SpatialFilter::Nearest,
+            ..GuidingConfig::default()
+        };
+        // Weight 64c spread over the cube: without a cap it splits into 64+ leaves.
+        let fill = |t: &mut SdTree| {
+            for i in 0..64u32 {
+                let p = Vec3::new(
+                    -1.0 + 4.0 * ((i % 4) as f32 + 0.5) / 4.0,
+                    -2.0 + 4.0 * (((i / 4) % 4) as f32 + 0.5) / 4.0,
+                    -1.0 + 4.0 * ((i / 16) as f32 + 0.5) / 4.0,
+                );
+                record_at(t, p, 12001);
+            }
+        };
+        let mut t = tree(&uncapped);
+        fill(&mut t);
+        let free = t.refit(4);
+        assert!(free.leaves >= 64, "{free:?}");
+        let cap = free.gpu_bytes / 3;
+        let capped = GuidingConfig {
+            memory_cap_bytes: cap,
+            ..uncapped
+        };
+        let mut t = tree(&capped);
+        fill(&mut t);
+        let s = t.refit(4);
+        assert!(s.gpu_bytes <= cap, "{} > {cap}", s.gpu_bytes);
+        assert!(s.refused_splits > 0 && s.splits > 0);
+        assert_eq!(s.gpu_bytes, t.gpu_arrays().byte_size());
+        // A cap below the current size refuses every split.
+        let tiny = GuidingConfig {
+            memory_cap_bytes: 1,
+            ..capped
+        };
+        let mut t = tree(&tiny);
+        fill(&mut t);
+        assert_eq!(t.refit(4).splits, 0);
+    }
+
+    #[test]
+    fn spatial_depth_cap() {
+        let config = GuidingConfig {
+            spatial_filter: crate::guiding::SpatialFilter::Nearest,
+            max_spatial_depth: 3,
+            ..GuidingConfig::default()
+        };
+        let mut t = tree(&config);
+        record_at(&mut t, Vec3::ZERO, 1 << 20);
+        let s = t.refit(4);
+        assert_eq!(s.leaves, 8);
+        assert!(t.leaves().iter().all(|l| l.depth == 3));
+    }
+}

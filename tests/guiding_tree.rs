@@ -1,0 +1,215 @@
+//! The SD-tree's arrays and files: flatten → unflatten round trip, the training
+//! readback path (a CPU stand-in for the GPU recording into the uploaded training
+//! buffer), save → load bit-exact, and the errors for wrong files, versions, corrupt
+//! data and another scene.
+
+use glam::Vec3;
+use lanterna::guiding::{GuidingConfig, GuidingError, SceneHasher, SdTree};
+
+/// SplitMix64 → floats in [0, 1).
+struct Rng(u64);
+impl Rng {
+    fn f32(&mut self) -> f32 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+const BBOX: ([f32; 3], [f32; 3]) = ([-2.0, 0.0, -1.0], [2.0, 3.0, 1.5]);
+
+/// Records spread over the box, radiance from a direction depending on position.
+fn record_some(tree: &mut SdTree, n: u32, rng: &mut Rng) {
+    let (lo, hi) = (Vec3::from_array(BBOX.0), Vec3::from_array(BBOX.1));
+    for _ in 0..n {
+        let p = lo + (hi - lo) * Vec3::new(rng.f32(), rng.f32(), rng.f32());
+        let to_light = (Vec3::new(0.0, 2.9, 0.0) - p).normalize_or(Vec3::Y);
+        let dir = (to_light + 0.05 * Vec3::new(rng.f32(), rng.f32(), rng.f32())).normalize();
+        let u = [rng.f32(), rng.f32(), rng.f32()];
+        tree.record(p, dir, 2.0 * rng.f32(), 1.0, u);
+    }
+}
+
+/// A tree after a few iterations: many leaves, shared and distinct sampling trees, and
+/// a training tree holding records.
+fn grown_tree() -> SdTree {
+    let config = GuidingConfig {
+        spatial_threshold: 200.0,
+        ..GuidingConfig::default()
+    };
+    let mut tree =
+        SdTree::new(Vec3::from_array(BBOX.0), Vec3::from_array(BBOX.1), &config).unwrap();
+    let mut rng = Rng(1);
+    for k in 0..4 {
+        record_some(&mut tree, 4000 << k, &mut rng);
+        tree.refit(2 << k);
+    }
+    record_some(&mut tree, 3000, &mut rng);
+    assert!(tree.leaves().len() > 20);
+    tree
+}
+
+#[test]
+fn flatten_round_trip() {
+    let tree = grown_tree();
+    let arrays = tree.gpu_arrays();
+    assert_eq!(arrays.byte_size(), tree.gpu_bytes());
+    // Split halves share sampling trees: the sampling array is smaller than the sum.
+    let separate: usize = tree.leaves().iter().map(|l| l.sampling.node_count()).sum();
+    assert!(arrays.sampling.len() < separate);
+    let back = SdTree::from_gpu_arrays(&arrays, tree.config()).unwrap();
+    assert_eq!(back.gpu_arrays(), arrays);
+    // Equal as trees, apart from the refit counter, which the arrays do not hold.
+    assert_eq!(back.leaves(), tree.leaves());
+    // Lookups agree.
+    let mut rng = Rng(2);
+    for _ in 0..1000 {
+        let p = Vec3::new(
+            rng.f32() * 4.0 - 2.0,
+            rng.f32() * 3.0,
+            rng.f32() * 2.5 - 1.0,
+        );
+        assert_eq!(back.find_leaf(p), tree.find_leaf(p));
+    }
+}
+
+#[test]
+fn arrays_are_validated() {
+    let tree = grown_tree();
+    let config = tree.config().clone();
+    let good = tree.gpu_arrays();
+    let mut a = good.clone();
+    a.spatial[0].child = 1_000_000;
+    assert!(SdTree::from_gpu_arrays(&a, &config).is_err());
+    let mut a = good.clone();
+    a.sampling[a.leaves[3].sampling_root as usize].child[2] = a.leaves[3].sampling_root;
+    assert!(SdTree::from_gpu_arrays(&a, &config).is_err());
+    let mut a = good.clone();
+    a.leaves[1].training_root = a.leaves[0].training_root;
+    assert!(SdTree::from_gpu_arrays(&a, &config).is_err());
+    let mut a = good.clone();
+    a.header.leaf_count += 1;
+    assert!(SdTree::from_gpu_arrays(&a, &config).is_err());
+}
+
+#[test]
+fn training_readback_replaces_cpu_training() {
+    // The GPU starts from the uploaded training buffer and adds records; here the CPU
+    // mirror plays the GPU on a copy, and its training arrays are "read back".
+    let mut tree = grown_tree();
+    let mut gpu = tree.clone();
+    record_some(&mut gpu, 5000, &mut Rng(3));
+    let readback = gpu.gpu_arrays().training;
+    tree.load_training_readback(&readback).unwrap();
+    assert_eq!(tree.leaves(), gpu.leaves());
+    // The refits then agree.
+    let (a, b) = (tree.refit(32), gpu.refit(32));
+    assert_eq!(a, b);
+    assert_eq!(tree.gpu_arrays(), gpu.gpu_arrays());
+    // A buffer of another topology is refused.
+    let stale = readback;
+    let err = tree.load_training_readback(&stale).unwrap_err();
+    assert!(matches!(err, GuidingError::TrainingMismatch(_)), "{err}");
+}
+
+fn scene_hash() -> u64 {
+    SceneHasher::default()
+        .update(b"some scene geometry")
+        .finish()
+}
+
+#[test]
+fn save_load_round_trip_is_bit_exact() {
+    let dir = tempfile::tempdir().unwrap();
+    let tree = grown_tree();
+    let path = dir.path().join("tree.sdt");
+    tree.save(&path, scene_hash(), BBOX).unwrap();
+    let loaded = SdTree::load(&path, scene_hash()).unwrap();
+    assert_eq!(loaded, tree);
+    let again = dir.path().join("again.sdt");
+    loaded.save(&again, scene_hash(), BBOX).unwrap();
+    assert_eq!(
+        std::fs::read(&path).unwrap(),
+        std::fs::read(&again).unwrap()
+    );
+    // No temporary file is left behind.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+    let (_, info) = SdTree::load_unchecked(&path).unwrap();
+    assert_eq!(
+        (info.bbox_min, info.bbox_max, info.iterations),
+        (BBOX.0, BBOX.1, 4)
+    );
+}
+
+#[test]
+fn load_refuses_bad_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let tree = grown_tree();
+    let path = dir.path().join("tree.sdt");
+    tree.save(&path, scene_hash(), BBOX).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let write = |name: &str, data: &[u8]| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, data).unwrap();
+        p
+    };
+
+    let err = SdTree::load(&path, scene_hash() ^ 1).unwrap_err();
+    assert!(matches!(err, GuidingError::SceneMismatch { .. }), "{err}");
+    assert!(err.to_string().contains("tree.sdt") && err.to_string().contains("another scene"));
+
+    let err = SdTree::load(
+        &write("png.sdt", b"\x89PNG\r\n\x1a\n0000000000000000"),
+        scene_hash(),
+    )
+    .unwrap_err();
+    assert!(matches!(err, GuidingError::NotAnSdTree { .. }), "{err}");
+
+    let mut v2 = bytes.clone();
+    v2[16] = 2;
+    let err = SdTree::load(&write("v2.sdt", &v2), scene_hash()).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            GuidingError::Version {
+                found: 2,
+                supported: 1,
+                ..
+            }
+        ),
+        "{err}"
+    );
+
+    let err =
+        SdTree::load(&write("short.sdt", &bytes[..bytes.len() / 2]), scene_hash()).unwrap_err();
+    assert!(matches!(err, GuidingError::Corrupt { .. }), "{err}");
+
+    let mut flipped = bytes.clone();
+    let mid = bytes.len() / 2;
+    flipped[mid] ^= 0x40;
+    let err = SdTree::load(&write("flipped.sdt", &flipped), scene_hash()).unwrap_err();
+    assert!(matches!(err, GuidingError::Corrupt { .. }), "{err}");
+
+    let err = SdTree::load(&dir.path().join("missing.sdt"), scene_hash()).unwrap_err();
+    assert!(matches!(err, GuidingError::Io { .. }), "{err}");
+}
+
+#[test]
+fn leaf_view_shows_the_leaf() {
+    let tree = grown_tree();
+    let p = Vec3::new(0.5, 1.0, 0.2);
+    let view = tree.leaf_view(p, 128);
+    assert_eq!(view.rgb.len(), 128 * 128 * 3);
+    let leaf = tree.leaf(tree.find_leaf(p));
+    assert_eq!(view.info.box_min, leaf.box_min);
+    assert_eq!(view.info.sampling_weight, leaf.sampling_weight);
+    assert!(view.info.max_density > 1.0 && !view.info.uniform);
+    let text = view.info.to_string();
+    assert!(
+        text.contains("bounds") && text.contains("sample weight"),
+        "{text}"
+    );
+    assert!(view.rgb.iter().all(|v| (0.0..=1.0).contains(v)));
+}
