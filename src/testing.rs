@@ -227,3 +227,80 @@ pub fn assert_same_expectation(a: &Batches, b: &Batches, block: u32, alpha: f64)
     }
     p
 }
+
+// ---- scenes ----------------------------------------------------------------------------
+
+/// A generated scene in a temporary directory (removed on drop).
+pub struct TestScene {
+    pub dir: tempfile_dir::TempDir,
+    pub path: std::path::PathBuf,
+    pub scene: Scene,
+    pub camera: Camera,
+}
+
+/// A tiny temporary-directory guard (the crate's dev-dependency is not visible here).
+pub mod tempfile_dir {
+    /// Removes the directory when dropped.
+    pub struct TempDir(pub std::path::PathBuf);
+    impl TempDir {
+        pub fn new(tag: &str) -> TempDir {
+            use std::sync::atomic::{AtomicU64, Ordering};
+            static N: AtomicU64 = AtomicU64::new(0);
+            let p = std::env::temp_dir().join(format!(
+                "lanterna-test-{tag}-{}-{}",
+                std::process::id(),
+                N.fetch_add(1, Ordering::SeqCst)
+            ));
+            std::fs::create_dir_all(&p).unwrap();
+            TempDir(p)
+        }
+    }
+    impl Drop for TempDir {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+/// Generate `kind` with `options` and load it with its first camera.
+pub fn generated(
+    kind: crate::scene::generate::Kind,
+    options: &crate::scene::generate::Options,
+) -> TestScene {
+    let dir = tempfile_dir::TempDir::new(kind.name());
+    let path = dir.0.join(format!("{}.gltf", kind.name()));
+    crate::scene::generate::generate(kind, options, &path).expect("generate scene");
+    let scene = Scene::load(&path, &Default::default()).expect("load generated scene");
+    let camera = scene
+        .cameras
+        .first()
+        .cloned()
+        .expect("generated scenes have a camera");
+    TestScene {
+        dir,
+        path,
+        scene,
+        camera,
+    }
+}
+
+/// The `asset.extras.lanterna.analytic` object of a generated scene.
+pub fn analytic(scene: &Scene) -> serde_json::Value {
+    scene
+        .extras
+        .as_ref()
+        .and_then(|e| e.get("lanterna"))
+        .and_then(|l| l.get("analytic"))
+        .cloned()
+        .expect("analytic extras")
+}
+
+/// Settings for a small test render.
+pub fn settings(method: crate::render::Method, width: u32, height: u32) -> RenderSettings {
+    RenderSettings {
+        method,
+        width,
+        height,
+        ..RenderSettings::default()
+    }
+}

@@ -113,6 +113,10 @@ fn run_generate(a: GenerateArgs) -> anyhow::Result<()> {
         }),
     };
     let start = std::time::Instant::now();
+    if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| anyhow::anyhow!("cannot create directory {}: {e}", dir.display()))?;
+    }
     let s = generate::generate(kind, &options, &a.output)
         .with_context(|| format!("generating a `{kind}` scene into {}", a.output.display()))?;
     log::info!(

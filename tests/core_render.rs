@@ -1,0 +1,198 @@
+//! The renderer core against closed forms and against itself: furnace, analytic direct
+//! lighting, the three direct-light strategies, determinism and exact chunking. Every
+//! bound is a t-test on independent batches (disjoint sample ranges) at a stated
+//! significance, never a tolerance tuned to one run.
+
+use lanterna::render::{Method, Strategy};
+use lanterna::scene::generate::{Kind, Options};
+use lanterna::testing::{self, Batches};
+use lanterna::{stats, testing::render_batches};
+
+/// Family-wise significance of each test's comparisons.
+const ALPHA: f64 = 1e-3;
+
+/// The film's arithmetic resolution: samples are rounded to 2^-20 before they are summed,
+/// and f32 shading carries a relative error of a few ulps. Nearly noise-free estimates
+/// (a point light) sit within this of the closed form whatever the sample count.
+fn precision_floor(expected: f64) -> f64 {
+    1.0 / lanterna::gpu::FILM_FIXED_SCALE as f64 + 8.0 * f32::EPSILON as f64 * expected.abs()
+}
+
+fn assert_mean(b: &Batches, region: (u32, u32, u32, u32), expected: f64, what: &str) {
+    let est = b.region_estimates(region.0, region.1, region.2, region.3);
+    for (c, e) in est.iter().enumerate() {
+        let p = stats::t_test_against(e, expected);
+        let (m, v) = stats::mean_var(e);
+        assert!(
+            p > stats::sidak(ALPHA, 3) || (m - expected).abs() < precision_floor(expected),
+            "{what}: channel {c} mean {m} ± {} vs expected {expected} (p = {p:.2e})",
+            (v / e.len() as f64).sqrt()
+        );
+    }
+}
+
+#[test]
+fn furnace_matches_closed_form() {
+    let t = testing::generated(Kind::Furnace, &Options::default());
+    let expected = testing::analytic(&t.scene)["expected_by_max_depth"].clone();
+    for (method, depth) in [(Method::Pt, 4u32), (Method::Ris, 4), (Method::Pt, 2)] {
+        let mut s = testing::settings(method, 8, 8);
+        s.max_depth = depth;
+        let b = render_batches(&t.scene, &t.camera, s, 16, 16);
+        let e = expected[depth as usize - 1].as_f64().unwrap();
+        assert_mean(
+            &b,
+            (0, 0, 8, 8),
+            e,
+            &format!("furnace {method} depth {depth}"),
+        );
+    }
+    testing::assert_no_validation_errors();
+}
+
+/// The camera looks at the point under the light. A 0.05° view makes the centre pixel's
+/// footprint small enough that irradiance is constant over it (at the scene's 20° view a
+/// pixel of a tiny image averages over a visible cos³ fall-off).
+fn centre_pixel_matches(kind: Kind, options: Options, methods: &[Method]) {
+    let t = testing::generated(kind, &options);
+    let expected = testing::analytic(&t.scene)["expected_radiance_at_look_at"]
+        .as_f64()
+        .unwrap();
+    let camera = t
+        .camera
+        .clone()
+        .with_override(&lanterna::scene::CameraOverride {
+            fov_degrees: Some(0.05),
+            ..Default::default()
+        });
+    for &method in methods {
+        let mut s = testing::settings(method, 3, 3);
+        s.max_depth = 2;
+        let b = render_batches(&t.scene, &camera, s, 16, 128);
+        assert_mean(&b, (1, 1, 1, 1), expected, &format!("{kind} {method}"));
+    }
+    testing::assert_no_validation_errors();
+}
+
+#[test]
+fn direct_light_from_a_quad_matches_closed_form() {
+    centre_pixel_matches(
+        Kind::PlaneQuad,
+        Options::default(),
+        &[Method::Pt, Method::Ris],
+    );
+}
+
+#[test]
+fn direct_light_from_a_point_light_matches_closed_form() {
+    centre_pixel_matches(
+        Kind::PlanePoint,
+        Options::default(),
+        &[Method::Pt, Method::Ris],
+    );
+}
+
+#[test]
+fn direct_light_from_a_spot_light_matches_closed_form() {
+    centre_pixel_matches(
+        Kind::PlanePoint,
+        Options {
+            spot: true,
+            ..Options::default()
+        },
+        &[Method::Pt],
+    );
+}
+
+#[test]
+fn nee_only_bsdf_only_and_mis_agree() {
+    // A large light keeps direction sampling alone tractable; depth 3 adds indirect light.
+    let t = testing::generated(
+        Kind::PlaneQuad,
+        &Options {
+            size: Some(1.5),
+            ..Options::default()
+        },
+    );
+    for method in [Method::Pt, Method::Ris] {
+        let run = |strategy| {
+            let mut s = testing::settings(method, 8, 8);
+            s.max_depth = 3;
+            s.strategy = strategy;
+            s.seed = strategy as u32 * 7 + 1;
+            render_batches(&t.scene, &t.camera, s, 12, 128)
+        };
+        let mis = run(Strategy::Mis);
+        testing::assert_same_expectation(&mis, &run(Strategy::Nee), 4, ALPHA);
+        testing::assert_same_expectation(&mis, &run(Strategy::Bsdf), 4, ALPHA);
+    }
+    testing::assert_no_validation_errors();
+}
+
+#[test]
+fn alpha_masked_geometry_lets_light_through_its_holes() {
+    let t = testing::generated(Kind::AlphaTest, &Options::default());
+    let expected = testing::analytic(&t.scene)["expected_mean_for_aspect_1"]
+        .as_f64()
+        .unwrap();
+    let mut s = testing::settings(Method::Pt, 16, 16);
+    s.max_depth = 1;
+    let b = render_batches(&t.scene, &t.camera, s, 8, 16);
+    assert_mean(&b, (0, 0, 16, 16), expected, "alpha-test");
+    testing::assert_no_validation_errors();
+}
+
+#[test]
+fn same_seed_same_image_and_chunks_equal_one_run() {
+    use lanterna::lights::LightTable;
+    use lanterna::render::{RenderStats, Renderer};
+    use std::sync::atomic::AtomicBool;
+    let t = testing::generated(Kind::CornellLights, &Options::default());
+    let lights = LightTable::build(&t.scene).unwrap();
+    let cancel = AtomicBool::new(false);
+    for method in [Method::Pt, Method::Ris] {
+        let film = |seed: u32, ranges: &[(u64, u64)]| {
+            let mut s = testing::settings(method, 12, 12);
+            s.seed = seed;
+            let mut r = Renderer::new(
+                testing::device(),
+                &t.scene,
+                &lights,
+                t.camera.clone(),
+                s,
+                Default::default(),
+            )
+            .unwrap();
+            let mut stats = RenderStats::default();
+            for &(begin, count) in ranges {
+                r.render_samples(begin, count, false, &cancel, &mut |_| {}, &mut stats)
+                    .unwrap();
+            }
+            r.film().unwrap()
+        };
+        let one = film(3, &[(0, 8)]);
+        assert_eq!(
+            one,
+            film(3, &[(0, 8)]),
+            "{method}: the same seed gave a different film"
+        );
+        assert_ne!(
+            one.sums,
+            film(4, &[(0, 8)]).sums,
+            "{method}: another seed gave the same film"
+        );
+        // Chunks in one film, and chunk films merged, both equal the one-shot film exactly.
+        assert_eq!(
+            one.sums,
+            film(3, &[(0, 3), (3, 1), (4, 4)]).sums,
+            "{method}: chunked render differs"
+        );
+        let mut merged = film(3, &[(0, 5)]);
+        merged.merge(&film(3, &[(5, 3)]));
+        assert_eq!(
+            one, merged,
+            "{method}: merged chunks differ from the one-shot render"
+        );
+    }
+    testing::assert_no_validation_errors();
+}
