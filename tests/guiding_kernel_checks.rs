@@ -45,3 +45,75 @@ fn record_check_notices_a_wrong_kernel() {
     };
     assert!(check_record_kernel(&tree, 10_000, &mut lossy).is_err());
 }
+
+// ---- the same checks on the device, with the real GLSL -------------------------------
+
+use lanterna::gpu::{self, GuideQuadNode, GuideTestRecord, GuideTestResult, GuideTestSample};
+use lanterna::guiding::GuideArrays;
+use lanterna::testing;
+
+fn guide_buffers(arrays: &GuideArrays) -> [Vec<u8>; 4] {
+    [
+        arrays.spatial_buffer(),
+        bytemuck::cast_slice(&arrays.leaves).to_vec(),
+        bytemuck::cast_slice(&arrays.sampling).to_vec(),
+        bytemuck::cast_slice(&arrays.training).to_vec(),
+    ]
+}
+
+fn gpu_sample_runner(arrays: &GuideArrays, inputs: &[GuideTestSample]) -> Vec<GuideTestResult> {
+    let [spatial, leaves, sampling, training] = guide_buffers(arrays);
+    let out = vec![0u8; inputs.len() * std::mem::size_of::<GuideTestResult>()];
+    let buffers = testing::dispatch(
+        "tests/guiding_sample",
+        &[
+            (gpu::TEST_BINDING_IN, bytemuck::cast_slice(inputs)),
+            (gpu::TEST_BINDING_OUT, &out),
+            (gpu::BINDING_GUIDE_SPATIAL, &spatial),
+            (gpu::BINDING_GUIDE_LEAVES, &leaves),
+            (gpu::BINDING_GUIDE_SAMPLING, &sampling),
+            (gpu::BINDING_GUIDE_TRAINING, &training),
+        ],
+        &[],
+        inputs.len() as u32,
+    )
+    .expect("guiding_sample kernel");
+    bytemuck::pod_collect_to_vec(&buffers[1])
+}
+
+fn gpu_record_runner(arrays: &GuideArrays, records: &[GuideTestRecord]) -> Vec<GuideQuadNode> {
+    let [spatial, leaves, sampling, training] = guide_buffers(arrays);
+    let buffers = testing::dispatch(
+        "tests/guiding_record",
+        &[
+            (gpu::TEST_BINDING_IN, bytemuck::cast_slice(records)),
+            (gpu::BINDING_GUIDE_SPATIAL, &spatial),
+            (gpu::BINDING_GUIDE_LEAVES, &leaves),
+            (gpu::BINDING_GUIDE_SAMPLING, &sampling),
+            (gpu::BINDING_GUIDE_TRAINING, &training),
+        ],
+        &[],
+        records.len() as u32,
+    )
+    .expect("guiding_record kernel");
+    bytemuck::pod_collect_to_vec(&buffers[4])
+}
+
+#[test]
+fn sampling_checks_pass_on_the_device() {
+    // χ² of sampled directions against the pdf, sample() pdf == pdf(), ∫pdf = 1.
+    for tree in [scene_tree(&GuidingConfig::default()), deep_tree()] {
+        let reports = check_sampling_kernel(&tree, 200_000, &mut gpu_sample_runner).unwrap();
+        assert!(!reports.is_empty());
+    }
+    testing::assert_no_validation_errors();
+}
+
+#[test]
+fn record_checks_pass_on_the_device() {
+    for config in record_configs() {
+        let tree = scene_tree(&config);
+        check_record_kernel(&tree, 200_000, &mut gpu_record_runner).unwrap();
+    }
+    testing::assert_no_validation_errors();
+}

@@ -132,7 +132,8 @@ pub struct EstimatorArgs {
     #[arg(long, value_enum, default_value = "mis")]
     pub strategy: Strategy,
     /// Guiding: c in the spatial split threshold c·√(spp of the next iteration / 4)
-    /// (Müller et al.'s default 12000).
+    /// (Müller et al.'s 12000), for a 1280×720 image: it is scaled by the square root of
+    /// the image's pixel count relative to that, since records per leaf scale with it.
     #[arg(long, default_value_t = 12000.0)]
     pub guiding_threshold: f32,
     /// Guiding: memory cap of the SD-tree in MiB (splits stop before it is exceeded).

@@ -7,6 +7,7 @@ use std::process::ExitCode;
 
 mod common;
 mod compare;
+mod guiding;
 mod info;
 mod merge;
 mod reference;
@@ -42,6 +43,9 @@ enum Command {
     Merge(merge::Args),
     /// Compare methods against a reference: error vs spp and vs time, with figures.
     Compare(compare::Args),
+    /// Inspect trained SD-trees.
+    #[command(subcommand)]
+    Guiding(guiding::Command),
 }
 
 pub fn main() -> ExitCode {
@@ -59,6 +63,7 @@ pub fn main() -> ExitCode {
         Command::Reference(a) => reference::run(a),
         Command::Merge(a) => merge::run(a),
         Command::Compare(a) => compare::run(a),
+        Command::Guiding(c) => guiding::run(c),
     };
     // With validation on, a validation error is a failure even if the command finished.
     let result = result.and_then(|()| match lanterna::vk::validation_error_count() {

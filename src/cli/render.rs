@@ -140,7 +140,7 @@ impl Aov {
     }
 }
 
-fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
+pub fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
     let (x, y) = s.split_once(',').ok_or("expected X,Y")?;
     Ok((
         x.trim().parse().map_err(|e| format!("`{x}`: {e}"))?,

@@ -85,7 +85,8 @@ pub enum Strategy {
 /// SD-tree options beyond the kernel's.
 #[derive(Clone, Debug)]
 pub struct GuidingSettings {
-    /// c in the spatial split threshold c·√(spp of the coming iteration / 4).
+    /// c in the spatial split threshold c·√(spp of the coming iteration / 4), for a
+    /// 1280×720 image (scaled by √(pixels / 921 600) for others).
     pub spatial_threshold: f32,
     /// Stop splitting before the SD-tree's buffers exceed this.
     pub memory_cap_bytes: u64,

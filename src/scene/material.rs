@@ -116,7 +116,20 @@ impl TextureRegistry<'_> {
     ) -> gpu::TextureRef {
         match info {
             Some(i) => {
-                let transform = i.extension_value("KHR_texture_transform").cloned();
+                // The gltf crate parses KHR_texture_transform of texture infos into a typed
+                // field (extension_value() then finds nothing); rebuild the JSON form the
+                // rest of this file reads, as normal textures still provide it.
+                let transform = i.texture_transform().map(|t| {
+                    let mut v = serde_json::json!({
+                        "offset": t.offset(),
+                        "rotation": t.rotation(),
+                        "scale": t.scale(),
+                    });
+                    if let Some(tc) = t.tex_coord() {
+                        v["texCoord"] = tc.into();
+                    }
+                    v
+                });
                 self.reference(i.texture(), i.tex_coord(), transform.as_ref(), format)
             }
             None => no_texture(),

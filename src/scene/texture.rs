@@ -1,7 +1,7 @@
 //! Decoded textures: RGBA8 pixels with their colour encoding and sampler, plus a CPU
 //! lookup used to estimate the power of emissive-textured triangles.
 
-use crate::vk::{SamplerDesc, TextureFormat, WrapMode};
+use crate::vk::{srgb_decode, SamplerDesc, TextureFormat, WrapMode};
 
 /// Identifies one GPU texture: the same glTF image used as colour and as data, or with
 /// two samplers, becomes two textures.
@@ -80,13 +80,6 @@ pub fn to_rgba8(data: &gltf::image::Data) -> Option<Vec<u8>> {
     (out.len() == px * 4).then_some(out)
 }
 
-fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
 
 fn wrap(t: f32, mode: WrapMode) -> f32 {
     match mode {
@@ -112,26 +105,19 @@ impl TextureData {
         let y = ((v * self.height as f32) as u32).min(self.height - 1);
         let i = ((y * self.width + x) * 4) as usize;
         let c = |k: usize| self.rgba[i + k] as f32 / 255.0;
+        let s = |k: usize| srgb_decode(self.rgba[i + k]);
         match self.format {
-            TextureFormat::Srgb => [
-                srgb_to_linear(c(0)),
-                srgb_to_linear(c(1)),
-                srgb_to_linear(c(2)),
-                c(3),
-            ],
+            TextureFormat::Srgb => [s(0), s(1), s(2), c(3)],
             TextureFormat::Linear => [c(0), c(1), c(2), c(3)],
         }
     }
 
     /// Largest linear luminance over all texels (0 means the texture is black).
     pub fn max_luminance(&self) -> f32 {
-        let lut: Vec<f32> = (0..256)
-            .map(|v| {
-                let c = v as f32 / 255.0;
-                match self.format {
-                    TextureFormat::Srgb => srgb_to_linear(c),
-                    TextureFormat::Linear => c,
-                }
+        let lut: Vec<f32> = (0..=255u8)
+            .map(|v| match self.format {
+                TextureFormat::Srgb => srgb_decode(v),
+                TextureFormat::Linear => v as f32 / 255.0,
             })
             .collect();
         self.rgba

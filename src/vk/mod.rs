@@ -17,7 +17,7 @@ pub use accel::{AccelStructure, BlasGeometry, TlasInstance};
 pub use buffer::Buffer;
 pub use descriptor::DescriptorSet;
 pub use device::{Device, DeviceInfo, DeviceSelector, FeatureReport};
-pub use image::{Sampler, SamplerDesc, Texture, TextureFormat, WrapMode};
+pub use image::{srgb_decode, Sampler, SamplerDesc, Texture, TextureFormat, WrapMode};
 pub use instance::{take_debug_printf_messages, validation_error_count, Instance, InstanceOptions};
 pub use pipeline::{BindingKind, BindingSpec, ComputePipeline};
 
