@@ -10,9 +10,10 @@
 //! of a double-sided emitter) is checked without Mitsuba.
 
 use lanterna::image_io::{self, Image, RenderMeta};
+use lanterna::lights::LightTable;
 use lanterna::render::{session, Method, RenderSettings};
 use lanterna::scene::export_mitsuba::{self, ExportOptions};
-use lanterna::scene::CameraOverride;
+use lanterna::scene::{CameraOverride, Scene};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -34,7 +35,12 @@ fn mitsuba_available() -> bool {
 
 fn export(scene: &str, camera: Option<&str>, w: u32, h: u32, dir: &Path) -> ExportOptions {
     let loaded = session::load_scene(&data(scene)).expect("scene");
-    let cam = session::choose_camera(&loaded.scene, camera, &CameraOverride::default()).unwrap();
+    export_loaded(&loaded.scene, camera, w, h, dir)
+}
+
+fn export_loaded(scene: &Scene, camera: Option<&str>, w: u32, h: u32, dir: &Path) -> ExportOptions {
+    let lights = LightTable::build(scene).expect("light table");
+    let cam = session::choose_camera(scene, camera, &CameraOverride::default()).unwrap();
     let options = ExportOptions {
         width: w,
         height: h,
@@ -42,7 +48,7 @@ fn export(scene: &str, camera: Option<&str>, w: u32, h: u32, dir: &Path) -> Expo
         spp: 16,
         seed: 0,
     };
-    export_mitsuba::export(&loaded.scene, &loaded.lights, &cam, &options, dir).expect("export");
+    export_mitsuba::export(scene, &lights, &cam, &options, dir).expect("export");
     options
 }
 
@@ -146,15 +152,14 @@ fn export_keeps_front_faces_and_double_sided_sheets() {
 
 /// Render `batches` independent batches (disjoint sample ranges) and write them as EXRs.
 fn lanterna_batches(
-    scene_file: &str,
+    scene: &Scene,
     method: Method,
     options: &ExportOptions,
     batches: u32,
     spp: u64,
     dir: &Path,
 ) -> Vec<PathBuf> {
-    let loaded = session::load_scene(&data(scene_file)).unwrap();
-    let cam = session::choose_camera(&loaded.scene, None, &CameraOverride::default()).unwrap();
+    let cam = session::choose_camera(scene, None, &CameraOverride::default()).unwrap();
     let settings = RenderSettings {
         method,
         width: options.width,
@@ -162,7 +167,7 @@ fn lanterna_batches(
         max_depth: options.max_depth,
         ..RenderSettings::default()
     };
-    let b = lanterna::testing::render_batches(&loaded.scene, &cam, settings, batches, spp);
+    let b = lanterna::testing::render_batches(scene, &cam, settings, batches, spp);
     b.images
         .iter()
         .enumerate()
@@ -175,7 +180,7 @@ fn lanterna_batches(
                 seed: Some(0),
                 method: Some(method.name().into()),
                 max_depth: Some(options.max_depth),
-                scene_hash: Some(loaded.scene.hash.clone()),
+                scene_hash: Some(scene.hash.clone()),
                 ..RenderMeta::new()
             };
             let path = dir.join(format!("{}_{k}.exr", method.name()));
@@ -214,10 +219,11 @@ fn lanterna_agrees_with_mitsuba_on_a_lambertian_scene() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("export");
     // 4:3, so that a horizontal/vertical field-of-view mix-up changes the image.
-    let options = export("hierarchy.gltf", None, 40, 30, &dir);
+    let loaded = session::load_scene(&data("hierarchy.gltf")).unwrap();
+    let options = export_loaded(&loaded.scene, None, 40, 30, &dir);
     let spp = 32;
     for method in [Method::Pt, Method::Ris] {
-        let exrs = lanterna_batches("hierarchy.gltf", method, &options, 8, spp, tmp.path());
+        let exrs = lanterna_batches(&loaded.scene, method, &options, 8, spp, tmp.path());
         let report = compare(&dir, &exrs, spp, &tmp.path().join("report.json"));
         assert_eq!(report["exact"], true, "the scene should export exactly");
         assert!(
@@ -258,4 +264,44 @@ fn lanterna_agrees_with_mitsuba_on_a_lambertian_scene() {
             );
         }
     }
+}
+
+/// KHR_texture_transform on base colour and emissive textures: the transforms are set on
+/// the loaded scene (the loader does not read them from files yet), the exporter maps
+/// them to Mitsuba's `to_uv` and bakes the emissive one into the texture coordinates.
+/// Texels are 0 or 255 only, which every sRGB decoder maps exactly.
+#[test]
+fn texture_transforms_agree_with_mitsuba() {
+    if !mitsuba_available() {
+        println!("skipped: python3 cannot import mitsuba (pip install mitsuba)");
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let mut loaded = session::load_scene(&data("texxform.gltf")).unwrap();
+    let scene = &mut loaded.scene;
+    let floor = &mut scene.materials[0].base_color_tex;
+    floor.offset = [0.1, 0.3];
+    floor.scale = [1.7, 0.8];
+    floor.rotation = 0.4;
+    let panel = &mut scene.materials[1];
+    panel.base_color_tex.offset = [0.2, 0.0];
+    panel.base_color_tex.scale = [2.0, 2.0];
+    // A quarter turn that keeps the unit square (Mitsuba samples the emitter through it).
+    panel.emissive_tex.offset = [0.0, 1.0];
+    panel.emissive_tex.rotation = std::f32::consts::FRAC_PI_2;
+    let dir = tmp.path().join("export");
+    let options = export_loaded(scene, None, 40, 40, &dir);
+    let xml = std::fs::read_to_string(dir.join("scene.xml")).unwrap();
+    assert_eq!(xml.matches("name=\"to_uv\"").count(), 2, "{xml}");
+    let spp = 32;
+    let exrs = lanterna_batches(scene, Method::Pt, &options, 8, spp, tmp.path());
+    let report = compare(&dir, &exrs, spp, &tmp.path().join("report.json"));
+    assert_eq!(report["exact"], true, "{}", report["approximations"]);
+    assert!(
+        report["agree"].as_bool().unwrap(),
+        "lanterna and Mitsuba disagree:\nmean {}\nblocks {}\npixels {}",
+        report["mean"],
+        report["blocks"],
+        report["pixels"]
+    );
 }

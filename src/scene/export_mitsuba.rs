@@ -981,12 +981,16 @@ fn bitmap_xml(
         }
     );
     if *to_uv != Mat3::IDENTITY {
-        let r = to_uv.transpose().to_cols_array();
-        let _ = writeln!(
-            s,
-            "{indent}  <transform name=\"to_uv\"><matrix value=\"{}\"/></transform>",
-            r.map(|v| v.to_string()).join(" ")
-        );
+        // Mitsuba reads a 9-value <matrix> as a linear 3×3 and drops its translation;
+        // a 4×4 with the affine 2D map in rows/columns 0, 1 and 3 survives intact.
+        let m = to_uv.to_cols_array_2d();
+        let m4 = Mat4::from_cols_array_2d(&[
+            [m[0][0], m[0][1], 0.0, 0.0],
+            [m[1][0], m[1][1], 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+            [m[2][0], m[2][1], 0.0, 1.0],
+        ]);
+        let _ = writeln!(s, "{indent}  {}", matrix_xml("to_uv", &m4));
     }
     let _ = writeln!(s, "{indent}</texture>");
     s

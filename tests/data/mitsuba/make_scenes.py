@@ -13,6 +13,8 @@ agree up to noise.
                   and a back wall
   hierarchy.gltf  nested rotated and scaled nodes, a mirrored (negative determinant)
                   emissive one-sided quad and box, a perspective and an orthographic camera
+  texxform.gltf   floor and emissive panel textured with black/white texels (exact in
+                  any sRGB decoder) for texture-transform checks
   glossy.gltf     rough metal and rough dielectric panels (not Lambertian: the export
                   approximates them with `principled`; measures the gap, no exact check)
 
@@ -319,6 +321,27 @@ def hierarchy_scene():
     b.write("hierarchy.gltf")
 
 
+def texxform_scene():
+    """Textures of exact-decode texels only (0 and 255), for KHR_texture_transform
+    checks: the peer test sets the transforms on the loaded scene."""
+    b = Builder()
+    W, K = (255, 255, 255), (0, 0, 0)
+    t = b.texture(png_rgb(4, 4, [[W, K, K, W], [K, K, W, W], [W, W, K, K], [K, W, K, W]]),
+                  nearest=True)
+    floor = b.lambert((1, 1, 1), base_tex=t)
+    b.node(mesh=b.quad((-1, 0, 1), (1, 0, 1), (1, 0, -1), (-1, 0, -1), floor))
+    panel = b.lambert((0.8, 0.8, 0.8), emission=(1, 1, 1), strength=2, base_tex=t,
+                      emissive_tex=t)
+    b.node(mesh=b.quad((-0.5, 0.6, -0.6), (0.5, 0.6, -0.6), (0.5, 1.4, -0.6), (-0.5, 1.4, -0.6),
+                       panel))
+    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
+        type="directional", color=[1, 1, 1], intensity=2.0)}}, rotation=[-0.38, 0, 0, 0.925])
+    eye = (0, 1.6, 2.2)
+    b.node(camera=b.camera(yfov=0.9), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.5, -0.2)))
+    b.write("texxform.gltf")
+
+
 def glossy_scene():
     b = Builder()
     grey = b.lambert((0.6, 0.6, 0.6))
@@ -342,4 +365,5 @@ if __name__ == "__main__":
     twosided_scene()
     punctual_scene()
     hierarchy_scene()
+    texxform_scene()
     glossy_scene()
