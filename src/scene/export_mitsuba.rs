@@ -289,6 +289,7 @@ impl Writer<'_> {
 
         // Geometry, grouped per material and role.
         let mut plans: HashMap<u32, UvPlan> = HashMap::new();
+        let mut shadings: HashMap<u32, Shading> = HashMap::new();
         let mut groups: BTreeMap<GroupKey, PlyMesh> = BTreeMap::new();
         let mut triangles = 0u64;
         for (i, inst) in scene.instances.iter().enumerate() {
@@ -302,7 +303,16 @@ impl Writer<'_> {
                     p
                 }
             };
-            let curved = has_curved_normals(scene, inst);
+            let kind = *shadings
+                .entry(inst.primitive)
+                .or_insert_with(|| shading(scene, prim));
+            if kind == Shading::Mixed {
+                self.approximations.push(format!(
+                    "mesh {}: only some vertices have normals; exported flat",
+                    prim.name
+                ));
+            }
+            let curved = kind == Shading::Curved;
             if emitter && curved {
                 let m = &scene.materials[prim.material as usize];
                 if m.base_color[..3].iter().any(|&c| c > 0.0) {
@@ -807,11 +817,21 @@ fn integrator_xml(o: &ExportOptions) -> String {
     )
 }
 
-/// A face is curved-shaded when one of its vertex normals deviates from its face normal.
-fn has_curved_normals(scene: &Scene, inst: &Instance) -> bool {
-    let p = &scene.primitives[inst.primitive as usize];
+/// How a primitive's vertex normals shade it.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Shading {
+    /// No vertex normals, or all equal to their faces' normals (up to sign): flat.
+    Flat,
+    /// Every vertex has a normal and some differ from their faces' normals.
+    Curved,
+    /// Some vertices have normals and some do not: exported flat (approximation).
+    Mixed,
+}
+
+fn shading(scene: &Scene, p: &crate::scene::MeshPrimitive) -> Shading {
     let verts =
         &scene.vertices[p.vertex_offset as usize..(p.vertex_offset + p.vertex_count) as usize];
+    let (mut curved, mut missing, mut present) = (false, false, false);
     for t in 0..p.triangle_count as usize {
         let idx =
             &scene.indices[p.index_offset as usize + 3 * t..p.index_offset as usize + 3 * t + 3];
@@ -820,14 +840,20 @@ fn has_curved_normals(scene: &Scene, inst: &Instance) -> bool {
         for &i in idx {
             let n = Vec3::from(verts[i as usize].normal);
             if n == Vec3::ZERO {
+                missing = true;
                 continue;
             }
-            if ng != Vec3::ZERO && n.dot(ng).abs() < 1.0 - 1e-5 {
-                return true;
-            }
+            present = true;
+            // lanterna turns a shading normal to the side of the geometric one, so an
+            // authored normal opposite to the face is flat shading too.
+            curved |= ng != Vec3::ZERO && n.dot(ng).abs() < 1.0 - 1e-5;
         }
     }
-    false
+    match (curved, missing && present) {
+        (true, true) => Shading::Mixed,
+        (true, false) => Shading::Curved,
+        _ => Shading::Flat,
+    }
 }
 
 /// Append an instance's triangles in world space. Negative-determinant transforms flip

@@ -15,6 +15,7 @@ agree up to noise.
                   emissive one-sided quad and box, a perspective and an orthographic camera
   texxform.gltf   floor and emissive panel textured with black/white texels (exact in
                   any sRGB decoder) for texture-transform checks
+  smooth.gltf     a coarse sphere with smooth vertex normals (approximate export)
   glossy.gltf     rough metal and rough dielectric panels (not Lambertian: the export
                   approximates them with `principled`; measures the gap, no exact check)
 
@@ -342,6 +343,36 @@ def texxform_scene():
     b.write("texxform.gltf")
 
 
+def smooth_scene():
+    """A coarse UV sphere with smooth vertex normals (the export notes an approximation:
+    the renderers treat shading normals that disagree with the geometry differently)."""
+    b = Builder()
+    grey = b.lambert((0.6, 0.6, 0.6))
+    floor_and_wall(b, grey)
+    pos, nrm, idx = [], [], []
+    rings, segs = 6, 12
+    for i in range(rings + 1):
+        th = math.pi * i / rings
+        for j in range(segs + 1):
+            ph = 2 * math.pi * j / segs
+            n = [math.sin(th) * math.cos(ph), math.cos(th), math.sin(th) * math.sin(ph)]
+            pos.append(n)
+            nrm.append(n)
+    for i in range(rings):
+        for j in range(segs):
+            a, c = i * (segs + 1) + j, (i + 1) * (segs + 1) + j
+            idx += [a, a + 1, c, a + 1, c + 1, c]
+    sphere = b.mesh(pos, idx, b.lambert((0.8, 0.5, 0.3)), nrm)
+    b.node(mesh=sphere, translation=[0, 0.7, -0.3], scale=[0.7, 0.7, 0.7])
+    light = b.lambert((0, 0, 0), emission=(1, 1, 1), strength=8)
+    b.node(mesh=b.quad((-0.5, 2.2, -0.5), (0.5, 2.2, -0.5), (0.5, 2.2, 0.5), (-0.5, 2.2, 0.5),
+                       light, uv=False))
+    eye = (0.3, 1.4, 3.2)
+    b.node(camera=b.camera(yfov=0.8), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.6, -0.3)))
+    b.write("smooth.gltf")
+
+
 def glossy_scene():
     b = Builder()
     grey = b.lambert((0.6, 0.6, 0.6))
@@ -366,4 +397,5 @@ if __name__ == "__main__":
     punctual_scene()
     hierarchy_scene()
     texxform_scene()
+    smooth_scene()
     glossy_scene()
