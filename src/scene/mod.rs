@@ -6,6 +6,7 @@
 //! derived from it by [`crate::lights`].
 
 mod camera;
+pub mod export_mitsuba;
 pub mod generate;
 mod load;
 mod material;

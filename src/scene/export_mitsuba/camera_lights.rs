@@ -1,0 +1,171 @@
+//! The sensor (camera frame, field of view axis, box-filtered film) and the punctual
+//! lights (point, spot with the glTF falloff, directional).
+
+use super::textures::spot_falloff_pfm;
+use super::writer::Writer;
+use super::xml::{matrix_xml, rgb_xml};
+use super::{ExportError, ExportOptions};
+use crate::gpu;
+use crate::scene::{Camera, Projection};
+use glam::{Mat4, Vec3};
+use std::fmt::Write as _;
+
+impl Writer<'_> {
+    pub(super) fn sensor_xml(&mut self, camera: &Camera, o: &ExportOptions) -> String {
+        // glTF cameras look down −Z with +X to the right of the image; Mitsuba's look
+        // down +Z with +X to the left: a half turn about the camera's Y axis maps one
+        // frame onto the other (no mirror, determinant +1).
+        let flip = Mat4::from_diagonal(glam::Vec4::new(-1.0, 1.0, -1.0, 1.0));
+        let rigid = camera.rigid_to_world();
+        let extent = self.scene.extent();
+        let eye = rigid.transform_point3(Vec3::ZERO);
+        let reach = (eye - self.scene.bounds_min)
+            .abs()
+            .max((eye - self.scene.bounds_max).abs())
+            .length();
+        let far = (10.0 * (reach + extent)).max(1e4);
+        let near = 1e-5 * extent;
+        let mut s = String::new();
+        let aspect = o.width as f32 / o.height as f32;
+        match camera.projection {
+            Projection::Perspective {
+                yfov,
+                aspect: file_aspect,
+            } => {
+                if let Some(a) = file_aspect {
+                    if (a - aspect).abs() > 1e-3 * a {
+                        self.warnings.push(format!(
+                            "camera `{}` has aspect ratio {a} but the image is {}×{}: both renderers use the image's",
+                            camera.name, o.width, o.height
+                        ));
+                    }
+                }
+                s.push_str("  <sensor type=\"perspective\">\n");
+                s.push_str("    <string name=\"fov_axis\" value=\"y\"/>\n");
+                let _ = writeln!(
+                    s,
+                    "    <float name=\"fov\" value=\"{}\"/>",
+                    yfov.to_degrees()
+                );
+                let _ = writeln!(s, "    {}", matrix_xml("to_world", &(rigid * flip)));
+            }
+            Projection::Orthographic { xmag, ymag } => {
+                // Mitsuba's orthographic view spans x ∈ [−1, 1], y ∈ [−1/aspect, 1/aspect]
+                // before to_world; lanterna's spans [−xmag, xmag] × [−ymag, ymag].
+                let scale = Mat4::from_scale(Vec3::new(xmag, ymag * aspect, 1.0));
+                s.push_str("  <sensor type=\"orthographic\">\n");
+                let _ = writeln!(s, "    {}", matrix_xml("to_world", &(rigid * flip * scale)));
+            }
+        }
+        let _ = writeln!(s, "    <float name=\"near_clip\" value=\"{near}\"/>");
+        let _ = writeln!(s, "    <float name=\"far_clip\" value=\"{far}\"/>");
+        s.push_str("    <sampler type=\"independent\">\n");
+        s.push_str("      <integer name=\"sample_count\" value=\"$spp\"/>\n");
+        s.push_str("      <integer name=\"seed\" value=\"$seed\"/>\n");
+        s.push_str("    </sampler>\n");
+        s.push_str("    <film type=\"hdrfilm\">\n");
+        let _ = writeln!(s, "      <integer name=\"width\" value=\"{}\"/>", o.width);
+        let _ = writeln!(s, "      <integer name=\"height\" value=\"{}\"/>", o.height);
+        s.push_str("      <string name=\"pixel_format\" value=\"rgb\"/>\n");
+        s.push_str("      <string name=\"component_format\" value=\"float32\"/>\n");
+        // lanterna averages uniform samples over each pixel's square: a box of radius ½.
+        s.push_str("      <rfilter type=\"box\"/>\n");
+        s.push_str("    </film>\n");
+        s.push_str("  </sensor>\n");
+        s
+    }
+
+    pub(super) fn punctual_xml(
+        &mut self,
+        i: usize,
+        l: &gpu::PunctualLight,
+    ) -> Result<String, ExportError> {
+        let mut s = String::new();
+        if l.range > 0.0 {
+            self.warnings.push(format!(
+                "punctual light {i}: range {} ignored (by lanterna and Mitsuba alike)",
+                l.range
+            ));
+        }
+        let p = Vec3::from(l.position);
+        let d = Vec3::from(l.direction).normalize_or(Vec3::NEG_Z);
+        match l.kind {
+            gpu::PUNCTUAL_POINT => {
+                let _ = writeln!(s, "  <emitter type=\"point\">");
+                let _ = writeln!(
+                    s,
+                    "    <point name=\"position\" x=\"{}\" y=\"{}\" z=\"{}\"/>",
+                    p.x, p.y, p.z
+                );
+                let _ = writeln!(s, "    {}", rgb_xml("intensity", l.intensity));
+            }
+            gpu::PUNCTUAL_DIRECTIONAL => {
+                let _ = writeln!(s, "  <emitter type=\"directional\">");
+                let _ = writeln!(
+                    s,
+                    "    <vector name=\"direction\" x=\"{}\" y=\"{}\" z=\"{}\"/>",
+                    d.x, d.y, d.z
+                );
+                let _ = writeln!(s, "    {}", rgb_xml("irradiance", l.intensity));
+            }
+            gpu::PUNCTUAL_SPOT => {
+                // Mitsuba's spot looks down its +Z and ramps linearly in angle between
+                // beam_width and cutoff_angle; glTF's (and lanterna's) falloff is the
+                // square of a linear ramp in cosθ. It is baked into the spot's projected
+                // texture (uv = ½ + ½·(x, y)/(z·tan cutoff)) with a flat Mitsuba ramp.
+                let outer = l.cos_outer.clamp(-1.0, 1.0).acos();
+                let up = if d.y.abs() < 0.9 { Vec3::Y } else { Vec3::X };
+                let to_world = Mat4::look_at_rh(p, p + d, up).inverse()
+                    * Mat4::from_diagonal(glam::Vec4::new(-1.0, 1.0, -1.0, 1.0));
+                let _ = writeln!(s, "  <emitter type=\"spot\">");
+                let _ = writeln!(s, "    {}", matrix_xml("to_world", &to_world));
+                let _ = writeln!(s, "    {}", rgb_xml("intensity", l.intensity));
+                let _ = writeln!(
+                    s,
+                    "    <float name=\"cutoff_angle\" value=\"{}\"/>",
+                    outer.to_degrees()
+                );
+                let hard = l.cos_inner - l.cos_outer < 1e-3;
+                if hard || outer > 85f32.to_radians() {
+                    if !hard {
+                        self.approximations.push(format!(
+                            "spot light {i}: cone wider than 85°: Mitsuba's linear-in-angle falloff from the inner angle is used instead of glTF's"
+                        ));
+                        let inner = l.cos_inner.clamp(-1.0, 1.0).acos();
+                        let _ = writeln!(
+                            s,
+                            "    <float name=\"beam_width\" value=\"{}\"/>",
+                            inner.to_degrees()
+                        );
+                    } else {
+                        let _ = writeln!(
+                            s,
+                            "    <float name=\"beam_width\" value=\"{}\"/>",
+                            outer.to_degrees()
+                        );
+                    }
+                } else {
+                    let _ = writeln!(
+                        s,
+                        "    <float name=\"beam_width\" value=\"{}\"/>",
+                        outer.to_degrees()
+                    );
+                    let file = format!("textures/spot{i}.pfm");
+                    self.write(&file, &spot_falloff_pfm(l, outer, 256))?;
+                    let _ = writeln!(s, "    <texture type=\"bitmap\" name=\"texture\">");
+                    let _ = writeln!(s, "      <string name=\"filename\" value=\"{file}\"/>");
+                    s.push_str("      <boolean name=\"raw\" value=\"true\"/>\n");
+                    s.push_str("      <string name=\"wrap_mode\" value=\"clamp\"/>\n");
+                    s.push_str("    </texture>\n");
+                }
+            }
+            k => {
+                return Err(ExportError::Invalid(format!(
+                    "punctual light {i} has unknown kind {k}"
+                )))
+            }
+        }
+        s.push_str("  </emitter>\n");
+        Ok(s)
+    }
+}

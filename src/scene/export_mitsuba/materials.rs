@@ -1,0 +1,249 @@
+//! Materials and textures: glTF materials as Mitsuba BSDFs (exact `diffuse` for
+//! Lambertian ones, `principled` otherwise), base colour and emission as constants or
+//! bitmaps (8-bit sRGB PNG as lanterna decodes it, or linear PFM with the factor baked in).
+
+use super::files::{self, PlyMesh};
+use super::geometry::UvPlan;
+use super::textures::{average_colour, linear_texels};
+use super::writer::Writer;
+use super::xml::{bitmap_xml, is_identity, rgb_xml, uv_matrix, xml_escape};
+use super::ExportError;
+use crate::gpu;
+use crate::scene::TextureData;
+use crate::vk::TextureFormat;
+use glam::{Mat3, Vec2};
+use std::fmt::Write as _;
+
+impl Writer<'_> {
+    /// Which UV set the PLY of a material carries, and which transform is baked in.
+    pub(super) fn uv_plan(&mut self, m: u32) -> UvPlan {
+        let mat = &self.scene.materials[m as usize];
+        let emissive = mat.emissive_tex.index >= 0 && mat.emission.iter().any(|&c| c > 0.0);
+        let base = mat.base_color_tex.index >= 0;
+        if emissive {
+            let bake = (!is_identity(&mat.emissive_tex)).then_some(mat.emissive_tex);
+            UvPlan {
+                set: Some(mat.emissive_tex.uv_set),
+                bake,
+            }
+        } else if base {
+            UvPlan {
+                set: Some(mat.base_color_tex.uv_set),
+                bake: None,
+            }
+        } else {
+            UvPlan {
+                set: None,
+                bake: None,
+            }
+        }
+    }
+
+    pub(super) fn bsdf_xml(&mut self, m: u32, plan: UvPlan) -> Result<String, ExportError> {
+        let mat =
+            *self.scene.materials.get(m as usize).ok_or_else(|| {
+                ExportError::Invalid(format!("material index {m} is out of range"))
+            })?;
+        let name = self.material_name(m).to_string();
+        let colour = self.base_colour_xml(m, &mat, plan, "reflectance")?;
+        if mat.alpha_mode != gpu::ALPHA_MODE_OPAQUE {
+            self.approximations.push(format!(
+                "material `{name}`: alpha mode {} is not exported (Mitsuba sees it opaque)",
+                if mat.alpha_mode == gpu::ALPHA_MODE_MASK {
+                    "MASK"
+                } else {
+                    "BLEND"
+                }
+            ));
+        }
+        if mat.normal_tex.index >= 0 {
+            self.approximations.push(format!(
+                "material `{name}`: its normal texture is not exported"
+            ));
+        }
+        let mut s = String::new();
+        let _ = writeln!(s, "  <!-- material `{}` -->", xml_escape(&name));
+        let _ = writeln!(s, "  <bsdf type=\"twosided\" id=\"bsdf{m}\">");
+        // glTF with specularFactor 0 and metallic 0 is exactly Lambertian (albedo/π).
+        if mat.specular == 0.0 && mat.metallic == 0.0 {
+            s.push_str("    <bsdf type=\"diffuse\">\n");
+            s.push_str(&colour);
+            s.push_str("    </bsdf>\n");
+        } else {
+            self.approximations.push(format!(
+                "material `{name}`: glTF metallic-roughness (metallic {}, roughness {}, specular {}) approximated by Mitsuba's `principled`",
+                mat.metallic, mat.roughness, mat.specular
+            ));
+            if mat.metallic_roughness_tex.index >= 0 {
+                self.approximations.push(format!(
+                    "material `{name}`: metallic-roughness texture not exported (factors used)"
+                ));
+            }
+            let colour = colour.replace("\"reflectance\"", "\"base_color\"");
+            let f0 = ((mat.ior - 1.0) / (mat.ior + 1.0)).powi(2)
+                * mat.specular
+                * mat.specular_color.iter().cloned().fold(0.0, f32::max);
+            s.push_str("    <bsdf type=\"principled\">\n");
+            s.push_str(&colour.replace("\n      ", "\n        "));
+            let _ = writeln!(
+                s,
+                "      <float name=\"metallic\" value=\"{}\"/>",
+                mat.metallic
+            );
+            let _ = writeln!(
+                s,
+                "      <float name=\"roughness\" value=\"{}\"/>",
+                mat.roughness
+            );
+            // Mitsuba: F0 = 0.08 · specular for dielectrics.
+            let _ = writeln!(
+                s,
+                "      <float name=\"specular\" value=\"{}\"/>",
+                (f0 / 0.08).clamp(1e-4, 1.0)
+            );
+            s.push_str("    </bsdf>\n");
+        }
+        s.push_str("  </bsdf>\n");
+        Ok(s)
+    }
+
+    /// `<rgb name=…>` or `<texture type="bitmap" name=…>` for the base colour.
+    pub(super) fn base_colour_xml(
+        &mut self,
+        m: u32,
+        mat: &gpu::Material,
+        plan: UvPlan,
+        param: &str,
+    ) -> Result<String, ExportError> {
+        let factor = [
+            mat.base_color[0].clamp(0.0, 1.0),
+            mat.base_color[1].clamp(0.0, 1.0),
+            mat.base_color[2].clamp(0.0, 1.0),
+        ];
+        if mat.base_color[..3].iter().any(|&c| c > 1.0) {
+            self.warnings.push(format!(
+                "material `{}`: base colour above 1 clamped (as lanterna does)",
+                self.material_name(m)
+            ));
+        }
+        let tref = mat.base_color_tex;
+        if tref.index < 0 {
+            return Ok(format!("      {}\n", rgb_xml(param, factor)));
+        }
+        let tex = &self.scene.textures[tref.index as usize];
+        if plan.set != Some(tref.uv_set) {
+            let avg = average_colour(tex);
+            self.approximations.push(format!(
+                "material `{}`: base colour texture uses UV set {} but the emissive texture set {:?}: exported as its average colour",
+                self.material_name(m),
+                tref.uv_set,
+                plan.set
+            ));
+            return Ok(format!(
+                "      {}\n",
+                rgb_xml(param, std::array::from_fn(|c| avg[c] * factor[c]))
+            ));
+        }
+        // The written UVs carry the baked transform B; the texture wants T(uv) =
+        // (T ∘ B⁻¹)(written).
+        let to_uv = match plan.bake {
+            Some(b) => uv_matrix(&tref) * uv_matrix(&b).inverse(),
+            None => uv_matrix(&tref),
+        };
+        let (file, raw) = self.texture_file(tref.index, tex, factor)?;
+        Ok(bitmap_xml(param, &file, raw, tex, &to_uv, "      "))
+    }
+
+    pub(super) fn radiance_xml(
+        &mut self,
+        m: u32,
+        plan: UvPlan,
+        mesh: &PlyMesh,
+    ) -> Result<String, ExportError> {
+        let mat = self.scene.materials[m as usize];
+        let tref = mat.emissive_tex;
+        if tref.index < 0 {
+            return Ok(format!("      {}\n", rgb_xml("radiance", mat.emission)));
+        }
+        let tex = &self.scene.textures[tref.index as usize];
+        debug_assert_eq!(plan.set, Some(tref.uv_set));
+        // Mitsuba samples textured emitters through the inverse of the UV map: it must
+        // be one-to-one onto a part of the unit square.
+        let mut uv_area = 0.0f64;
+        let mut outside = false;
+        for f in &mesh.faces {
+            let [a, b, c] = f.map(|i| Vec2::from(mesh.uvs[i as usize]));
+            uv_area += 0.5 * ((b - a).perp_dot(c - a) as f64).abs();
+            outside |= [a, b, c]
+                .iter()
+                .any(|p| p.min_element() < -1e-4 || p.max_element() > 1.0 + 1e-4);
+        }
+        if outside || uv_area > 1.0 + 1e-3 {
+            self.approximations.push(format!(
+                "material `{}`: emissive texture coordinates leave the unit square or overlap (UV area {uv_area:.3}); Mitsuba's emitter sampling assumes a one-to-one UV map",
+                self.material_name(m)
+            ));
+        }
+        let (file, raw) = self.texture_file(tref.index, tex, mat.emission)?;
+        Ok(bitmap_xml(
+            "radiance",
+            &file,
+            raw,
+            tex,
+            &Mat3::IDENTITY,
+            "      ",
+        ))
+    }
+
+    /// Write texture `slot` scaled by `factor`: the 8-bit sRGB texels as PNG when the
+    /// factor is one (Mitsuba decodes sRGB as lanterna's sampler does), else linear
+    /// float texels × factor as PFM. Returns the file and whether it is raw (linear).
+    pub(super) fn texture_file(
+        &mut self,
+        slot: i32,
+        tex: &TextureData,
+        factor: [f32; 3],
+    ) -> Result<(String, bool), ExportError> {
+        let key = (slot, factor.map(f32::to_bits));
+        if let Some(f) = self.textures.get(&key) {
+            return Ok(f.clone());
+        }
+        let (w, h) = (tex.width, tex.height);
+        let result = if factor == [1.0; 3] && tex.format == TextureFormat::Srgb {
+            let rgb: Vec<u8> = tex
+                .rgba
+                .chunks_exact(4)
+                .flat_map(|p| [p[0], p[1], p[2]])
+                .collect();
+            let mut bytes = Vec::new();
+            image::ImageEncoder::write_image(
+                image::codecs::png::PngEncoder::new(&mut bytes),
+                &rgb,
+                w,
+                h,
+                image::ExtendedColorType::Rgb8,
+            )
+            .map_err(|e| ExportError::Invalid(format!("texture `{}`: {e}", tex.name)))?;
+            let file = format!("textures/t{slot}.png");
+            self.write(&file, &bytes)?;
+            (file, false)
+        } else {
+            let texels = linear_texels(tex);
+            let rgb: Vec<[f32; 3]> = texels
+                .iter()
+                .map(|t| std::array::from_fn(|c| t[c] * factor[c]))
+                .collect();
+            let file = format!("textures/t{slot}-{}.pfm", self.textures.len());
+            self.write(&file, &files::pfm_bytes(w, h, &rgb))?;
+            (file, true)
+        };
+        if tex.sampler.wrap_u != tex.sampler.wrap_v {
+            self.approximations.push(format!(
+                "texture `{}`: different wrap modes along u and v; Mitsuba uses one ({:?})",
+                tex.name, tex.sampler.wrap_u
+            ));
+        }
+        self.textures.insert(key, result.clone());
+        Ok(result)
+    }
+}

@@ -1,0 +1,192 @@
+//! The export's state and the scene body: instances grouped per material and role into
+//! PLY shapes, each with its BSDF and, for lights, its `area` emitter (two sheets when
+//! double-sided), then the punctual lights.
+
+use super::files::PlyMesh;
+use super::geometry::{append_instance, back_sheet, shading, GroupKey, Shading, UvPlan};
+use super::xml::{integrator_xml, xml_escape};
+use super::{io_err, ExportError, ExportOptions};
+use crate::gpu;
+use crate::lights::LightTable;
+use crate::scene::{Camera, Scene};
+use std::collections::{BTreeMap, HashMap};
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+pub(super) struct Body {
+    pub(super) xml: String,
+    pub(super) shapes: usize,
+    pub(super) emitters: usize,
+    pub(super) triangles: u64,
+}
+
+pub(super) struct Writer<'a> {
+    pub(super) scene: &'a Scene,
+    pub(super) dir: PathBuf,
+    /// (texture slot, factor bits) → file name relative to the export directory.
+    pub(super) textures: HashMap<(i32, [u32; 3]), (String, bool)>,
+    pub(super) approximations: Vec<String>,
+    pub(super) warnings: Vec<String>,
+    /// Gap between the two sheets of a double-sided emitter.
+    pub(super) epsilon: f32,
+}
+
+impl Writer<'_> {
+    pub(super) fn write(&self, rel: &str, bytes: &[u8]) -> Result<(), ExportError> {
+        let path = self.dir.join(rel);
+        std::fs::write(&path, bytes).map_err(io_err(&path))
+    }
+
+    pub(super) fn material_name(&self, m: u32) -> &str {
+        self.scene
+            .material_names
+            .get(m as usize)
+            .map(String::as_str)
+            .unwrap_or("?")
+    }
+
+    pub(super) fn scene_body(
+        &mut self,
+        lights: &LightTable,
+        camera: &Camera,
+        options: &ExportOptions,
+    ) -> Result<Body, ExportError> {
+        let scene = self.scene;
+        let mut xml = String::new();
+        xml.push_str(&integrator_xml(options));
+        xml.push_str(&self.sensor_xml(camera, options));
+
+        // Geometry, grouped per material and role.
+        let mut plans: HashMap<u32, UvPlan> = HashMap::new();
+        let mut shadings: HashMap<u32, Shading> = HashMap::new();
+        let mut groups: BTreeMap<GroupKey, PlyMesh> = BTreeMap::new();
+        let mut triangles = 0u64;
+        for (i, inst) in scene.instances.iter().enumerate() {
+            let prim = &scene.primitives[inst.primitive as usize];
+            let emitter = lights.instance_lights[i].1 != gpu::INVALID_INDEX;
+            let plan = match plans.get(&prim.material) {
+                Some(p) => *p,
+                None => {
+                    let p = self.uv_plan(prim.material);
+                    plans.insert(prim.material, p);
+                    p
+                }
+            };
+            let kind = *shadings
+                .entry(inst.primitive)
+                .or_insert_with(|| shading(scene, prim));
+            if kind == Shading::Mixed {
+                self.approximations.push(format!(
+                    "mesh {}: only some vertices have normals; exported flat",
+                    prim.name
+                ));
+            }
+            let curved = kind == Shading::Curved;
+            if emitter && curved {
+                let m = &scene.materials[prim.material as usize];
+                if m.base_color[..3].iter().any(|&c| c > 0.0) {
+                    self.approximations.push(format!(
+                        "material `{}`: emissive mesh `{}` has vertex normals; Mitsuba shades it with face normals (its area emitter must use the geometric normal, like lanterna's)",
+                        self.material_name(prim.material),
+                        prim.name
+                    ));
+                }
+            }
+            let key = GroupKey {
+                material: prim.material,
+                emitter,
+                smooth: curved && !emitter,
+            };
+            let mesh = groups.entry(key).or_default();
+            append_instance(mesh, scene, inst, key.smooth, plan);
+            triangles += prim.triangle_count as u64;
+        }
+        if groups.keys().any(|k| k.smooth) {
+            // Same interpolation, but lanterna also flips shading normals to the
+            // geometric side and zeroes light below the geometric surface; Mitsuba
+            // does neither.
+            self.approximations.push(
+                "curved vertex normals: lanterna and Mitsuba treat shading normals that disagree with the geometric normal differently (grazing angles only)".into(),
+            );
+        }
+
+        // BSDFs, one per material used.
+        let mut used: Vec<u32> = groups.keys().map(|k| k.material).collect();
+        used.dedup();
+        for &m in &used {
+            let plan = plans[&m];
+            xml.push_str(&self.bsdf_xml(m, plan)?);
+        }
+
+        let mut shapes = 0;
+        let mut emitters = 0;
+        for (key, mesh) in &groups {
+            let plan = plans[&key.material];
+            let material = &scene.materials[key.material as usize];
+            let radiance = if key.emitter {
+                Some(self.radiance_xml(key.material, plan, mesh)?)
+            } else {
+                None
+            };
+            let double_sided = material.flags & gpu::MATERIAL_FLAG_DOUBLE_SIDED != 0;
+            let mut sheets = vec![(mesh, "")];
+            let back;
+            if key.emitter && double_sided {
+                back = back_sheet(mesh, self.epsilon);
+                sheets.push((&back, "-back"));
+            }
+            for (sheet, suffix) in sheets {
+                let file = format!(
+                    "meshes/m{}{}{}{}.ply",
+                    key.material,
+                    if key.emitter { "-emitter" } else { "" },
+                    if key.smooth { "-smooth" } else { "" },
+                    suffix
+                );
+                self.write(&file, &sheet.to_bytes())?;
+                let _ = writeln!(
+                    xml,
+                    "  <!-- material `{}`{} -->",
+                    xml_escape(self.material_name(key.material)),
+                    if suffix.is_empty() {
+                        ""
+                    } else {
+                        ", back sheet of a double-sided emitter"
+                    }
+                );
+                let _ = writeln!(xml, "  <shape type=\"ply\">");
+                let _ = writeln!(xml, "    <string name=\"filename\" value=\"{file}\"/>");
+                if !key.smooth {
+                    xml.push_str("    <boolean name=\"face_normals\" value=\"true\"/>\n");
+                }
+                let _ = writeln!(xml, "    <ref id=\"bsdf{}\"/>", key.material);
+                if let Some(r) = &radiance {
+                    let _ = writeln!(xml, "    <emitter type=\"area\">\n{r}    </emitter>");
+                    emitters += 1;
+                }
+                xml.push_str("  </shape>\n");
+                shapes += 1;
+            }
+        }
+
+        for (i, l) in scene.punctual.iter().enumerate() {
+            if l.intensity.iter().all(|&c| c <= 0.0) {
+                continue;
+            }
+            xml.push_str(&self.punctual_xml(i, l)?);
+            emitters += 1;
+        }
+        if emitters == 0 {
+            return Err(ExportError::Invalid(format!(
+                "{}: the scene has no lights",
+                scene.path.display()
+            )));
+        }
+        Ok(Body {
+            xml,
+            shapes,
+            emitters,
+            triangles,
+        })
+    }
+}

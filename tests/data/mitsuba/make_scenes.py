@@ -1,0 +1,401 @@
+#!/usr/bin/env python3
+"""Writes the tiny single-file glTF scenes of the Mitsuba peer check (tests/data/mitsuba):
+each covers conventions the exporter must map exactly, with Lambertian materials
+(metallic 0, KHR_materials_specular specularFactor 0) so lanterna and Mitsuba 3 must
+agree up to noise.
+
+  tex.gltf        textured diffuse floor (sRGB PNG, 4 coloured quadrants, nearest and
+                  bilinear), an emissive-textured panel (emissive strength 3, so its
+                  texture goes out as linear PFM), a 4:3 camera (vertical fov)
+  twosided.gltf   a double-sided emitter standing in a room seen edge-on, and a
+                  one-sided emitter facing away from the camera
+  punctual.gltf   point, spot (penumbra), hard spot and directional lights on a floor
+                  and a back wall
+  hierarchy.gltf  nested rotated and scaled nodes, a mirrored (negative determinant)
+                  emissive one-sided quad and box, a perspective and an orthographic camera
+  texxform.gltf   floor and emissive panel textured with black/white texels (exact in
+                  any sRGB decoder) for texture-transform checks
+  smooth.gltf     a coarse sphere with smooth vertex normals (approximate export)
+  glossy.gltf     rough metal and rough dielectric panels (not Lambertian: the export
+                  approximates them with `principled`; measures the gap, no exact check)
+
+Run from anywhere: python3 make_scenes.py (writes next to itself).
+"""
+
+import base64
+import json
+import math
+import os
+import struct
+import zlib
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def png_rgb(w, h, pixels):
+    """A minimal RGB8 PNG (pixels: rows of (r, g, b) tuples, top row first)."""
+    raw = b"".join(b"\x00" + bytes(c for px in row for c in px) for row in pixels)
+
+    def chunk(tag, data):
+        c = struct.pack(">I", len(data)) + tag + data
+        return c + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
+
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+class Builder:
+    def __init__(self):
+        self.bin = bytearray()
+        self.views, self.accessors, self.meshes = [], [], []
+        self.materials, self.nodes, self.cameras = [], [], []
+        self.images, self.textures, self.samplers = [], [], []
+        self.lights = []
+        self.roots = []
+
+    def _view(self, data):
+        while len(self.bin) % 4:
+            self.bin += b"\x00"
+        off = len(self.bin)
+        self.bin += data
+        self.views.append({"buffer": 0, "byteOffset": off, "byteLength": len(data)})
+        return len(self.views) - 1
+
+    def _acc(self, data, comp, count, typ, **kw):
+        self.accessors.append(dict(bufferView=self._view(data), componentType=comp,
+                                   count=count, type=typ, **kw))
+        return len(self.accessors) - 1
+
+    def mesh(self, positions, indices, material, normals=None, uvs=None):
+        attrs = {}
+        mn = [min(p[i] for p in positions) for i in range(3)]
+        mx = [max(p[i] for p in positions) for i in range(3)]
+        attrs["POSITION"] = self._acc(b"".join(struct.pack("<3f", *p) for p in positions),
+                                      5126, len(positions), "VEC3", min=mn, max=mx)
+        if normals:
+            attrs["NORMAL"] = self._acc(b"".join(struct.pack("<3f", *n) for n in normals),
+                                        5126, len(normals), "VEC3")
+        if uvs:
+            attrs["TEXCOORD_0"] = self._acc(b"".join(struct.pack("<2f", *t) for t in uvs),
+                                            5126, len(uvs), "VEC2")
+        ind = self._acc(b"".join(struct.pack("<I", i) for i in indices), 5125, len(indices),
+                        "SCALAR")
+        self.meshes.append({"primitives": [{"attributes": attrs, "indices": ind,
+                                            "material": material}]})
+        return len(self.meshes) - 1
+
+    def quad(self, p0, p1, p2, p3, material, uv=True, normal=True):
+        """Quad p0 p1 p2 p3 (counter-clockwise seen from its front), uv (0,0) at p0."""
+        n = None
+        if normal:
+            a = [p1[i] - p0[i] for i in range(3)]
+            b = [p2[i] - p0[i] for i in range(3)]
+            c = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+            l = math.sqrt(sum(v * v for v in c))
+            n = [[v / l for v in c]] * 4
+        uvs = [(0, 0), (1, 0), (1, 1), (0, 1)] if uv else None
+        return self.mesh([p0, p1, p2, p3], [0, 1, 2, 0, 2, 3], material, n, uvs)
+
+    def box(self, material):
+        """Unit cube [-0.5, 0.5]^3, outward faces, flat normals."""
+        prims_p, prims_n, idx = [], [], []
+        for axis in range(3):
+            for s in (-1, 1):
+                u, v = (axis + 1) % 3, (axis + 2) % 3
+                corners = []
+                for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+                    p = [0, 0, 0]
+                    p[axis] = 0.5 * s
+                    p[u] = 0.5 * a
+                    p[v] = 0.5 * b
+                    corners.append(p)
+                if s < 0:
+                    corners = corners[::-1]
+                n = [0, 0, 0]
+                n[axis] = s
+                base = len(prims_p)
+                prims_p += corners
+                prims_n += [n] * 4
+                idx += [base, base + 1, base + 2, base, base + 2, base + 3]
+        return self.mesh(prims_p, idx, material, prims_n)
+
+    def lambert(self, rgb, emission=None, strength=None, double_sided=False, base_tex=None,
+                emissive_tex=None):
+        m = {"pbrMetallicRoughness": {"baseColorFactor": list(rgb) + [1], "metallicFactor": 0,
+                                      "roughnessFactor": 1},
+             "extensions": {"KHR_materials_specular": {"specularFactor": 0}}}
+        if base_tex is not None:
+            m["pbrMetallicRoughness"]["baseColorTexture"] = {"index": base_tex}
+        if emission:
+            m["emissiveFactor"] = list(emission)
+        if strength is not None:
+            m["extensions"]["KHR_materials_emissive_strength"] = {"emissiveStrength": strength}
+        if emissive_tex is not None:
+            m["emissiveTexture"] = {"index": emissive_tex}
+        if double_sided:
+            m["doubleSided"] = True
+        self.materials.append(m)
+        return len(self.materials) - 1
+
+    def pbr(self, rgb, metallic, roughness):
+        self.materials.append({"pbrMetallicRoughness": {"baseColorFactor": list(rgb) + [1],
+                                                        "metallicFactor": metallic,
+                                                        "roughnessFactor": roughness}})
+        return len(self.materials) - 1
+
+    def texture(self, png, nearest=False):
+        self.images.append({"uri": "data:image/png;base64," + base64.b64encode(png).decode()})
+        s = {"wrapS": 10497, "wrapT": 10497}
+        if nearest:
+            s.update(magFilter=9728, minFilter=9728)
+        self.samplers.append(s)
+        self.textures.append({"source": len(self.images) - 1, "sampler": len(self.samplers) - 1})
+        return len(self.textures) - 1
+
+    def node(self, root=True, **kw):
+        self.nodes.append(kw)
+        if root:
+            self.roots.append(len(self.nodes) - 1)
+        return len(self.nodes) - 1
+
+    def camera(self, yfov=None, aspect=None, ortho=None):
+        if ortho:
+            self.cameras.append({"type": "orthographic", "orthographic": {
+                "xmag": ortho[0], "ymag": ortho[1], "znear": 0.01, "zfar": 100}})
+        else:
+            p = {"yfov": yfov, "znear": 0.05}
+            if aspect:
+                p["aspectRatio"] = aspect
+            self.cameras.append({"type": "perspective", "perspective": p})
+        return len(self.cameras) - 1
+
+    def light(self, **kw):
+        self.lights.append(kw)
+        return len(self.lights) - 1
+
+    def write(self, name):
+        used = ["KHR_materials_specular", "KHR_materials_emissive_strength"]
+        g = {"asset": {"version": "2.0", "generator": "lanterna tests/data/mitsuba/make_scenes.py"},
+             "extensionsUsed": used + (["KHR_lights_punctual"] if self.lights else []),
+             "buffers": [{"byteLength": len(self.bin), "uri": "data:application/octet-stream;base64,"
+                          + base64.b64encode(bytes(self.bin)).decode()}],
+             "bufferViews": self.views, "accessors": self.accessors, "meshes": self.meshes,
+             "materials": self.materials, "nodes": self.nodes,
+             "scenes": [{"nodes": self.roots}], "scene": 0, "cameras": self.cameras}
+        if self.images:
+            g.update(images=self.images, textures=self.textures, samplers=self.samplers)
+        if self.lights:
+            g["extensions"] = {"KHR_lights_punctual": {"lights": self.lights}}
+        with open(os.path.join(HERE, name), "w") as f:
+            json.dump(g, f, separators=(",", ":"))
+
+
+def look_at_rotation(eye, target):
+    """Quaternion (x, y, z, w) turning glTF's −Z view axis toward target (up +Y)."""
+    f = [target[i] - eye[i] for i in range(3)]
+    l = math.sqrt(sum(v * v for v in f))
+    f = [v / l for v in f]
+    z = [-v for v in f]
+    up = [0, 1, 0]
+    x = [up[1] * z[2] - up[2] * z[1], up[2] * z[0] - up[0] * z[2], up[0] * z[1] - up[1] * z[0]]
+    lx = math.sqrt(sum(v * v for v in x))
+    x = [v / lx for v in x]
+    y = [z[1] * x[2] - z[2] * x[1], z[2] * x[0] - z[0] * x[2], z[0] * x[1] - z[1] * x[0]]
+    m = [[x[0], y[0], z[0]], [x[1], y[1], z[1]], [x[2], y[2], z[2]]]
+    tr = m[0][0] + m[1][1] + m[2][2]
+    if tr > 0:
+        s = 0.5 / math.sqrt(tr + 1)
+        return [(m[2][1] - m[1][2]) * s, (m[0][2] - m[2][0]) * s, (m[1][0] - m[0][1]) * s, 0.25 / s]
+    i = max(range(3), key=lambda k: m[k][k])
+    j, k = (i + 1) % 3, (i + 2) % 3
+    s = 2 * math.sqrt(1 + m[i][i] - m[j][j] - m[k][k])
+    q = [0, 0, 0, 0]
+    q[i] = 0.25 * s
+    q[j] = (m[j][i] + m[i][j]) / s
+    q[k] = (m[k][i] + m[i][k]) / s
+    q[3] = (m[k][j] - m[j][k]) / s
+    return q
+
+
+def floor_and_wall(b, mat, size=2.0):
+    b.node(mesh=b.quad((-size, 0, size), (size, 0, size), (size, 0, -size), (-size, 0, -size), mat))
+    b.node(mesh=b.quad((-size, 0, -size), (size, 0, -size), (size, 2 * size, -size),
+                       (-size, 2 * size, -size), mat))
+
+
+def tex_scene():
+    b = Builder()
+    quads = [[(230, 40, 40)] * 2 + [(40, 200, 40)] * 2] * 2 + [[(40, 40, 230)] * 2 + [(240, 240, 60)] * 2] * 2
+    t_near = b.texture(png_rgb(4, 4, quads), nearest=True)
+    ramp = [[(int(255 * x / 7), 128, int(255 * (7 - y) / 7)) for x in range(8)] for y in range(8)]
+    t_lin = b.texture(png_rgb(8, 8, ramp))
+    floor = b.lambert((1, 1, 1), base_tex=t_near)
+    wall = b.lambert((1, 1, 1), base_tex=t_lin)
+    b.node(mesh=b.quad((-1, 0, 1), (1, 0, 1), (1, 0, -1), (-1, 0, -1), floor))
+    b.node(mesh=b.quad((-1, 0, -1), (1, 0, -1), (1, 2, -1), (-1, 2, -1), wall))
+    glow = b.texture(png_rgb(2, 2, [[(255, 255, 255), (255, 60, 0)], [(0, 90, 255), (40, 40, 40)]]),
+                     nearest=True)
+    panel = b.lambert((0.5, 0.5, 0.5), emission=(1, 1, 1), strength=3, emissive_tex=glow)
+    # Panel above the floor, facing down and toward the camera.
+    b.node(mesh=b.quad((-0.6, 1.3, 0.2), (0.6, 1.3, 0.2), (0.6, 1.6, 0.9), (-0.6, 1.6, 0.9),
+                       panel))
+    eye = (0.3, 1.2, 2.6)
+    b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.6, 0)))
+    b.write("tex.gltf")
+
+
+def twosided_scene():
+    b = Builder()
+    grey = b.lambert((0.7, 0.7, 0.7))
+    red = b.lambert((0.7, 0.2, 0.2))
+    floor_and_wall(b, grey)
+    # Double-sided emitter: a vertical panel in the x = 0 plane, seen edge-on-ish.
+    ds = b.lambert((0.3, 0.3, 0.3), emission=(1, 0.9, 0.7), strength=4, double_sided=True)
+    b.node(mesh=b.quad((0, 0.3, -0.4), (0, 0.3, 0.4), (0, 1.1, 0.4), (0, 1.1, -0.4), ds))
+    # One-sided emitter facing away from the camera (toward the back wall).
+    os_ = b.lambert((0.5, 0.5, 0.5), emission=(0.4, 0.6, 1), strength=5)
+    b.node(mesh=b.quad((0.8, 1.4, -0.6), (0.8, 1.8, -0.6), (1.4, 1.8, -0.6), (1.4, 1.4, -0.6),
+                       os_, uv=False, normal=False))
+    b.node(mesh=b.box(red), translation=[-1.0, 0.25, 0.3], scale=[0.5, 0.5, 0.5])
+    eye = (1.6, 1.4, 2.8)
+    b.node(camera=b.camera(yfov=0.8), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.6, -0.3)))
+    b.write("twosided.gltf")
+
+
+def punctual_scene():
+    b = Builder()
+    grey = b.lambert((0.6, 0.6, 0.6))
+    floor_and_wall(b, grey)
+    b.node(mesh=b.box(b.lambert((0.2, 0.5, 0.8))), translation=[0.6, 0.3, -0.4],
+           scale=[0.6, 0.6, 0.6])
+    down = [-math.sqrt(0.5), 0, 0, math.sqrt(0.5)]  # −Z → −Y
+    b.node(extensions={"KHR_lights_punctual": {"light": b.light(type="point", color=[1, 0.8, 0.6],
+                                                               intensity=2.0)}},
+           translation=[-1.0, 1.5, 0.5])
+    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
+        type="spot", color=[0.6, 0.8, 1], intensity=6.0,
+        spot={"innerConeAngle": 0.2, "outerConeAngle": 0.5})}},
+        translation=[0.5, 2.0, 0.3], rotation=down)
+    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
+        type="spot", color=[1, 1, 1], intensity=4.0,
+        spot={"innerConeAngle": 0.3, "outerConeAngle": 0.3})}},
+        translation=[-0.9, 1.8, -1.2], rotation=down)
+    tilt = [-0.3, 0.2, 0.1, 0.93]
+    n = math.sqrt(sum(v * v for v in tilt))
+    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
+        type="directional", color=[1, 1, 0.9], intensity=0.5)}},
+        rotation=[v / n for v in tilt])
+    eye = (0.4, 1.8, 3.4)
+    b.node(camera=b.camera(yfov=0.8), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.5, -0.5)))
+    b.write("punctual.gltf")
+
+
+def hierarchy_scene():
+    b = Builder()
+    grey = b.lambert((0.65, 0.65, 0.65))
+    floor_and_wall(b, grey)
+    green = b.lambert((0.2, 0.7, 0.3))
+    light = b.lambert((0.8, 0.8, 0.8), emission=(1, 1, 1), strength=6)
+    quad = b.quad((-0.3, 0, -0.3), (0.3, 0, -0.3), (0.3, 0, 0.3), (-0.3, 0, 0.3), light,
+                  uv=False)  # faces −Y (down) before any transform
+    box = b.box(green)
+    # Children: a lamp facing down, and a mirrored copy under a negative-scale node
+    # (x → −x keeps it facing down only if the renderer flips the winding's normal).
+    lamp = b.node(root=False, mesh=quad, translation=[0.6, 0, 0])
+    mirrored = b.node(root=False, mesh=quad, translation=[0.6, 0, 0])
+    mirror = b.node(root=False, children=[mirrored], scale=[-1, 1, 1])
+    cube = b.node(root=False, mesh=box, translation=[0, -1.2, 0.4],
+                  rotation=[0, 0.3826834, 0, 0.9238795], scale=[0.5, 0.8, 0.5])
+    flipped_cube = b.node(root=False, mesh=box, translation=[0.7, -1.35, -0.2],
+                          scale=[0.3, -0.3, 0.3])
+    b.node(children=[lamp, mirror, cube, flipped_cube], translation=[0, 1.9, -0.2],
+           rotation=[0, 0.1305262, 0, 0.9914449], scale=[1.2, 1.0, 1.2])
+    eye = (0.5, 1.3, 3.0)
+    b.node(camera=b.camera(yfov=0.85), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.7, -0.5)))
+    eye2 = (2.5, 2.0, 2.5)
+    b.node(camera=b.camera(ortho=(1.6, 1.2)), translation=list(eye2),
+           rotation=look_at_rotation(eye2, (0, 0.6, -0.5)))
+    b.write("hierarchy.gltf")
+
+
+def texxform_scene():
+    """Textures of exact-decode texels only (0 and 255), for KHR_texture_transform
+    checks: the peer test sets the transforms on the loaded scene."""
+    b = Builder()
+    W, K = (255, 255, 255), (0, 0, 0)
+    t = b.texture(png_rgb(4, 4, [[W, K, K, W], [K, K, W, W], [W, W, K, K], [K, W, K, W]]),
+                  nearest=True)
+    floor = b.lambert((1, 1, 1), base_tex=t)
+    b.node(mesh=b.quad((-1, 0, 1), (1, 0, 1), (1, 0, -1), (-1, 0, -1), floor))
+    panel = b.lambert((0.8, 0.8, 0.8), emission=(1, 1, 1), strength=2, base_tex=t,
+                      emissive_tex=t)
+    b.node(mesh=b.quad((-0.5, 0.6, -0.6), (0.5, 0.6, -0.6), (0.5, 1.4, -0.6), (-0.5, 1.4, -0.6),
+                       panel))
+    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
+        type="directional", color=[1, 1, 1], intensity=2.0)}}, rotation=[-0.38, 0, 0, 0.925])
+    eye = (0, 1.6, 2.2)
+    b.node(camera=b.camera(yfov=0.9), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.5, -0.2)))
+    b.write("texxform.gltf")
+
+
+def smooth_scene():
+    """A coarse UV sphere with smooth vertex normals (the export notes an approximation:
+    the renderers treat shading normals that disagree with the geometry differently)."""
+    b = Builder()
+    grey = b.lambert((0.6, 0.6, 0.6))
+    floor_and_wall(b, grey)
+    pos, nrm, idx = [], [], []
+    rings, segs = 6, 12
+    for i in range(rings + 1):
+        th = math.pi * i / rings
+        for j in range(segs + 1):
+            ph = 2 * math.pi * j / segs
+            n = [math.sin(th) * math.cos(ph), math.cos(th), math.sin(th) * math.sin(ph)]
+            pos.append(n)
+            nrm.append(n)
+    for i in range(rings):
+        for j in range(segs):
+            a, c = i * (segs + 1) + j, (i + 1) * (segs + 1) + j
+            idx += [a, a + 1, c, a + 1, c + 1, c]
+    sphere = b.mesh(pos, idx, b.lambert((0.8, 0.5, 0.3)), nrm)
+    b.node(mesh=sphere, translation=[0, 0.7, -0.3], scale=[0.7, 0.7, 0.7])
+    light = b.lambert((0, 0, 0), emission=(1, 1, 1), strength=8)
+    b.node(mesh=b.quad((-0.5, 2.2, -0.5), (0.5, 2.2, -0.5), (0.5, 2.2, 0.5), (-0.5, 2.2, 0.5),
+                       light, uv=False))
+    eye = (0.3, 1.4, 3.2)
+    b.node(camera=b.camera(yfov=0.8), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.6, -0.3)))
+    b.write("smooth.gltf")
+
+
+def glossy_scene():
+    b = Builder()
+    grey = b.lambert((0.6, 0.6, 0.6))
+    floor_and_wall(b, grey)
+    metal = b.pbr((0.9, 0.6, 0.3), 1.0, 0.4)
+    plastic = b.pbr((0.2, 0.3, 0.8), 0.0, 0.3)
+    b.node(mesh=b.box(metal), translation=[-0.6, 0.4, -0.3], scale=[0.8, 0.8, 0.8],
+           rotation=[0, 0.3826834, 0, 0.9238795])
+    b.node(mesh=b.box(plastic), translation=[0.7, 0.35, 0.2], scale=[0.7, 0.7, 0.7])
+    light = b.lambert((0, 0, 0), emission=(1, 1, 1), strength=8)
+    b.node(mesh=b.quad((-0.5, 2.2, -0.5), (0.5, 2.2, -0.5), (0.5, 2.2, 0.5), (-0.5, 2.2, 0.5),
+                       light, uv=False))
+    eye = (0.3, 1.4, 3.2)
+    b.node(camera=b.camera(yfov=0.8), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.6, -0.3)))
+    b.write("glossy.gltf")
+
+
+if __name__ == "__main__":
+    tex_scene()
+    twosided_scene()
+    punctual_scene()
+    hierarchy_scene()
+    texxform_scene()
+    smooth_scene()
+    glossy_scene()
