@@ -40,11 +40,22 @@ pub fn assert_no_validation_errors() {
 /// Run test kernel `name` (e.g. `tests/reservoir`) over `invocations` (x dimension,
 /// local size 64), with `input` and `aux` bound as read buffers and an output buffer of
 /// `output_bytes`, returned after the run.
-pub fn run_kernel(name: &str, input: &[u8], aux: &[u8], output_bytes: usize, push: &[u8], invocations: u32) -> vk::Result<Vec<u8>> {
+pub fn run_kernel(
+    name: &str,
+    input: &[u8],
+    aux: &[u8],
+    output_bytes: usize,
+    push: &[u8],
+    invocations: u32,
+) -> vk::Result<Vec<u8>> {
     let zeros = vec![0u8; output_bytes];
     let mut out = dispatch(
         name,
-        &[(gpu::TEST_BINDING_IN, input), (gpu::TEST_BINDING_OUT, &zeros), (gpu::TEST_BINDING_AUX, aux)],
+        &[
+            (gpu::TEST_BINDING_IN, input),
+            (gpu::TEST_BINDING_OUT, &zeros),
+            (gpu::TEST_BINDING_AUX, aux),
+        ],
         push,
         invocations,
     )?;
@@ -53,18 +64,30 @@ pub fn run_kernel(name: &str, input: &[u8], aux: &[u8], output_bytes: usize, pus
 
 /// Run test kernel `name` over `invocations` (local size 64) with one storage buffer per
 /// `(binding, initial contents)`; returns every buffer's contents after the run, in order.
-pub fn dispatch(name: &str, buffers: &[(u32, &[u8])], push: &[u8], invocations: u32) -> vk::Result<Vec<Vec<u8>>> {
+pub fn dispatch(
+    name: &str,
+    buffers: &[(u32, &[u8])],
+    push: &[u8],
+    invocations: u32,
+) -> vk::Result<Vec<Vec<u8>>> {
     let device = device();
     let spirv = ShaderSource::Builtin
         .load(name)
         .map_err(|e| vk::VkError::Other(e.to_string()))?;
-    let bindings: Vec<BindingSpec> = buffers.iter().map(|(b, _)| BindingSpec::buffer(*b)).collect();
+    let bindings: Vec<BindingSpec> = buffers
+        .iter()
+        .map(|(b, _)| BindingSpec::buffer(*b))
+        .collect();
     let pipeline = ComputePipeline::new(&device, &spirv, &bindings, 128, &[], name)?;
     let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_SRC;
     let gpu_buffers: Vec<Buffer> = buffers
         .iter()
         .map(|(b, data)| {
-            let data = if data.is_empty() { vec![0u8; 16] } else { data.to_vec() };
+            let data = if data.is_empty() {
+                vec![0u8; 16]
+            } else {
+                data.to_vec()
+            };
             Buffer::from_slice(&device, &data, usage, &format!("test binding {b}"))
         })
         .collect::<vk::Result<_>>()?;
@@ -74,7 +97,9 @@ pub fn dispatch(name: &str, buffers: &[(u32, &[u8])], push: &[u8], invocations: 
     }
     let mut push_bytes = [0u8; 128];
     push_bytes[..push.len()].copy_from_slice(push);
-    device.submit(|cmd| pipeline.cmd_dispatch(cmd, set.raw, &push_bytes, [invocations.div_ceil(64), 1, 1]))?;
+    device.submit(|cmd| {
+        pipeline.cmd_dispatch(cmd, set.raw, &push_bytes, [invocations.div_ceil(64), 1, 1])
+    })?;
     buffers
         .iter()
         .zip(&gpu_buffers)
@@ -309,16 +334,33 @@ pub fn settings(method: crate::render::Method, width: u32, height: u32) -> Rende
 /// Like [`render_batches`], for any method: each batch is a full `run_method` (guided
 /// methods train their own SD-tree on the batch's own sample range), so the batches are
 /// independent estimates of the whole estimator.
-pub fn run_batches(scene: &Scene, camera: &Camera, settings: RenderSettings, batches: u32, spp: u64) -> Batches {
+pub fn run_batches(
+    scene: &Scene,
+    camera: &Camera,
+    settings: RenderSettings,
+    batches: u32,
+    spp: u64,
+) -> Batches {
     use crate::render::run::{run_method, Budget};
     let lights = LightTable::build(scene).expect("light table");
-    let mut r = Renderer::new(device(), scene, &lights, camera.clone(), settings.clone(), Default::default())
-        .expect("renderer");
+    let mut r = Renderer::new(
+        device(),
+        scene,
+        &lights,
+        camera.clone(),
+        settings.clone(),
+        Default::default(),
+    )
+    .expect("renderer");
     let cancel = AtomicBool::new(false);
     let mut images = Vec::new();
     for b in 0..batches as u64 {
-        let out = run_method(&mut r, Budget::Spp(spp), b * spp, &cancel, &mut |_| {}).expect("render");
-        assert_eq!(out.stats.nonfinite_samples, 0, "the kernel produced non-finite samples");
+        let out =
+            run_method(&mut r, Budget::Spp(spp), b * spp, &cancel, &mut |_| {}).expect("render");
+        assert_eq!(
+            out.stats.nonfinite_samples, 0,
+            "the kernel produced non-finite samples"
+        );
         images.push(out.film.mean());
     }
     Batches {
@@ -332,6 +374,12 @@ pub fn run_batches(scene: &Scene, camera: &Camera, settings: RenderSettings, bat
 pub fn batch_mae(b: &Batches, reference: &[f64]) -> Vec<f64> {
     b.images
         .iter()
-        .map(|img| img.iter().zip(reference).map(|(&x, &r)| (x as f64 - r).abs()).sum::<f64>() / reference.len() as f64)
+        .map(|img| {
+            img.iter()
+                .zip(reference)
+                .map(|(&x, &r)| (x as f64 - r).abs())
+                .sum::<f64>()
+                / reference.len() as f64
+        })
         .collect()
 }

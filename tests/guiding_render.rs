@@ -3,8 +3,8 @@
 
 use lanterna::render::Method;
 use lanterna::scene::generate::{Kind, Options};
-use lanterna::testing::{self, render_batches, run_batches};
 use lanterna::stats;
+use lanterna::testing::{self, render_batches, run_batches};
 
 const ALPHA: f64 = 1e-3;
 
@@ -30,5 +30,15 @@ fn guided_methods_agree_with_pt_on_cornell_lights() {
 
 #[test]
 fn guided_methods_agree_with_pt_on_a_small_street() {
-    agree(Kind::Street, Options { lamps: Some(120), aspect: Some(1.5), ..Options::default() }, 24, 16, 48);
+    agree(
+        Kind::Street,
+        Options {
+            lamps: Some(120),
+            aspect: Some(1.5),
+            ..Options::default()
+        },
+        24,
+        16,
+        48,
+    );
 }

@@ -6,7 +6,14 @@ use lanterna::testing::{self, render_batches};
 
 const ALPHA: f64 = 1e-3;
 
-fn agree(kind: Kind, options: Options, w: u32, h: u32, spp: u64, tweak: impl Fn(&mut lanterna::render::RenderSettings)) {
+fn agree(
+    kind: Kind,
+    options: Options,
+    w: u32,
+    h: u32,
+    spp: u64,
+    tweak: impl Fn(&mut lanterna::render::RenderSettings),
+) {
     let t = testing::generated(kind, &options);
     let mut pt = testing::settings(Method::Pt, w, h);
     pt.seed = 11;
@@ -26,15 +33,30 @@ fn ris_agrees_with_pt_on_cornell_lights() {
 
 #[test]
 fn ris_agrees_with_pt_on_a_small_street() {
-    agree(Kind::Street, Options { lamps: Some(120), aspect: Some(1.5), ..Options::default() }, 24, 16, 32, |_| {});
+    agree(
+        Kind::Street,
+        Options {
+            lamps: Some(120),
+            aspect: Some(1.5),
+            ..Options::default()
+        },
+        24,
+        16,
+        32,
+        |_| {},
+    );
 }
 
 #[test]
 fn ris_with_power_source_agrees_with_pt() {
-    agree(Kind::CornellLights, Options::default(), 16, 16, 64, |s| s.source = LightSource::Power);
+    agree(Kind::CornellLights, Options::default(), 16, 16, 64, |s| {
+        s.source = LightSource::Power
+    });
 }
 
 #[test]
 fn ris_with_one_candidate_equals_pt_in_expectation() {
-    agree(Kind::CornellLights, Options::default(), 16, 16, 64, |s| s.ris_candidates = 1);
+    agree(Kind::CornellLights, Options::default(), 16, 16, 64, |s| {
+        s.ris_candidates = 1
+    });
 }

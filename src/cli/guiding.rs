@@ -44,11 +44,18 @@ pub fn run(command: Command) -> Result<()> {
 fn view(args: ViewArgs) -> Result<()> {
     let (loaded, camera, width, height) = common::load(&args.scene)?;
     let (x, y) = args.pixel;
-    anyhow::ensure!(x < width && y < height, "pixel ({x}, {y}) is outside the {width}×{height} image");
-    let tree = SdTree::load(&args.load_guiding, u64::from_str_radix(&loaded.scene.hash, 16).unwrap_or(0))?;
+    anyhow::ensure!(
+        x < width && y < height,
+        "pixel ({x}, {y}) is outside the {width}×{height} image"
+    );
+    let tree = SdTree::load(
+        &args.load_guiding,
+        u64::from_str_radix(&loaded.scene.hash, 16).unwrap_or(0),
+    )?;
 
     // The first hit: the position AOV of a few samples of the pixel.
-    let device = session::open_device(&args.device.options()).context("cannot open a Vulkan device")?;
+    let device =
+        session::open_device(&args.device.options()).context("cannot open a Vulkan device")?;
     let settings = RenderSettings {
         method: Method::Pt,
         width,
@@ -57,9 +64,23 @@ fn view(args: ViewArgs) -> Result<()> {
         aovs: true,
         ..RenderSettings::default()
     };
-    let mut r = Renderer::new(device, &loaded.scene, &loaded.lights, camera, settings, args.device.shaders())?;
+    let mut r = Renderer::new(
+        device,
+        &loaded.scene,
+        &loaded.lights,
+        camera,
+        settings,
+        args.device.shaders(),
+    )?;
     let mut stats = RenderStats::default();
-    r.render_samples(0, 4, false, &AtomicBool::new(false), &mut |_| {}, &mut stats)?;
+    r.render_samples(
+        0,
+        4,
+        false,
+        &AtomicBool::new(false),
+        &mut |_| {},
+        &mut stats,
+    )?;
     let aov = r.aovs()?;
     let n = lanterna::gpu::AOV_CHANNELS as usize;
     let px = &aov[(y * width + x) as usize * n..][..n];
@@ -69,13 +90,20 @@ fn view(args: ViewArgs) -> Result<()> {
     let pos = glam::Vec3::new(px[p], px[p + 1], px[p + 2]);
 
     let v = tree.leaf_view(pos, args.size);
-    let rgb8: Vec<u8> = v.rgb.iter().map(|c| (c.clamp(0.0, 1.0) * 255.0 + 0.5) as u8).collect();
+    let rgb8: Vec<u8> = v
+        .rgb
+        .iter()
+        .map(|c| (c.clamp(0.0, 1.0) * 255.0 + 0.5) as u8)
+        .collect();
     common::ensure_parent(&args.output)?;
     lanterna::image_io::write_png_rgb8(&args.output, v.width, v.height, &rgb8)
         .with_context(|| format!("cannot write {}", args.output.display()))?;
     let i = &v.info;
     println!("first hit of pixel ({x}, {y}): {pos:?}");
-    println!("leaf {} at depth {}: box {:?} + {:?}", i.leaf, i.spatial_depth, i.box_min, i.box_size);
+    println!(
+        "leaf {} at depth {}: box {:?} + {:?}",
+        i.leaf, i.spatial_depth, i.box_min, i.box_size
+    );
     println!(
         "sampling tree: learned from weight {:.0}, {} nodes, depth {}, density {:.3e} .. {:.3e}{}",
         i.sampling_weight,

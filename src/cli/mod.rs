@@ -13,6 +13,7 @@ mod merge;
 mod reference;
 mod render;
 mod scene;
+mod scene_export;
 
 #[derive(Parser)]
 #[command(

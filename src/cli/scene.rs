@@ -11,6 +11,9 @@ pub enum Command {
     /// Generate a test scene as glTF 2.0 (.gltf + .bin + PNG textures), deterministic
     /// for a given --seed.
     Generate(GenerateArgs),
+    /// Export a scene to Mitsuba 3 (XML + PLY meshes) for an independent reference: the
+    /// same world-space triangles, camera, Lambertian materials and area emitters.
+    ExportMitsuba(super::scene_export::ExportArgs),
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -83,6 +86,7 @@ pub struct GenerateArgs {
 pub fn run(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Generate(a) => run_generate(a),
+        Command::ExportMitsuba(a) => super::scene_export::run(a),
     }
 }
 

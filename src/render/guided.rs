@@ -61,7 +61,8 @@ pub fn guiding_config(renderer: &Renderer) -> GuidingConfig {
     let s = &renderer.settings;
     let pixels = s.width as f64 * s.height as f64;
     GuidingConfig {
-        spatial_threshold: (s.guiding.spatial_threshold as f64 * (pixels / REFERENCE_PIXELS).sqrt()).max(1.0) as f32,
+        spatial_threshold: (s.guiding.spatial_threshold as f64 * (pixels / REFERENCE_PIXELS).sqrt())
+            .max(1.0) as f32,
         memory_cap_bytes: s.guiding.memory_cap_bytes,
         spatial_filter: if s.spatial_jitter {
             SpatialFilter::StochasticBox

@@ -80,7 +80,6 @@ pub fn to_rgba8(data: &gltf::image::Data) -> Option<Vec<u8>> {
     (out.len() == px * 4).then_some(out)
 }
 
-
 fn wrap(t: f32, mode: WrapMode) -> f32 {
     match mode {
         WrapMode::Repeat => t - t.floor(),

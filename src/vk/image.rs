@@ -57,12 +57,19 @@ impl Texture {
         );
         let (vk_format, texels): (vk::Format, std::borrow::Cow<'_, [u8]>) = match format {
             TextureFormat::Srgb => {
-                let lut: Vec<half::f16> = (0..=255u8).map(|c| half::f16::from_f32(srgb_decode(c))).collect();
+                let lut: Vec<half::f16> = (0..=255u8)
+                    .map(|c| half::f16::from_f32(srgb_decode(c)))
+                    .collect();
                 let bytes: Vec<u8> = rgba
                     .chunks_exact(4)
                     .flat_map(|p| {
                         let a = half::f16::from_f32(p[3] as f32 / 255.0);
-                        [lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize], a]
+                        [
+                            lut[p[0] as usize],
+                            lut[p[1] as usize],
+                            lut[p[2] as usize],
+                            a,
+                        ]
                     })
                     .flat_map(|h| h.to_le_bytes())
                     .collect();
