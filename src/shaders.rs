@@ -27,8 +27,9 @@ pub enum ShaderSource {
 pub enum ShaderError {
     #[error("no kernel named `{0}` is built into this binary")]
     Unknown(String),
+    /// Already in `file:line: message` form (not a `source`, so it prints once).
     #[error("{0}")]
-    Compile(#[from] CompileError),
+    Compile(CompileError),
     #[error("bad SPIR-V for kernel `{0}`: {1}")]
     BadSpirv(String, std::io::Error),
 }
@@ -56,5 +57,11 @@ impl ShaderSource {
     /// Names of the kernels built into the binary.
     pub fn builtin_names() -> impl Iterator<Item = &'static str> {
         builtin::KERNELS.iter().map(|(n, _)| *n)
+    }
+}
+
+impl From<CompileError> for ShaderError {
+    fn from(e: CompileError) -> Self {
+        ShaderError::Compile(e)
     }
 }
