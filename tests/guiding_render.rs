@@ -67,7 +67,11 @@ fn guiding_learns_the_way_through_a_gap() {
     let (mg, _) = stats::mean_var(&g_mae);
     let (mp, _) = stats::mean_var(&pt_mae);
     let p = stats::welch(&g_mae, &target);
-    assert!(mg < 0.9 * mp && p < 1e-3, "guided MAE {mg:.5} vs pt {mp:.5} (ratio {:.3}, p = {p:.2e})", mg / mp);
+    assert!(
+        mg < 0.9 * mp && p < 1e-3,
+        "guided MAE {mg:.5} vs pt {mp:.5} (ratio {:.3}, p = {p:.2e})",
+        mg / mp
+    );
     eprintln!("gap scene: guided/pt MAE ratio {:.3} at {spp} spp", mg / mp);
     testing::assert_no_validation_errors();
 }
@@ -82,19 +86,51 @@ fn saved_tree_renders_the_same_image() {
     let lights = LightTable::build(&t.scene).unwrap();
     let cancel = AtomicBool::new(false);
     let s = testing::settings(Method::GuidedRis, 16, 16);
-    let mut r = Renderer::new(testing::device(), &t.scene, &lights, t.camera.clone(), s.clone(), Default::default()).unwrap();
+    let mut r = Renderer::new(
+        testing::device(),
+        &t.scene,
+        &lights,
+        t.camera.clone(),
+        s.clone(),
+        Default::default(),
+    )
+    .unwrap();
     let out = run_method(&mut r, Budget::Spp(32), 0, &cancel, &mut |_| {}).unwrap();
     let g = out.guiding.expect("guided run");
     let trained: u64 = g.iterations.iter().map(|i| i.spp).sum();
     let file = t.dir.0.join("tree.sdt");
     let hash = u64::from_str_radix(&t.scene.hash, 16).unwrap();
-    g.tree.save(&file, hash, (t.scene.bounds_min.into(), t.scene.bounds_max.into())).unwrap();
+    g.tree
+        .save(
+            &file,
+            hash,
+            (t.scene.bounds_min.into(), t.scene.bounds_max.into()),
+        )
+        .unwrap();
 
     // A loaded tree skips training; render the same sample range as the render phase.
-    let mut r2 = Renderer::new(testing::device(), &t.scene, &lights, t.camera.clone(), s, Default::default()).unwrap();
+    let mut r2 = Renderer::new(
+        testing::device(),
+        &t.scene,
+        &lights,
+        t.camera.clone(),
+        s,
+        Default::default(),
+    )
+    .unwrap();
     r2.preloaded_tree = Some(lanterna::guiding::SdTree::load(&file, hash).unwrap());
-    let again = run_method(&mut r2, Budget::Spp(out.film.spp), trained, &cancel, &mut |_| {}).unwrap();
-    assert_eq!(again.film, out.film, "a loaded tree rendered a different image");
+    let again = run_method(
+        &mut r2,
+        Budget::Spp(out.film.spp),
+        trained,
+        &cancel,
+        &mut |_| {},
+    )
+    .unwrap();
+    assert_eq!(
+        again.film, out.film,
+        "a loaded tree rendered a different image"
+    );
     // Another scene's hash is refused.
     assert!(lanterna::guiding::SdTree::load(&file, hash ^ 1).is_err());
     testing::assert_no_validation_errors();

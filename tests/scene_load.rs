@@ -1,0 +1,246 @@
+//! Loading real content: the shipped scenes against an independent reference, .glb and
+//! data-URI variants, tolerant loading of non-conformant emission, clear errors.
+
+use lanterna::lights::LightTable;
+use lanterna::render::Method;
+use lanterna::scene::Scene;
+use lanterna::stats;
+use lanterna::testing::{self, render_batches};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn load(path: &Path) -> Scene {
+    Scene::load(path, &Default::default()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// scenes/cornell-lights.gltf against Mitsuba 3's render of its export
+/// (scripts/make_cornell_reference.py): per 4×4 block and channel, the difference of the
+/// means over their combined standard error, Šidák-corrected at α = 1e-3.
+#[test]
+fn cornell_lights_matches_an_independent_reference() {
+    let reference: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(root().join("tests/data/cornell-lights-reference.json")).unwrap(),
+    )
+    .unwrap();
+    let scene = load(&root().join("scenes/cornell-lights.gltf"));
+    assert_eq!(
+        reference["scene_hash"].as_str(),
+        Some(scene.hash.as_str()),
+        "the shipped scene changed: run scripts/make_cornell_reference.py"
+    );
+    let size = reference["width"].as_u64().unwrap() as u32;
+    let block = reference["block"].as_u64().unwrap() as u32;
+    let camera = scene.cameras[0].clone();
+    for method in [Method::Pt, Method::Ris] {
+        let mut s = testing::settings(method, size, size);
+        s.max_depth = reference["max_depth"].as_u64().unwrap() as u32;
+        let b = render_batches(&scene, &camera, s, 16, 128);
+        let est = b.block_estimates(block);
+        let n = size / block;
+        let threshold = stats::sidak(1e-3, est.len());
+        let mut image_mean = 0.0;
+        for by in 0..n {
+            for bx in 0..n {
+                for c in 0..3 {
+                    let e = &est[((by * n + bx) * 3 + c) as usize];
+                    let (m, v) = stats::mean_var(e);
+                    let r = reference["block_mean"][by as usize][bx as usize][c as usize]
+                        .as_f64()
+                        .unwrap();
+                    let se_r = reference["block_stderr"][by as usize][bx as usize][c as usize]
+                        .as_f64()
+                        .unwrap();
+                    let z = (m - r) / (v / e.len() as f64 + se_r * se_r).sqrt();
+                    let p = 2.0 * (1.0 - stats::normal_cdf(z.abs()));
+                    assert!(
+                        p > threshold,
+                        "{method}: block ({bx}, {by}) channel {c}: {m} vs Mitsuba {r} (z = {z:.2})"
+                    );
+                    image_mean += m;
+                }
+            }
+        }
+        assert!(
+            image_mean.is_finite() && image_mean > 0.0,
+            "black or non-finite render"
+        );
+    }
+    testing::assert_no_validation_errors();
+}
+
+/// A .gltf with one external buffer repacked as .glb, and with the buffer as a data URI.
+fn repack(gltf: &Path, dir: &Path) -> (PathBuf, PathBuf) {
+    use base64::Engine as _;
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(gltf).unwrap()).unwrap();
+    assert_eq!(
+        json["buffers"].as_array().unwrap().len(),
+        1,
+        "repack handles one buffer"
+    );
+    let bin = std::fs::read(
+        gltf.parent()
+            .unwrap()
+            .join(json["buffers"][0]["uri"].as_str().unwrap()),
+    )
+    .unwrap();
+
+    let mut data_uri = json.clone();
+    data_uri["buffers"][0]["uri"] = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bin)
+    )
+    .into();
+    let data_path = dir.join("data-uri.gltf");
+    std::fs::write(&data_path, serde_json::to_vec(&data_uri).unwrap()).unwrap();
+
+    json["buffers"][0].as_object_mut().unwrap().remove("uri");
+    let mut text = serde_json::to_vec(&json).unwrap();
+    while text.len() % 4 != 0 {
+        text.push(b' ');
+    }
+    let mut body = bin.clone();
+    while body.len() % 4 != 0 {
+        body.push(0);
+    }
+    let mut glb = Vec::new();
+    glb.extend_from_slice(b"glTF");
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&((12 + 8 + text.len() + 8 + body.len()) as u32).to_le_bytes());
+    glb.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"JSON");
+    glb.extend_from_slice(&text);
+    glb.extend_from_slice(&(body.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"BIN\0");
+    glb.extend_from_slice(&body);
+    let glb_path = dir.join("packed.glb");
+    std::fs::write(&glb_path, glb).unwrap();
+    (glb_path, data_path)
+}
+
+#[test]
+fn glb_and_data_uri_load_the_same_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let original = load(&root().join("scenes/cornell-lights.gltf"));
+    let (glb, data) = repack(&root().join("scenes/cornell-lights.gltf"), dir.path());
+    for path in [glb, data] {
+        let s = load(&path);
+        assert_eq!(
+            s.hash,
+            original.hash,
+            "{} loaded different content",
+            path.display()
+        );
+        assert_eq!(s.instances.len(), original.instances.len());
+    }
+}
+
+fn lanterna(args: &[&str]) -> (bool, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_lanterna"))
+        .args(args)
+        .output()
+        .expect("run lanterna");
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!stderr.contains("panicked"), "lanterna panicked:\n{stderr}");
+    (out.status.success(), stderr)
+}
+
+#[test]
+fn emissive_factor_above_one_loads_with_a_warning() {
+    // The RTXDI Bistro puts brightness in emissiveFactor without the strength extension.
+    let dir = tempfile::tempdir().unwrap();
+    let src = root().join("scenes/cornell-lights.gltf");
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&src).unwrap()).unwrap();
+    let mut changed = 0;
+    for m in json["materials"].as_array_mut().unwrap() {
+        let strength =
+            m["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"].as_f64();
+        if let Some(s) = strength {
+            let f: Vec<f64> = m["emissiveFactor"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap() * s)
+                .collect();
+            m["emissiveFactor"] = serde_json::json!(f);
+            m["extensions"]
+                .as_object_mut()
+                .unwrap()
+                .remove("KHR_materials_emissive_strength");
+            changed += 1;
+        }
+    }
+    assert!(changed > 0);
+    std::fs::copy(
+        root().join("scenes/cornell-lights.bin"),
+        dir.path().join("cornell-lights.bin"),
+    )
+    .unwrap();
+    let path = dir.path().join("cornell-lights.gltf");
+    std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
+    let (ok, stderr) = lanterna(&["info", path.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stderr.contains("exceeds 1 without KHR_materials_emissive_strength"),
+        "no warning:\n{stderr}"
+    );
+    // Same emission as the conformant file.
+    let a = LightTable::build(&load(&src)).unwrap();
+    let b = LightTable::build(&load(&path)).unwrap();
+    assert!((a.total_power - b.total_power).abs() < 1e-6 * a.total_power);
+}
+
+#[test]
+fn a_missing_texture_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    for e in std::fs::read_dir(root().join("scenes")).unwrap() {
+        let p = e.unwrap().path();
+        if p.file_name()
+            .unwrap()
+            .to_string_lossy()
+            .starts_with("street")
+        {
+            std::fs::copy(&p, dir.path().join(p.file_name().unwrap())).unwrap();
+        }
+    }
+    std::fs::remove_file(dir.path().join("street_signs.png")).unwrap();
+    let scene = dir.path().join("street.gltf");
+    let (ok, stderr) = lanterna(&["info", scene.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("street.gltf") && stderr.contains("street_signs.png"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn the_street_scene_loads_with_its_generated_counts() {
+    let path = root().join("scenes/street.gltf");
+    let scene = load(&path);
+    let lights = LightTable::build(&scene).unwrap();
+    let extras = scene.extras.as_ref().unwrap()["lanterna"].clone();
+    let lamps = extras["options"]["lamps"].as_u64().unwrap();
+    assert_eq!(lights.models.len() as u64, lamps, "light models");
+    assert!(scene
+        .textures
+        .iter()
+        .any(|t| t.format == lanterna::vk::TextureFormat::Srgb));
+    assert!(scene
+        .materials
+        .iter()
+        .any(|m| m.alpha_mode == lanterna::gpu::ALPHA_MODE_MASK));
+    assert!(
+        scene.materials.iter().any(|m| m.emissive_tex.index >= 0),
+        "no textured emitter"
+    );
+    let powers: Vec<f32> = lights.models.iter().map(|m| m.power).collect();
+    let (lo, hi) = powers
+        .iter()
+        .fold((f32::MAX, 0f32), |(a, b), &p| (a.min(p), b.max(p)));
+    assert!(hi / lo > 1000.0, "light powers span only {}×", hi / lo);
+}
