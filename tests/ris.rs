@@ -49,51 +49,50 @@ fn reservoir_selects_in_proportion_to_weights() {
 /// targets `p`: sum over all multisets of candidates (multinomial counts n) of
 /// P(n) · n_j w_j / Σ n_i w_i with w_i = p_i / q_i.
 fn exact_selection(p: &[f64], q: &[f64], m: u32) -> Vec<f64> {
-    let l = p.len();
-    let w: Vec<f64> = p
-        .iter()
-        .zip(q)
-        .map(|(p, q)| if *q > 0.0 { p / q } else { 0.0 })
-        .collect();
-    let ln_fact: Vec<f64> = (0..=m).map(|k| stats::ln_gamma(k as f64 + 1.0)).collect();
-    let mut out = vec![0.0; l];
-    let mut n = vec![0u32; l];
-    fn rec(
-        i: usize,
-        left: u32,
-        n: &mut Vec<u32>,
-        q: &[f64],
-        w: &[f64],
-        ln_fact: &[f64],
+    /// Walks all multinomial counts n of m candidates over the lights.
+    struct Walk<'a> {
+        q: &'a [f64],
+        w: Vec<f64>,
+        ln_fact: Vec<f64>,
         m: u32,
-        out: &mut [f64],
-    ) {
-        if i + 1 == n.len() {
-            n[i] = left;
-            let mut ln_p = ln_fact[m as usize];
-            for (k, &c) in n.iter().enumerate() {
-                if c > 0 {
-                    if q[k] == 0.0 {
-                        return;
+        out: Vec<f64>,
+    }
+    impl Walk<'_> {
+        fn rec(&mut self, i: usize, left: u32, n: &mut [u32]) {
+            if i + 1 == n.len() {
+                n[i] = left;
+                let mut ln_p = self.ln_fact[self.m as usize];
+                for (k, &c) in n.iter().enumerate() {
+                    if c > 0 {
+                        if self.q[k] == 0.0 {
+                            return;
+                        }
+                        ln_p += c as f64 * self.q[k].ln() - self.ln_fact[c as usize];
                     }
-                    ln_p += c as f64 * q[k].ln() - ln_fact[c as usize];
                 }
-            }
-            let total: f64 = n.iter().zip(w).map(|(&c, w)| c as f64 * w).sum();
-            if total > 0.0 {
-                for k in 0..n.len() {
-                    out[k] += ln_p.exp() * n[k] as f64 * w[k] / total;
+                let total: f64 = n.iter().zip(&self.w).map(|(&c, w)| c as f64 * w).sum();
+                if total > 0.0 {
+                    for ((o, &c), w) in self.out.iter_mut().zip(n.iter()).zip(&self.w) {
+                        *o += ln_p.exp() * c as f64 * w / total;
+                    }
                 }
+                return;
             }
-            return;
-        }
-        for c in 0..=left {
-            n[i] = c;
-            rec(i + 1, left - c, n, q, w, ln_fact, m, out);
+            for c in 0..=left {
+                n[i] = c;
+                self.rec(i + 1, left - c, n);
+            }
         }
     }
-    rec(0, m, &mut n, q, &w, &ln_fact, m, &mut out);
-    out
+    let mut walk = Walk {
+        q,
+        w: p.iter().zip(q).map(|(p, q)| if *q > 0.0 { p / q } else { 0.0 }).collect(),
+        ln_fact: (0..=m).map(|k| stats::ln_gamma(k as f64 + 1.0)).collect(),
+        m,
+        out: vec![0.0; p.len()],
+    };
+    walk.rec(0, m, &mut vec![0u32; p.len()]);
+    walk.out
 }
 
 fn run_ris(p: &[f32], q: &[f32], m: u32, seed: u32) -> Vec<(u32, f32)> {

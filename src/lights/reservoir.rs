@@ -12,7 +12,8 @@ impl Reservoir {
     /// Stream a candidate; true when it replaces the kept one (u < w / w_sum).
     pub fn update(&mut self, w: f64, u: f64) -> bool {
         self.count += 1;
-        if !(w > 0.0) {
+        // Zero, negative and NaN weights never win (as in the GLSL).
+        if w.is_nan() || w <= 0.0 {
             return false;
         }
         self.w_sum += w;
