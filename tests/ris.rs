@@ -86,7 +86,10 @@ fn exact_selection(p: &[f64], q: &[f64], m: u32) -> Vec<f64> {
     }
     let mut walk = Walk {
         q,
-        w: p.iter().zip(q).map(|(p, q)| if *q > 0.0 { p / q } else { 0.0 }).collect(),
+        w: p.iter()
+            .zip(q)
+            .map(|(p, q)| if *q > 0.0 { p / q } else { 0.0 })
+            .collect(),
         ln_fact: (0..=m).map(|k| stats::ln_gamma(k as f64 + 1.0)).collect(),
         m,
         out: vec![0.0; p.len()],

@@ -92,7 +92,7 @@ float guide_pdf(uint leaf, vec3 dir) {
     }
     vec2 p = guide_dir_to_square(dir);
     precise float density = 1.0;
-    for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
+    [[dont_unroll]] for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
         GuideQuadNode node = guide_sampling[n];
         uint q = guide_quadrant(p);
         density = density * guide_quadrant_factor(node.sum, q);
@@ -131,7 +131,7 @@ vec3 guide_sample(uint leaf, vec2 u, out float pdf) {
     vec2 origin = vec2(0.0);
     float size = 1.0;
     precise float density = 1.0;
-    for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
+    [[dont_unroll]] for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
         GuideQuadNode node = guide_sampling[n];
         vec4 s = node.sum;
         float total = guide_node_total(s);
@@ -177,7 +177,7 @@ vec3 guide_sample(uint leaf, vec2 u, out float pdf) {
     vec2 centre = origin + 0.5 * size;
     vec3 dir;
     bool inside = false;
-    for (int attempt = 0; attempt < GUIDE_SAMPLE_ATTEMPTS && !inside; ++attempt) {
+    [[dont_unroll]] for (int attempt = 0; attempt < GUIDE_SAMPLE_ATTEMPTS && !inside; ++attempt) {
         dir = guide_square_to_dir(p);
         inside = guide_in_cell(guide_dir_to_square(dir), origin, size);
         p = 0.5 * (p + centre);
@@ -197,7 +197,7 @@ vec3 guide_sample(uint leaf, vec2 u, out float pdf) {
 uint guide_find_leaf(vec3 p) {
     vec3 x = clamp((p - guide_header.origin) / guide_header.size, vec3(0.0), vec3(1.0));
     uint n = 0u;
-    for (int level = 0; level <= GUIDE_MAX_SPATIAL_DEPTH; ++level) {
+    [[dont_unroll]] for (int level = 0; level <= GUIDE_MAX_SPATIAL_DEPTH; ++level) {
         GuideSpatialNode node = guide_spatial[n];
         if (node.axis == GUIDE_SPATIAL_LEAF) {
             break;
@@ -219,7 +219,7 @@ uint guide_find_leaf(vec3 p) {
 // Nearest directional filter: everything goes to the leaf cell holding p.
 void guide_splat_nearest(uint root, vec2 p, float v) {
     uint n = root;
-    for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
+    [[dont_unroll]] for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
         uint q = guide_quadrant(p);
         uint c = guide_training[n].child[q];
         if (c == 0u || level + 1 == GUIDE_MAX_QUAD_DEPTH) {
@@ -234,7 +234,7 @@ void guide_splat_nearest(uint root, vec2 p, float v) {
 float guide_training_cell_size(uint root, vec2 p) {
     uint n = root;
     float size = 0.5;
-    for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
+    [[dont_unroll]] for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
         uint q = guide_quadrant(p);
         n = guide_training[n].child[q];
         if (n == 0u) {
@@ -253,7 +253,7 @@ void guide_splat_rect(uint root, vec2 lo, vec2 hi, float density) {
     // depth-first walk only branches where the box straddles cells.
     uint n = root;
     vec3 cell = vec3(0.0, 0.0, 1.0);
-    for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
+    [[dont_unroll]] for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
         float h = cell.z * 0.5;
         vec2 mid = cell.xy + h;
         bvec2 lo_high = greaterThanEqual(lo, mid);

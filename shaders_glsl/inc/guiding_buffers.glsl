@@ -5,6 +5,7 @@
 
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_shader_atomic_float : require
+#extension GL_EXT_control_flow_attributes : require
 
 #include "shared/bindings.h"
 #include "shared/guiding.h"

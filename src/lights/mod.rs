@@ -101,7 +101,8 @@ impl LightTable {
                     * luminance(factor) as f64
                     * mean_texture as f64
                     * if two_sided { 2.0 } else { 1.0 };
-                let samplable = area.is_finite() && area > 1e-14 && power.is_finite() && power > 0.0;
+                let samplable =
+                    area.is_finite() && area > 1e-14 && power.is_finite() && power > 0.0;
                 if !samplable {
                     dropped += 1;
                     triangle_light_index.push(gpu::INVALID_INDEX);

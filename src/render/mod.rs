@@ -461,9 +461,15 @@ impl Renderer {
             let set = self.descriptor_set(v)?;
             let push = gpu::PushConstants::default();
             let pipeline = &self.pipelines[&v];
+            let t = Instant::now();
             self.device.submit(|cmd| {
                 pipeline.cmd_dispatch(cmd, set, bytemuck::bytes_of(&push), [1, 1, 1])
             })?;
+            log::debug!(
+                "{}: first dispatch (driver compile) {:.1} s",
+                pipeline.name,
+                t.elapsed().as_secs_f64()
+            );
         }
         Ok(())
     }
