@@ -36,14 +36,15 @@ mat3 inverse_transpose3(mat3 m) {
 Surface make_surface(Hit h, vec3 ray_dir) {
     Surface s;
     Instance inst = instances[h.instance];
+    mat4x3 object_to_world = transpose(mat3x4(inst.to_world_row0, inst.to_world_row1, inst.to_world_row2));
     uvec3 vi = triangle_vertices(inst, h.primitive);
     vec3 w = vec3(1.0 - h.bary.x - h.bary.y, h.bary.x, h.bary.y);
     Vertex v0 = vertices[vi.x];
     Vertex v1 = vertices[vi.y];
     Vertex v2 = vertices[vi.z];
-    vec3 p0 = h.to_world * vec4(v0.position, 1.0);
-    vec3 p1 = h.to_world * vec4(v1.position, 1.0);
-    vec3 p2 = h.to_world * vec4(v2.position, 1.0);
+    vec3 p0 = object_to_world * vec4(v0.position, 1.0);
+    vec3 p1 = object_to_world * vec4(v1.position, 1.0);
+    vec3 p2 = object_to_world * vec4(v2.position, 1.0);
     s.p = w.x * p0 + w.y * p1 + w.z * p2;
     vec3 ng = normalize(cross(p1 - p0, p2 - p0));
     if ((inst.flags & INSTANCE_FLAG_FLIPPED) != 0u) ng = -ng;
@@ -57,7 +58,7 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     Material m = materials[inst.material];
 
     // Shading normal: interpolated vertex normals (zero = flat), then the normal map.
-    mat3 normal_to_world = inverse_transpose3(mat3(h.to_world));
+    mat3 normal_to_world = inverse_transpose3(mat3(object_to_world));
     vec3 nv = w.x * v0.normal + w.y * v1.normal + w.z * v2.normal;
     vec3 n = dot(nv, nv) > 1e-12 ? normalize(normal_to_world * nv) : ng;
     if (dot(n, ng) < 0.0) n = -n;  // authored normals agree with the winding
@@ -69,7 +70,7 @@ Surface make_surface(Hit h, vec3 ray_dir) {
         vec3 tangent;
         float sign_b;
         if (dot(tv.xyz, tv.xyz) > 1e-12) {
-            tangent = mat3(h.to_world) * tv.xyz;
+            tangent = mat3(object_to_world) * tv.xyz;
             sign_b = tv.w < 0.0 ? -1.0 : 1.0;
         } else {
             // No TANGENT attribute: derive one from the UV parameterisation.

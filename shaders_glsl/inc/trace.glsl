@@ -9,8 +9,13 @@ struct Hit {
     uint primitive;
     vec2 bary;        // barycentrics of vertices 1 and 2
     float t;
-    mat4x3 to_world;  // object to world
 };
+
+// Instance index of the candidate (C = false) or committed (C = true) intersection: the
+// TLAS instance's custom index plus the geometry's index in its BLAS. (A macro: the
+// `committed` argument of the ray-query getters must be a compile-time constant.)
+#define HIT_INSTANCE(rq, C) \
+    (rayQueryGetIntersectionInstanceCustomIndexEXT(rq, C) + uint(rayQueryGetIntersectionGeometryIndexEXT(rq, C)))
 
 // Does a candidate hit on non-opaque geometry count? MASK compares alpha with the
 // cutoff; BLEND keeps the hit with probability alpha, decided by a hash of the ray and
@@ -40,7 +45,7 @@ Hit trace_closest(vec3 origin, vec3 dir, float tmax) {
     uvec4 key = ray_key(origin, dir);
     while (rayQueryProceedEXT(rq)) {
         if (rayQueryGetIntersectionTypeEXT(rq, false) == gl_RayQueryCandidateIntersectionTriangleEXT) {
-            uint inst = rayQueryGetIntersectionInstanceCustomIndexEXT(rq, false);
+            uint inst = HIT_INSTANCE(rq, false);
             uint prim = rayQueryGetIntersectionPrimitiveIndexEXT(rq, false);
             vec2 bary = rayQueryGetIntersectionBarycentricsEXT(rq, false);
             if (alpha_passes(inst, prim, bary, key)) rayQueryConfirmIntersectionEXT(rq);
@@ -49,11 +54,10 @@ Hit trace_closest(vec3 origin, vec3 dir, float tmax) {
     Hit h;
     h.valid = rayQueryGetIntersectionTypeEXT(rq, true) == gl_RayQueryCommittedIntersectionTriangleEXT;
     if (h.valid) {
-        h.instance = rayQueryGetIntersectionInstanceCustomIndexEXT(rq, true);
+        h.instance = HIT_INSTANCE(rq, true);
         h.primitive = rayQueryGetIntersectionPrimitiveIndexEXT(rq, true);
         h.bary = rayQueryGetIntersectionBarycentricsEXT(rq, true);
         h.t = rayQueryGetIntersectionTEXT(rq, true);
-        h.to_world = rayQueryGetIntersectionObjectToWorldEXT(rq, true);
     }
     return h;
 }
@@ -65,7 +69,7 @@ bool visible(vec3 origin, vec3 dir, float tmax) {
     uvec4 key = ray_key(origin, dir);
     while (rayQueryProceedEXT(rq)) {
         if (rayQueryGetIntersectionTypeEXT(rq, false) == gl_RayQueryCandidateIntersectionTriangleEXT) {
-            uint inst = rayQueryGetIntersectionInstanceCustomIndexEXT(rq, false);
+            uint inst = HIT_INSTANCE(rq, false);
             uint prim = rayQueryGetIntersectionPrimitiveIndexEXT(rq, false);
             vec2 bary = rayQueryGetIntersectionBarycentricsEXT(rq, false);
             if (alpha_passes(inst, prim, bary, key)) rayQueryConfirmIntersectionEXT(rq);

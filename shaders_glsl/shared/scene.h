@@ -11,9 +11,15 @@ struct Vertex {
     vec2 uv1;
 };
 
-// One TLAS instance: a mesh primitive placed by a node. The instance's custom index is
-// its position in the instance buffer.
+// A mesh primitive placed by a node. Small instances are flattened into world-space
+// geometries of shared BLASes (lavapipe traverses many small TLAS instances slowly); a
+// hit's instance is the TLAS instance's custom index plus the geometry index within its
+// BLAS, and its object-to-world transform is stored here rather than taken from the ray
+// query (which is the identity for flattened geometry).
 struct Instance {
+    vec4 to_world_row0;       // object-to-world, rows of a 3×4 matrix
+    vec4 to_world_row1;
+    vec4 to_world_row2;
     uint vertex_offset;       // added to every index of the primitive
     uint index_offset;        // first index (3 per triangle) in the index buffer
     uint triangle_count;

@@ -30,6 +30,7 @@ pub struct GpuScene {
     pub samplers: Vec<Sampler>,
     pub tlas: AccelStructure,
     _blases: Vec<AccelStructure>,
+    _flat_positions: Buffer,
     /// Seconds spent building acceleration structures.
     pub accel_seconds: f64,
     /// Seconds spent uploading buffers and textures.
@@ -53,11 +54,15 @@ impl GpuScene {
         let vertices = Buffer::from_slice(device, &scene.vertices, geometry_usage, "vertices")?;
         let indices = Buffer::from_slice(device, &scene.indices, geometry_usage, "indices")?;
 
-        let gpu_instances: Vec<gpu::Instance> = scene
-            .instances
+        // Small instanced meshes are copied into world space and merged into shared
+        // BLASes; the instance buffer lists them first, in merge order.
+        let plan = FlattenPlan::new(scene);
+        let gpu_instances: Vec<gpu::Instance> = plan
+            .order
             .iter()
-            .zip(&lights.instance_lights)
-            .map(|(inst, &(light_index_offset, light_model))| {
+            .map(|&i| {
+                let inst = &scene.instances[i];
+                let (light_index_offset, light_model) = lights.instance_lights[i];
                 let p = &scene.primitives[inst.primitive as usize];
                 let mut flags = 0;
                 if p.opaque {
@@ -66,7 +71,11 @@ impl GpuScene {
                 if inst.transform.determinant() < 0.0 {
                     flags |= gpu::INSTANCE_FLAG_FLIPPED;
                 }
+                let rows = inst.transform.transpose().to_cols_array_2d();
                 gpu::Instance {
+                    to_world_row0: rows[0],
+                    to_world_row1: rows[1],
+                    to_world_row2: rows[2],
                     vertex_offset: p.vertex_offset,
                     index_offset: p.index_offset,
                     triangle_count: p.triangle_count,
@@ -125,34 +134,90 @@ impl GpuScene {
 
         let started = Instant::now();
         let stride = std::mem::size_of::<gpu::Vertex>() as u64;
-        let geometries: Vec<BlasGeometry> = scene
-            .primitives
+        let geometry = |p: &crate::scene::MeshPrimitive,
+                        vertex_address: u64,
+                        vertex_stride: u64| BlasGeometry {
+            vertex_address,
+            vertex_stride,
+            max_vertex: p.vertex_count.saturating_sub(1),
+            index_address: indices.address + p.index_offset as u64 * 4,
+            triangle_count: p.triangle_count,
+            opaque: p.opaque,
+        };
+        // World-space positions of the flattened instances, then one geometry each.
+        let mut flat_positions: Vec<[f32; 3]> =
+            Vec::with_capacity(plan.flattened_vertices as usize);
+        let mut flat_geometries = Vec::with_capacity(plan.flattened);
+        for &i in &plan.order[..plan.flattened] {
+            let inst = &scene.instances[i];
+            let p = &scene.primitives[inst.primitive as usize];
+            let first = flat_positions.len() as u64;
+            flat_positions.extend(
+                scene.vertices
+                    [p.vertex_offset as usize..(p.vertex_offset + p.vertex_count) as usize]
+                    .iter()
+                    .map(|v| {
+                        inst.transform
+                            .transform_point3(glam::Vec3::from(v.position))
+                            .to_array()
+                    }),
+            );
+            flat_geometries.push((p, first));
+        }
+        let flat_buffer = Buffer::from_slice(
+            device,
+            &flat_positions,
+            geometry_usage,
+            "flattened positions",
+        )?;
+        let mut blas_lists: Vec<Vec<BlasGeometry>> = plan
+            .groups
             .iter()
-            .map(|p| BlasGeometry {
-                vertex_address: vertices.address + p.vertex_offset as u64 * stride,
-                vertex_stride: stride,
-                max_vertex: p.vertex_count.saturating_sub(1),
-                index_address: indices.address + p.index_offset as u64 * 4,
-                triangle_count: p.triangle_count,
-                opaque: p.opaque,
+            .map(|g| {
+                flat_geometries[g.clone()]
+                    .iter()
+                    .map(|&(p, first)| geometry(p, flat_buffer.address + first * 12, 12))
+                    .collect()
             })
             .collect();
-        let blases = AccelStructure::build_blases(device, &geometries)?;
-        let tlas_instances: Vec<TlasInstance> = scene
-            .instances
+        // Then one BLAS per primitive that stays instanced.
+        let mut primitive_blas: HashMap<u32, usize> = HashMap::new();
+        for &i in &plan.order[plan.flattened..] {
+            let prim = scene.instances[i].primitive;
+            primitive_blas.entry(prim).or_insert_with(|| {
+                let p = &scene.primitives[prim as usize];
+                blas_lists.push(vec![geometry(
+                    p,
+                    vertices.address + p.vertex_offset as u64 * stride,
+                    stride,
+                )]);
+                blas_lists.len() - 1
+            });
+        }
+        let blases = AccelStructure::build_blases(device, &blas_lists)?;
+        const IDENTITY: [f32; 12] = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+        let mut tlas_instances: Vec<TlasInstance> = plan
+            .groups
             .iter()
             .enumerate()
-            .map(|(i, inst)| {
-                let m = inst.transform.transpose().to_cols_array();
-                TlasInstance {
-                    // Row-major 3×4: the first three rows of the matrix.
-                    transform: m[..12].try_into().unwrap(),
-                    custom_index: i as u32,
-                    blas_address: blases[inst.primitive as usize].address,
-                    force_opaque: false,
-                }
+            .map(|(b, g)| TlasInstance {
+                transform: IDENTITY,
+                custom_index: g.start as u32,
+                blas_address: blases[b].address,
+                force_opaque: false,
             })
             .collect();
+        for (k, &i) in plan.order.iter().enumerate().skip(plan.flattened) {
+            let inst = &scene.instances[i];
+            let m = inst.transform.transpose().to_cols_array();
+            tlas_instances.push(TlasInstance {
+                // Row-major 3×4: the first three rows of the matrix.
+                transform: m[..12].try_into().unwrap(),
+                custom_index: k as u32,
+                blas_address: blases[primitive_blas[&inst.primitive]].address,
+                force_opaque: false,
+            });
+        }
         let tlas = AccelStructure::build_tlas(device, &tlas_instances)?;
         let accel_seconds = started.elapsed().as_secs_f64();
 
@@ -179,11 +244,14 @@ impl GpuScene {
             + blases.iter().map(|b| b.size).sum::<u64>()
             + tlas.size;
         log::info!(
-            "scene on device: {:.1} MiB, uploads {:.2} s, acceleration structures {:.2} s ({} BLAS)",
+            "scene on device: {:.1} MiB, uploads {:.2} s, acceleration structures {:.2} s ({} BLAS, {} TLAS instances; {} of {} instances flattened)",
             device_bytes as f64 / (1 << 20) as f64,
             upload_seconds,
             accel_seconds,
-            blases.len()
+            blases.len(),
+            tlas_instances.len(),
+            plan.flattened,
+            scene.instances.len()
         );
         Ok(GpuScene {
             vertices,
@@ -201,6 +269,7 @@ impl GpuScene {
             samplers,
             tlas,
             _blases: blases,
+            _flat_positions: flat_buffer,
             accel_seconds,
             upload_seconds,
             device_bytes,
@@ -214,5 +283,58 @@ impl GpuScene {
             .zip(&self.texture_samplers)
             .map(|(t, &s)| (t.view, self.samplers[s].raw))
             .collect()
+    }
+}
+
+/// Which instances are copied into world space and merged into shared BLASes.
+///
+/// lavapipe (and, less so, hardware) traverses a TLAS of many small instances slowly: the
+/// street scene's 882 instances ran camera rays 20× slower than a Cornell box. Instances
+/// of primitives up to `FLATTEN_MAX_TRIANGLES` are flattened while the copies stay within
+/// `FLATTEN_BUDGET_TRIANGLES`; large meshes keep real instancing, so heavy instancing of
+/// big meshes does not multiply memory.
+struct FlattenPlan {
+    /// Scene instance indices in GPU order: the flattened ones first.
+    order: Vec<usize>,
+    /// How many of `order` are flattened.
+    flattened: usize,
+    flattened_vertices: u64,
+    /// Ranges of `order` that share one BLAS.
+    groups: Vec<std::ops::Range<usize>>,
+}
+
+const FLATTEN_MAX_TRIANGLES: u32 = 65_536;
+const FLATTEN_BUDGET_TRIANGLES: u64 = 8 << 20;
+const FLATTEN_MAX_GEOMETRIES: usize = 1 << 16;
+
+impl FlattenPlan {
+    fn new(scene: &Scene) -> FlattenPlan {
+        let mut flat = Vec::new();
+        let mut rest = Vec::new();
+        let (mut triangles, mut vertices) = (0u64, 0u64);
+        for (i, inst) in scene.instances.iter().enumerate() {
+            let p = &scene.primitives[inst.primitive as usize];
+            if p.triangle_count <= FLATTEN_MAX_TRIANGLES
+                && triangles + p.triangle_count as u64 <= FLATTEN_BUDGET_TRIANGLES
+            {
+                triangles += p.triangle_count as u64;
+                vertices += p.vertex_count as u64;
+                flat.push(i);
+            } else {
+                rest.push(i);
+            }
+        }
+        let flattened = flat.len();
+        let groups = (0..flattened)
+            .step_by(FLATTEN_MAX_GEOMETRIES)
+            .map(|s| s..(s + FLATTEN_MAX_GEOMETRIES).min(flattened))
+            .collect();
+        flat.extend(rest);
+        FlattenPlan {
+            order: flat,
+            flattened,
+            flattened_vertices: vertices,
+            groups,
+        }
     }
 }

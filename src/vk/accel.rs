@@ -29,7 +29,7 @@ impl Drop for AccelStructure {
     }
 }
 
-/// Triangles of one BLAS, read from buffers by device address.
+/// One geometry (a run of triangles) of a BLAS, read from buffers by device address.
 #[derive(Clone, Copy, Debug)]
 pub struct BlasGeometry {
     /// Address of the first vertex position (vec3 f32 at the start of each vertex).
@@ -103,33 +103,43 @@ fn align(x: u64, a: u64) -> u64 {
 const SCRATCH_BUDGET: u64 = 256 << 20;
 
 impl AccelStructure {
-    /// Build one bottom-level structure per geometry.
+    /// Build one bottom-level structure per list of geometries (geometry i of a BLAS is
+    /// `rayQueryGetIntersectionGeometryIndexEXT` = i).
     pub fn build_blases(
         device: &Arc<Device>,
-        geometries: &[BlasGeometry],
+        blases: &[Vec<BlasGeometry>],
     ) -> Result<Vec<AccelStructure>> {
         let scratch_align = device.info.min_scratch_alignment;
-        let mut out = Vec::with_capacity(geometries.len());
+        let geometries_of =
+            |list: &[BlasGeometry]| -> Vec<vk::AccelerationStructureGeometryKHR<'static>> {
+                list.iter()
+                    .map(|g| {
+                        vk::AccelerationStructureGeometryKHR::default()
+                            .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
+                            .geometry(vk::AccelerationStructureGeometryDataKHR {
+                                triangles: triangles(g),
+                            })
+                            .flags(geometry_flags(g))
+                    })
+                    .collect()
+            };
+        let mut out = Vec::with_capacity(blases.len());
         let mut start = 0;
-        while start < geometries.len() {
+        while start < blases.len() {
             // Size this batch.
             let mut batch = Vec::new();
             let mut scratch_total = 0u64;
             let mut i = start;
-            while i < geometries.len() {
-                let g = &geometries[i];
-                let tri = triangles(g);
-                let geom = [vk::AccelerationStructureGeometryKHR::default()
-                    .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
-                    .geometry(vk::AccelerationStructureGeometryDataKHR { triangles: tri })
-                    .flags(geometry_flags(g))];
+            while i < blases.len() {
+                let geom = geometries_of(&blases[i]);
+                let counts: Vec<u32> = blases[i].iter().map(|g| g.triangle_count).collect();
                 let info = build_info(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, &geom);
                 let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
                 unsafe {
                     device.accel.get_acceleration_structure_build_sizes(
                         vk::AccelerationStructureBuildTypeKHR::DEVICE,
                         &info,
-                        &[g.triangle_count],
+                        &counts,
                         &mut sizes,
                     )
                 };
@@ -151,26 +161,18 @@ impl AccelStructure {
             let scratch_base = align(scratch.address, scratch_align);
             let structures: Vec<AccelStructure> = batch
                 .iter()
-                .map(|&(gi, size, _)| {
+                .map(|&(bi, size, _)| {
                     create_as(
                         device,
                         vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
                         size,
-                        &format!("BLAS {gi}"),
+                        &format!("BLAS {bi}"),
                     )
                 })
                 .collect::<Result<_>>()?;
-            let geoms: Vec<[vk::AccelerationStructureGeometryKHR; 1]> = batch
+            let geoms: Vec<Vec<vk::AccelerationStructureGeometryKHR>> = batch
                 .iter()
-                .map(|&(gi, _, _)| {
-                    let g = &geometries[gi];
-                    [vk::AccelerationStructureGeometryKHR::default()
-                        .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
-                        .geometry(vk::AccelerationStructureGeometryDataKHR {
-                            triangles: triangles(g),
-                        })
-                        .flags(geometry_flags(g))]
-                })
+                .map(|&(bi, _, _)| geometries_of(&blases[bi]))
                 .collect();
             let infos: Vec<vk::AccelerationStructureBuildGeometryInfoKHR> = batch
                 .iter()
@@ -184,11 +186,16 @@ impl AccelStructure {
                         })
                 })
                 .collect();
-            let ranges: Vec<[vk::AccelerationStructureBuildRangeInfoKHR; 1]> = batch
+            let ranges: Vec<Vec<vk::AccelerationStructureBuildRangeInfoKHR>> = batch
                 .iter()
-                .map(|&(gi, _, _)| {
-                    [vk::AccelerationStructureBuildRangeInfoKHR::default()
-                        .primitive_count(geometries[gi].triangle_count)]
+                .map(|&(bi, _, _)| {
+                    blases[bi]
+                        .iter()
+                        .map(|g| {
+                            vk::AccelerationStructureBuildRangeInfoKHR::default()
+                                .primitive_count(g.triangle_count)
+                        })
+                        .collect()
                 })
                 .collect();
             let range_refs: Vec<&[vk::AccelerationStructureBuildRangeInfoKHR]> =
