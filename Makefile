@@ -13,8 +13,9 @@ $(SETUP_STAMP): scripts/setup
 
 setup: $(SETUP_STAMP)
 
+# One minute of RIS on the street scene at 480×270 (lavapipe renders ~0.03 M samples/s here).
 demo: $(SETUP_STAMP)
-	$(CARGO) run --release -- render scenes/street.gltf --spp 64 -o out/street.exr --png out/street.png
+	$(CARGO) run --release -- render scenes/street.gltf --width 480 --method ris --time 60 -o out/street.exr --png out/street.png
 
 test: $(SETUP_STAMP)
 	$(CARGO) test --release
