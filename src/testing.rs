@@ -361,7 +361,7 @@ pub fn run_batches(
             out.stats.nonfinite_samples, 0,
             "the kernel produced non-finite samples"
         );
-        images.push(out.film.mean());
+        images.push(out.image());
     }
     Batches {
         width: settings.width,

@@ -3,7 +3,7 @@
 
 use anyhow::{Context, Result};
 use lanterna::render::session::{self, DeviceOptions, LoadedScene};
-use lanterna::render::{LightSource, Method, RenderSettings, Strategy};
+use lanterna::render::{GuidedOutput, LightSource, Method, RenderSettings, Strategy};
 use lanterna::scene::{Camera, CameraOverride};
 use lanterna::shaders::ShaderSource;
 use lanterna::vk::DeviceSelector;
@@ -145,6 +145,11 @@ pub struct EstimatorArgs {
     /// Guiding: directional filter of the training records.
     #[arg(long, value_enum, default_value = "box")]
     pub directional_filter: DirectionalFilterArg,
+    /// Guiding: output the render phase alone, or combine it with the training passes'
+    /// images weighted by their inverse estimated variance (Müller et al.'s option;
+    /// consistent rather than unbiased, and the EXR then has no exact film sums).
+    #[arg(long, value_enum, default_value = "render-phase")]
+    pub guided_output: GuidedOutput,
 }
 
 /// `--spatial-filter`.
@@ -178,6 +183,7 @@ impl EstimatorArgs {
             train_fraction: self.train_fraction,
             record_nee: !self.no_record_nee,
             strategy: self.strategy,
+            guided_output: self.guided_output,
             spatial_jitter: self.spatial_filter == SpatialFilterArg::Jitter,
             directional_box: self.directional_filter == DirectionalFilterArg::Box,
             guiding: lanterna::render::GuidingSettings {
@@ -273,4 +279,42 @@ pub fn render_meta(
             .insert("record_nee".into(), settings.record_nee.to_string());
     }
     meta
+}
+
+/// The image a run outputs: the film's exact sums, or the inverse-variance combination
+/// of a guided run (float means only; its spp counts every pass).
+pub fn outcome_image(
+    out: &lanterna::render::run::RunOutcome,
+    width: u32,
+    height: u32,
+    mut meta: lanterna::image_io::RenderMeta,
+) -> anyhow::Result<lanterna::image_io::Image> {
+    use lanterna::image_io::Image;
+    meta.sample_offset = Some(out.film.sample_offset);
+    match &out.combined {
+        Some(rgb) => {
+            let trained: u64 = out
+                .guiding
+                .as_ref()
+                .map_or(0, |g| g.iterations.iter().map(|i| i.spp).sum());
+            meta.spp = Some(out.film.spp + trained);
+            meta.sample_offset = Some(out.film.sample_offset - trained);
+            meta.extra
+                .insert("guided_output".into(), "inverse-variance".into());
+            let pixels = rgb.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+            let mut image = Image::new(width, height, pixels)?;
+            image.meta = meta;
+            Ok(image)
+        }
+        None => {
+            meta.spp = Some(out.film.spp);
+            let sums = out
+                .film
+                .sums
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect();
+            Ok(Image::from_sums(width, height, sums, meta)?)
+        }
+    }
 }

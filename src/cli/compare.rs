@@ -125,16 +125,8 @@ impl MethodRunner for GpuRunner {
         }
         let mut meta = self.meta.clone();
         meta.method = Some(method.name().to_string());
-        meta.spp = Some(out.film.spp);
-        meta.sample_offset = Some(out.film.sample_offset);
         meta.render_seconds = Some(out.seconds);
-        let sums = out
-            .film
-            .sums
-            .chunks_exact(3)
-            .map(|c| [c[0], c[1], c[2]])
-            .collect();
-        let image = Image::from_sums(w, h, sums, meta)?;
+        let image = common::outcome_image(&out, w, h, meta)?;
         log::info!(
             "{method} {budget:?}: {} spp in {:.2} s",
             out.film.spp,

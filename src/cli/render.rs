@@ -3,7 +3,7 @@
 use super::common::{self, DeviceArgs, MethodArgs, SceneArgs};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use lanterna::image_io::{self, Image};
+use lanterna::image_io;
 use lanterna::render::{run, session, Renderer};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -258,7 +258,7 @@ pub fn run(args: Args) -> Result<()> {
     bar.finish_and_clear();
     let render_seconds = outcome.seconds;
     let stats = outcome.stats;
-    let film = outcome.film;
+    let film = outcome.film.clone();
     let done = film.spp;
     anyhow::ensure!(
         done > 0,
@@ -286,12 +286,7 @@ pub fn run(args: Args) -> Result<()> {
     meta.render_seconds = Some(render_seconds);
     meta.extra
         .insert("gpu_seconds".into(), format!("{:.6}", stats.gpu_seconds));
-    let sums: Vec<[u64; 3]> = film
-        .sums
-        .chunks_exact(3)
-        .map(|c| [c[0], c[1], c[2]])
-        .collect();
-    let mut image = Image::from_sums(width, height, sums, meta)?;
+    let mut image = common::outcome_image(&outcome, width, height, meta)?;
     if !args.aov.is_empty() {
         let data = renderer.aovs()?;
         for aov in &args.aov {

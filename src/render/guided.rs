@@ -3,13 +3,16 @@
 //! with the tree frozen. Training and the final render use disjoint sample indices, so
 //! the final image's samples are independent of the data the tree learned from.
 //!
-//! The final image is the render phase alone. (Müller et al. also offer combining the
-//! last training iterations weighted by inverse variance; here the training passes
-//! record into the tree with the previous iteration's distribution, and their images are
-//! discarded.)
+//! The final image is the render phase alone by default. `GuidedOutput::InverseVariance`
+//! is Müller et al.'s alternative: every pass (the training iterations too, each rendered
+//! with the previous iteration's tree) is rendered as two halves, whose difference gives
+//! an unbiased estimate of that pass's mean pixel variance, and the passes' images are
+//! averaged with weights proportional to 1/variance. The weights are themselves estimates,
+//! so the combination is consistent rather than strictly unbiased (as in the reference
+//! implementation); the render phase alone is unbiased.
 
 use super::run::{Budget, RunOutcome};
-use super::{GuideBuffers, RenderError, RenderStats, Renderer, Result};
+use super::{Film, GuideBuffers, GuidedOutput, RenderError, RenderStats, Renderer, Result};
 use crate::guiding::{
     DirectionalFilter, GuidingConfig, SdTree, SpatialFilter, SppSchedule, TimeSchedule,
 };
@@ -97,6 +100,9 @@ pub fn run_guided(
     let mut stats = RenderStats::default();
     let mut iterations = Vec::new();
     let mut sample = first;
+    let combine = renderer.settings.guided_output == GuidedOutput::InverseVariance;
+    // (mean image, estimated mean pixel variance) of each pass, for the combination.
+    let mut passes: Vec<(Vec<f32>, f64)> = Vec::new();
 
     let tree = match renderer.preloaded_tree.take() {
         Some(mut t) => {
@@ -124,6 +130,7 @@ pub fn run_guided(
                             sample,
                             cancel,
                             &mut stats,
+                            combine.then_some(&mut passes),
                         )?;
                         sample += it.spp;
                         progress(sample - first);
@@ -150,6 +157,7 @@ pub fn run_guided(
                             sample,
                             cancel,
                             &mut stats,
+                            combine.then_some(&mut passes),
                         )?;
                         sample += it.spp;
                         progress(sample - first);
@@ -173,28 +181,59 @@ pub fn run_guided(
     // The render phase: the rest of the budget with the tree frozen.
     renderer.clear_film()?;
     let trained = sample - first;
-    let mut render_progress = |done: u64| progress(trained + done);
+    // With the combination, the render phase is rendered as two halves too.
+    let mut half: Option<Film> = None;
     match budget {
         Budget::Spp(n) => {
             let left = n.saturating_sub(trained).max(1);
+            let a = if combine && left >= 2 { left / 2 } else { left };
             renderer.render_samples(
                 sample,
-                left,
+                a,
                 false,
                 cancel,
-                &mut render_progress,
+                &mut |d| progress(trained + d),
                 &mut stats,
             )?;
+            if a < left {
+                half = Some(renderer.film()?);
+                renderer.render_samples(
+                    sample + a,
+                    left - a,
+                    false,
+                    cancel,
+                    &mut |d| progress(trained + a + d),
+                    &mut stats,
+                )?;
+            }
         }
         Budget::Seconds(total) => {
             let deadline = started + Duration::from_secs_f64(total);
+            let mut a = 0;
+            if combine {
+                let now = Instant::now();
+                let mid = now + deadline.saturating_duration_since(now) / 2;
+                renderer.render_until(
+                    sample,
+                    None,
+                    Some(mid),
+                    false,
+                    cancel,
+                    &mut |d| progress(trained + d),
+                    &mut stats,
+                )?;
+                a = renderer.film_spp();
+                if a > 0 {
+                    half = Some(renderer.film()?);
+                }
+            }
             renderer.render_until(
-                sample,
+                sample + a,
                 None,
                 Some(deadline),
                 false,
                 cancel,
-                &mut render_progress,
+                &mut |d| progress(trained + a + d),
                 &mut stats,
             )?;
             if renderer.film_spp() == 0 && !cancel.load(Ordering::SeqCst) {
@@ -204,19 +243,31 @@ pub fn run_guided(
                     1,
                     false,
                     cancel,
-                    &mut render_progress,
+                    &mut |d| progress(trained + d),
                     &mut stats,
                 )?;
+            }
+            if half.as_ref().is_some_and(|h| h.spp == renderer.film_spp()) {
+                half = None; // nothing after the midpoint: no variance estimate
             }
         }
     }
     let film = renderer.film()?;
+    let combined = combine.then(|| {
+        let var = half
+            .as_ref()
+            .and_then(|h| split_variance(h, &film))
+            .unwrap_or(f64::INFINITY);
+        passes.push((film.mean(), var));
+        combine_passes(&passes)
+    });
     let out = RunOutcome {
         film,
         stats,
         seconds: started.elapsed().as_secs_f64(),
         training_seconds,
         guiding: Some(GuidingOutcome { iterations, tree }),
+        combined,
     };
     Ok(out)
 }
@@ -233,6 +284,7 @@ fn train_iteration(
     sample: u64,
     cancel: &AtomicBool,
     stats: &mut RenderStats,
+    passes: Option<&mut Vec<(Vec<f32>, f64)>>,
 ) -> Result<IterationStats> {
     let t = Instant::now();
     renderer.set_guide_buffers(GuideBuffers::upload(&renderer.device, &tree.gpu_arrays())?);
@@ -241,7 +293,33 @@ fn train_iteration(
     renderer.clear_film()?;
     let gpu_before = stats.gpu_seconds;
     let t = Instant::now();
-    let done = renderer.render_samples(sample, spp, true, cancel, &mut |_| {}, stats)?;
+    // For the combination, render two halves: their difference estimates the variance.
+    let split = if passes.is_some() && spp >= 2 {
+        spp / 2
+    } else {
+        spp
+    };
+    let mut done = renderer.render_samples(sample, split, true, cancel, &mut |_| {}, stats)?;
+    let mut half = None;
+    if split < spp {
+        half = Some(renderer.film()?);
+        done += renderer.render_samples(
+            sample + split,
+            spp - split,
+            true,
+            cancel,
+            &mut |_| {},
+            stats,
+        )?;
+    }
+    if let Some(passes) = passes {
+        let film = renderer.film()?;
+        let var = half
+            .as_ref()
+            .and_then(|h| split_variance(h, &film))
+            .unwrap_or(f64::INFINITY);
+        passes.push((film.mean(), var));
+    }
     let render_seconds = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
@@ -286,4 +364,61 @@ fn train_iteration(
         it.gpu_bytes as f64 / 1024.0
     );
     Ok(it)
+}
+
+/// Mean pixel variance of the image of `total`, estimated from its first part `first`:
+/// with a and b the means of the two parts over n_a and n_b samples, E[(a − b)²] =
+/// σ²·(1/n_a + 1/n_b) for the per-sample variance σ², and the image's variance is σ²/n.
+fn split_variance(first: &Film, total: &Film) -> Option<f64> {
+    let (na, n) = (first.spp as f64, total.spp as f64);
+    let nb = n - na;
+    if na < 1.0 || nb < 1.0 {
+        return None;
+    }
+    let scale = crate::gpu::FILM_FIXED_SCALE as f64;
+    let sum_sq: f64 = first
+        .sums
+        .iter()
+        .zip(&total.sums)
+        .map(|(&a, &t)| {
+            let ma = a as f64 / scale / na;
+            let mb = (t - a) as f64 / scale / nb;
+            (ma - mb) * (ma - mb)
+        })
+        .sum();
+    let sigma2 = sum_sq / first.sums.len() as f64 / (1.0 / na + 1.0 / nb);
+    Some(sigma2 / n)
+}
+
+/// Average the passes' images with weights ∝ 1/variance (passes without an estimate get
+/// no weight; when none has one, the last pass alone).
+fn combine_passes(passes: &[(Vec<f32>, f64)]) -> Vec<f32> {
+    let weights: Vec<f64> = passes
+        .iter()
+        .map(|(_, v)| {
+            if v.is_finite() {
+                1.0 / v.max(1e-30)
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let total: f64 = weights.iter().sum();
+    if total <= 0.0 {
+        return passes.last().map(|p| p.0.clone()).unwrap_or_default();
+    }
+    let mut out = vec![0.0f64; passes[0].0.len()];
+    for ((img, _), w) in passes.iter().zip(&weights) {
+        for (o, &x) in out.iter_mut().zip(img) {
+            *o += w / total * x as f64;
+        }
+    }
+    log::debug!(
+        "inverse-variance weights of the passes: {:?}",
+        weights
+            .iter()
+            .map(|w| (w / total * 1000.0).round() / 1000.0)
+            .collect::<Vec<_>>()
+    );
+    out.into_iter().map(|x| x as f32).collect()
 }

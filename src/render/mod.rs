@@ -16,7 +16,7 @@ mod settings;
 pub use film::Film;
 pub use gpu_scene::GpuScene;
 pub use guided::{GuidingOutcome, IterationStats};
-pub use settings::{GuidingSettings, LightSource, Method, RenderSettings, Strategy};
+pub use settings::{GuidedOutput, GuidingSettings, LightSource, Method, RenderSettings, Strategy};
 
 use crate::gpu;
 use crate::lights::LightTable;

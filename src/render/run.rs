@@ -26,6 +26,16 @@ pub struct RunOutcome {
     pub training_seconds: f64,
     /// Training iterations and the tree (guided methods).
     pub guiding: Option<super::GuidingOutcome>,
+    /// The image to output instead of the film's mean, when it is not the film alone
+    /// (guided methods with `GuidedOutput::InverseVariance`): mean RGB per pixel.
+    pub combined: Option<Vec<f32>>,
+}
+
+impl RunOutcome {
+    /// Mean RGB per pixel of what the run outputs.
+    pub fn image(&self) -> Vec<f32> {
+        self.combined.clone().unwrap_or_else(|| self.film.mean())
+    }
 }
 
 /// Render `budget` with the renderer's method, starting at sample index `first`.
@@ -65,5 +75,6 @@ pub fn run_method(
         seconds: started.elapsed().as_secs_f64(),
         training_seconds: 0.0,
         guiding: None,
+        combined: None,
     })
 }

@@ -101,6 +101,19 @@ impl Default for GuidingSettings {
     }
 }
 
+/// What a guided render outputs.
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum GuidedOutput {
+    /// The render phase alone (training images are discarded).
+    RenderPhase,
+    /// Müller et al.'s option: the training iterations' images and the render phase's,
+    /// weighted by the inverse of their estimated variance.
+    InverseVariance,
+}
+
 /// Parameters of one render that the kernel sees.
 #[derive(Clone, Debug)]
 pub struct RenderSettings {
@@ -129,6 +142,7 @@ pub struct RenderSettings {
     /// Accumulate first-hit AOVs and per-pixel outliers (costs memory and a little time).
     pub aovs: bool,
     pub guiding: GuidingSettings,
+    pub guided_output: GuidedOutput,
 }
 
 impl Default for RenderSettings {
@@ -150,6 +164,7 @@ impl Default for RenderSettings {
             strategy: Strategy::Mis,
             aovs: false,
             guiding: GuidingSettings::default(),
+            guided_output: GuidedOutput::RenderPhase,
         }
     }
 }
