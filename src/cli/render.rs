@@ -68,6 +68,10 @@ pub struct Args {
     /// from the same scene; the whole budget renders with it).
     #[arg(long, value_name = "FILE")]
     pub load_guiding: Option<PathBuf>,
+    /// With --shader-dir: after rendering, wait for a kernel file to change, recompile and
+    /// render again (until Ctrl-C).
+    #[arg(long, requires = "shader_dir")]
+    pub watch: bool,
 }
 
 /// Saved SD-trees carry the scene's content hash (hex) as a number.
@@ -213,6 +217,84 @@ pub fn run(args: Args) -> Result<()> {
     if let Some((x, y)) = args.pixel {
         return trace_pixel(&mut renderer, x, y, &args, spp);
     }
+    let job = Job {
+        args: &args,
+        loaded: &loaded,
+        device: &device,
+        output,
+        png,
+        width,
+        height,
+        spp,
+    };
+    match &args.device.shader_dir {
+        Some(dir) if args.watch => watch(&mut renderer, &job, dir),
+        _ => render_once(&mut renderer, &job, started),
+    }
+}
+
+/// What `render_once` needs besides the renderer.
+struct Job<'a> {
+    args: &'a Args,
+    loaded: &'a session::LoadedScene,
+    device: &'a std::sync::Arc<lanterna::vk::Device>,
+    output: PathBuf,
+    png: Option<PathBuf>,
+    width: u32,
+    height: u32,
+    spp: u64,
+}
+
+/// `--watch`: render, then wait for a file under the shader directory to change, reload
+/// the kernels and render again, until Ctrl-C. Compile errors are printed, not fatal.
+fn watch(renderer: &mut Renderer, job: &Job<'_>, dir: &std::path::Path) -> Result<()> {
+    let cancel = common::cancel_flag();
+    loop {
+        if let Err(e) = render_once(renderer, job, Instant::now()) {
+            log::error!("{e:#}");
+        }
+        if cancel.load(std::sync::atomic::Ordering::SeqCst) {
+            return Ok(());
+        }
+        log::info!("watching {} for changes (Ctrl-C to stop)", dir.display());
+        let stamp = dir_stamp(dir);
+        while dir_stamp(dir) == stamp {
+            std::thread::sleep(std::time::Duration::from_millis(300));
+            if cancel.load(std::sync::atomic::Ordering::SeqCst) {
+                return Ok(());
+            }
+        }
+        log::info!("shaders changed: recompiling");
+        renderer.reload_shaders();
+    }
+}
+
+/// Paths, sizes and modification times of every file below `dir`.
+fn dir_stamp(dir: &std::path::Path) -> Vec<(PathBuf, u64, Option<std::time::SystemTime>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(&d) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let p = e.path();
+            match e.metadata() {
+                Ok(m) if m.is_dir() => stack.push(p),
+                Ok(m) => out.push((p, m.len(), m.modified().ok())),
+                Err(_) => {}
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Render with the current kernels and write the outputs.
+fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Result<()> {
+    let (args, loaded, device) = (job.args, job.loaded, job.device);
+    let (output, png) = (&job.output, &job.png);
+    let (width, height, spp) = (job.width, job.height, job.spp);
     renderer.prepare()?;
     let setup_seconds = started.elapsed().as_secs_f64();
 
@@ -248,13 +330,7 @@ pub fn run(args: Args) -> Result<()> {
         Some(t) => run::Budget::Seconds(t),
         None => run::Budget::Spp(spp),
     };
-    let outcome = run::run_method(
-        &mut renderer,
-        budget,
-        args.sample_offset,
-        cancel,
-        &mut progress,
-    )?;
+    let outcome = run::run_method(renderer, budget, args.sample_offset, cancel, &mut progress)?;
     bar.finish_and_clear();
     let render_seconds = outcome.seconds;
     let stats = outcome.stats;

@@ -484,6 +484,14 @@ impl Renderer {
         }
     }
 
+    /// Drop the compiled pipelines so the next render loads the kernels again (after
+    /// they changed on disk, with a directory shader source).
+    pub fn reload_shaders(&mut self) {
+        self.device.wait_idle();
+        self.set = None;
+        self.pipelines.clear();
+    }
+
     /// Samples per pixel in the film.
     pub fn film_spp(&self) -> u64 {
         self.film_spp
