@@ -355,8 +355,7 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
             log::info!("saved the SD-tree to {}", path.display());
         }
     }
-    let mut meta =
-        common::render_meta(&renderer.settings, &args.scene, &loaded.scene.hash, &device);
+    let mut meta = common::render_meta(&renderer.settings, &args.scene, &loaded.scene.hash, device);
     meta.spp = Some(film.spp);
     meta.sample_offset = Some(film.sample_offset);
     meta.render_seconds = Some(render_seconds);
@@ -403,8 +402,8 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
             );
         }
     }
-    common::ensure_parent(&output)?;
-    let written = image_io::write_exr(&output, &image)
+    common::ensure_parent(output)?;
+    let written = image_io::write_exr(output, &image)
         .with_context(|| format!("cannot write {}", output.display()))?;
     if written.nonfinite > 0 {
         // The kernel drops non-finite samples, so this would be a film bug: say so loudly.
