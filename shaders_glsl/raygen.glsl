@@ -26,6 +26,8 @@ struct VertexRecord {
     vec3 emitted;     // emission arriving along wi that this vertex's record counts
     vec3 nee_dir;
     float nee_value;  // NEE record value (0: none)
+    uint nee_model;   // light model NEE picked, for learned light selection
+    float nee_lum;    // luminance of the NEE contribution
 };
 
 void camera_ray(uvec2 pixel, vec2 jitter, out vec3 origin, out vec3 dir) {
@@ -57,6 +59,8 @@ void record_path(VertexRecord rec[MAX_RECORDED_VERTICES], uint count, inout Rng 
         }
         if ((guide_header.flags & GUIDE_FLAG_RECORD_NEE) != 0u && rec[k].nee_value > 0.0)
             guide_record(rec[k].p, rec[k].nee_dir, rec[k].nee_value, 0.0, vec3(rng_next2(rng), rng_next(rng)));
+        if ((guide_header.flags & GUIDE_FLAG_LEARN_LIGHTS) != 0u && rec[k].nee_model != INVALID_INDEX && rec[k].nee_lum > 0.0)
+            guide_light_record(guide_find_leaf(rec[k].p), rec[k].nee_model, rec[k].nee_lum);
     }
 }
 
@@ -76,7 +80,7 @@ struct PathInfo {
 vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo info) {
     info = PathInfo(vec3(0.0), vec3(0.0), 0.0, vec3(0.0), 0.0, 0.0, INVALID_INDEX, 0.0, 0.0);
     vec3 origin, dir;
-    camera_ray(pixel, rng_next2(rng), origin, dir);
+    camera_ray(pixel, stratified_pixel_sample(rng.key.x, rng.key.y, rng.key.z), origin, dir);
     TRACE2("camera ray o=%v3f d=%v3f\n", origin, dir);
     rays.camera += 1u;
     Hit hit = trace_closest(origin, dir, FLT_MAX);
@@ -102,6 +106,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
         TRACE4("  base colour %v3f metallic %f alpha %f throughput %v3f\n", s.bsdf.base_color, s.bsdf.metallic, s.bsdf.alpha,
                beta);
         DirectionSampler d = direction_sampler(s);
+        if (GUIDING) light_selection_begin(d.leaf, s.p);
         DirectionSample ds = sample_direction(s, d, rng);
         info.directions += 1.0;
         if (ds.guided) info.guided += 1.0;
@@ -154,6 +159,8 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
             r.emitted = emitted_recorded;
             r.nee_dir = nee.record_dir;
             r.nee_value = nee.record_value;
+            r.nee_model = nee.connected ? nee.chosen_model : INVALID_INDEX;
+            r.nee_lum = luminance(nee.contribution);
             rec[recorded++] = r;
         }
         if (!alive) {

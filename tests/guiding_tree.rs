@@ -167,15 +167,15 @@ fn load_refuses_bad_files() {
     .unwrap_err();
     assert!(matches!(err, GuidingError::NotAnSdTree { .. }), "{err}");
 
-    let mut v2 = bytes.clone();
-    v2[16] = 2;
-    let err = SdTree::load(&write("v2.sdt", &v2), scene_hash()).unwrap_err();
+    let mut v3 = bytes.clone();
+    v3[16] = 3;
+    let err = SdTree::load(&write("v3.sdt", &v3), scene_hash()).unwrap_err();
     assert!(
         matches!(
             err,
             GuidingError::Version {
-                found: 2,
-                supported: 1,
+                found: 3,
+                supported: 2,
                 ..
             }
         ),

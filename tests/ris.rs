@@ -185,3 +185,44 @@ fn ris_contribution_weight_is_unbiased() {
     }
     testing::assert_no_validation_errors();
 }
+
+/// The pixel positions of the first 2^m samples of a pixel form a (0, m, 2)-net: every
+/// elementary interval [a/2^i, (a+1)/2^i) × [b/2^j, (b+1)/2^j) with i + j = m holds
+/// exactly one of them (Owen scrambling keeps Sobol's net property).
+#[test]
+fn pixel_positions_are_stratified() {
+    let (pixels, m) = (16u32, 6u32);
+    let count = 1u32 << m;
+    let push: Vec<u8> = [pixels, count, 7]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let out = testing::run_kernel(
+        "tests/pixel_sampler",
+        &[],
+        &[],
+        (pixels * count) as usize * 8,
+        &push,
+        pixels * count,
+    )
+    .unwrap();
+    let p: Vec<[f32; 2]> = bytemuck::pod_collect_to_vec(&out);
+    for px in 0..pixels as usize {
+        let points = &p[px * count as usize..(px + 1) * count as usize];
+        for i in 0..=m {
+            let j = m - i;
+            let mut hits = vec![0u32; 1 << m];
+            for q in points {
+                assert!((0.0..1.0).contains(&q[0]) && (0.0..1.0).contains(&q[1]));
+                let a = (q[0] * (1u32 << i) as f32) as usize;
+                let b = (q[1] * (1u32 << j) as f32) as usize;
+                hits[(a << j) + b] += 1;
+            }
+            assert!(
+                hits.iter().all(|&h| h == 1),
+                "pixel {px}: {i}×{j} intervals not stratified"
+            );
+        }
+    }
+    testing::assert_no_validation_errors();
+}

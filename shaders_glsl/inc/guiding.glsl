@@ -356,4 +356,53 @@ void guide_record(vec3 p, vec3 dir, float value, float weight, vec3 u) {
     guide_record_from_leaf(guide_find_leaf(p), p, dir, value, weight, u);
 }
 
+// ---- learned light selection -------------------------------------------------------------
+#ifndef GUIDE_NO_LIGHT_TABLES
+
+// Probability of light model `model` in leaf `leaf`'s table (0 when absent).
+float guide_light_pmf(uint leaf, uint model) {
+    uint base = leaf * GUIDE_LIGHT_SLOTS;
+    [[dont_unroll]] for (uint i = 0u; i < GUIDE_LIGHT_SLOTS; ++i) {
+        GuideLightSlot s = guide_lights[base + i];
+        if (s.model == model) return s.value;
+    }
+    return 0.0;
+}
+
+// Pick a light model from leaf `leaf`'s table with u in [0, 1); INVALID_INDEX when the
+// table is empty.
+uint guide_light_sample(uint leaf, float u, out float pmf) {
+    uint base = leaf * GUIDE_LIGHT_SLOTS;
+    float cdf = 0.0;
+    uint last = GUIDE_LIGHT_EMPTY;
+    pmf = 0.0;
+    [[dont_unroll]] for (uint i = 0u; i < GUIDE_LIGHT_SLOTS; ++i) {
+        GuideLightSlot s = guide_lights[base + i];
+        if (s.model == GUIDE_LIGHT_EMPTY || s.value <= 0.0) continue;
+        cdf += s.value;
+        last = s.model;
+        pmf = s.value;
+        if (u < cdf) return s.model;
+    }
+    return last;  // rounding: the CDF may end a little below 1
+}
+
+// Add `value` to light model `model`'s slot of leaf `leaf`'s training table (open
+// addressing with atomics; a full neighbourhood drops the record, which only affects
+// what is learned, never correctness).
+void guide_light_record(uint leaf, uint model, float value) {
+    uint base = leaf * GUIDE_LIGHT_SLOTS;
+    uint h = (model * 2654435761u) >> 28u;  // top 4 bits: GUIDE_LIGHT_SLOTS = 16
+    [[dont_unroll]] for (uint probe = 0u; probe < GUIDE_LIGHT_PROBES; ++probe) {
+        uint i = base + ((h + probe) & (GUIDE_LIGHT_SLOTS - 1u));
+        uint prev = atomicCompSwap(guide_light_training[i].model, GUIDE_LIGHT_EMPTY, model);
+        if (prev == GUIDE_LIGHT_EMPTY || prev == model) {
+            atomicAdd(guide_light_training[i].value, value);
+            return;
+        }
+    }
+}
+
+#endif
+
 #endif

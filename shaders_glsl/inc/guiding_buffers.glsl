@@ -25,6 +25,12 @@
 #ifndef GUIDE_BINDING_TRAINING
 #define GUIDE_BINDING_TRAINING BINDING_GUIDE_TRAINING
 #endif
+#ifndef GUIDE_BINDING_LIGHTS
+#define GUIDE_BINDING_LIGHTS BINDING_GUIDE_LIGHTS
+#endif
+#ifndef GUIDE_BINDING_LIGHT_TRAINING
+#define GUIDE_BINDING_LIGHT_TRAINING BINDING_GUIDE_LIGHT_TRAINING
+#endif
 
 layout(set = GUIDE_SET, binding = GUIDE_BINDING_SPATIAL, scalar) readonly buffer GuideSpatialBuffer {
     GuideHeader guide_header;
@@ -40,5 +46,14 @@ layout(set = GUIDE_SET, binding = GUIDE_BINDING_SAMPLING, scalar) readonly buffe
 layout(set = GUIDE_SET, binding = GUIDE_BINDING_TRAINING, scalar) buffer GuideTrainingBuffer {
     GuideQuadNode guide_training[];
 };
+
+#ifndef GUIDE_NO_LIGHT_TABLES
+layout(set = GUIDE_SET, binding = GUIDE_BINDING_LIGHTS, scalar) readonly buffer GuideLightBuffer {
+    GuideLightSlot guide_lights[];
+};
+layout(set = GUIDE_SET, binding = GUIDE_BINDING_LIGHT_TRAINING, scalar) buffer GuideLightTrainingBuffer {
+    GuideLightSlot guide_light_training[];
+};
+#endif
 
 #endif

@@ -35,9 +35,33 @@ uint alias_sample(uint begin, uint count, float u, bool models) {
     return frac < threshold ? i : alias;
 }
 
-float model_pmf(uint model) {
+float source_model_pmf(uint model) {
     if (params.ris_source == RIS_SOURCE_POWER) return model_alias[model].pmf;
     return 1.0 / float(params.light_model_count);
+}
+
+// Learned light selection (guided methods with GUIDE_FLAG_LEARN_LIGHTS): at a shading
+// point whose SD-tree leaf has a learned table, light models are chosen from the
+// defensive mixture (1 − mix)·source + mix·table. The source term keeps every light
+// samplable, and every pdf below is the mixture's, so NEE, RIS and MIS stay unbiased.
+uint g_light_leaf = INVALID_INDEX;
+float g_light_mix = 0.0;
+
+// Set the model distribution for shading point p (`leaf`: its SD-tree leaf if known).
+void light_selection_begin(uint leaf, vec3 p) {
+    g_light_leaf = INVALID_INDEX;
+    g_light_mix = 0.0;
+    if (!GUIDING || (guide_header.flags & GUIDE_FLAG_LEARN_LIGHTS) == 0u) return;
+    if (leaf == INVALID_INDEX) leaf = guide_find_leaf(p);
+    g_light_leaf = leaf;
+    if (guide_lights[leaf * GUIDE_LIGHT_SLOTS].model == GUIDE_LIGHT_EMPTY) return;  // CPU puts entries first
+    g_light_mix = guide_header.light_mix;
+}
+
+float model_pmf(uint model) {
+    float p = source_model_pmf(model);
+    if (GUIDING && g_light_mix > 0.0) p = (1.0 - g_light_mix) * p + g_light_mix * guide_light_pmf(g_light_leaf, model);
+    return p;
 }
 
 float triangle_pmf(uint tri, LightModel m) {
@@ -95,8 +119,21 @@ LightSample sample_punctual(uint index, vec3 x) {
 // Draw a light point for shading point x with four uniform numbers.
 LightSample sample_light(vec3 x, vec4 u) {
     uint count = params.light_model_count;
-    uint model = params.ris_source == RIS_SOURCE_POWER ? alias_sample(0u, count, u.x, true)
-                                                       : min(uint(u.x * float(count)), count - 1u);
+    float um = u.x;
+    uint model = INVALID_INDEX;
+    if (GUIDING && g_light_mix > 0.0) {
+        // Reuse u.x: the first `mix` of its range picks from the table, the rest, rescaled,
+        // from the source.
+        if (um < g_light_mix) {
+            float unused;
+            model = guide_light_sample(g_light_leaf, um / g_light_mix, unused);
+        } else {
+            um = (um - g_light_mix) / (1.0 - g_light_mix);
+        }
+    }
+    if (model == INVALID_INDEX)
+        model = params.ris_source == RIS_SOURCE_POWER ? alias_sample(0u, count, um, true)
+                                                       : min(uint(um * float(count)), count - 1u);
     LightModel m = light_models[model];
     float pm = model_pmf(model);
     if (m.punctual != INVALID_INDEX) {

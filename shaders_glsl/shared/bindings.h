@@ -24,7 +24,9 @@
 #define BINDING_GUIDE_SAMPLING 18
 #define BINDING_GUIDE_TRAINING 19
 #define BINDING_OUTLIERS 20
-#define BINDING_COUNT 21
+#define BINDING_GUIDE_LIGHTS 21
+#define BINDING_GUIDE_LIGHT_TRAINING 22
+#define BINDING_COUNT 23
 
 // Upper bound on bindless textures in one scene.
 #define MAX_TEXTURES 8192

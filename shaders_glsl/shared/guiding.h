@@ -15,6 +15,13 @@
 #define GUIDE_FLAG_RECORD_NEE 1u
 #define GUIDE_FLAG_SPATIAL_JITTER 2u
 #define GUIDE_FLAG_DIRECTIONAL_BOX 4u
+#define GUIDE_FLAG_LEARN_LIGHTS 8u
+
+// Learned light selection: per spatial leaf, a table of GUIDE_LIGHT_SLOTS light models
+// (open addressing, GUIDE_LIGHT_PROBES probes) with the NEE contribution each delivered.
+#define GUIDE_LIGHT_SLOTS 16
+#define GUIDE_LIGHT_PROBES 4
+#define GUIDE_LIGHT_EMPTY 0xffffffffu
 
 // GuideSpatialNode.axis of a leaf.
 #define GUIDE_SPATIAL_LEAF 3u
@@ -33,7 +40,15 @@ struct GuideHeader {
     uint flags;           // GUIDE_FLAG_*
     uint leaf_count;
     float bsdf_fraction;  // probability of sampling the BSDF instead of the quadtree
-    uint pad;
+    float light_mix;      // probability of choosing a light model from the leaf's table
+};
+
+// One slot of a leaf's light table (BINDING_GUIDE_LIGHTS: value = the model's selection
+// probability, slots of a leaf sum to 1 or are all empty; BINDING_GUIDE_LIGHT_TRAINING:
+// value = summed luminance of the NEE contributions the model delivered in the leaf).
+struct GuideLightSlot {
+    uint model;
+    float value;
 };
 
 // Spatial binary tree node. Interior: `axis` (0 x, 1 y, 2 z) splits the node's box in

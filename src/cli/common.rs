@@ -150,6 +150,14 @@ pub struct EstimatorArgs {
     /// consistent rather than unbiased, and the EXR then has no exact film sums).
     #[arg(long, value_enum, default_value = "render-phase")]
     pub guided_output: GuidedOutput,
+    /// Guiding: learn, per SD-tree leaf, which lights deliver NEE contributions (and so
+    /// are visible and bright there), and choose lights from a mixture of the source
+    /// distribution and the learned table (visibility-aware light selection).
+    #[arg(long)]
+    pub learn_lights: bool,
+    /// Guiding with --learn-lights: probability of choosing from the learned table.
+    #[arg(long, default_value_t = 0.5)]
+    pub light_mix: f32,
 }
 
 /// `--spatial-filter`.
@@ -189,6 +197,8 @@ impl EstimatorArgs {
             guiding: lanterna::render::GuidingSettings {
                 spatial_threshold: self.guiding_threshold,
                 memory_cap_bytes: self.guiding_memory.saturating_mul(1 << 20),
+                learn_lights: self.learn_lights,
+                light_mix: self.light_mix,
             },
             ..RenderSettings::default()
         }

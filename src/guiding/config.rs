@@ -48,6 +48,10 @@ pub struct GuidingConfig {
     pub record_nee: bool,
     /// Probability of sampling the BSDF rather than the quadtree (read by the kernel).
     pub bsdf_fraction: f32,
+    /// Learn, per leaf, which light models deliver NEE contributions, and choose light
+    /// models from (1 − light_mix)·source + light_mix·learned table.
+    pub learn_lights: bool,
+    pub light_mix: f32,
 }
 
 /// Default `--guiding-memory`: 256 MiB of GPU arrays is thousands of well-resolved leaves.
@@ -65,6 +69,8 @@ impl Default for GuidingConfig {
             directional_filter: DirectionalFilter::default(),
             record_nee: true,
             bsdf_fraction: 0.5,
+            learn_lights: false,
+            light_mix: 0.5,
         }
     }
 }
@@ -102,6 +108,12 @@ impl GuidingConfig {
                 self.bsdf_fraction
             ));
         }
+        if !(0.0..=0.95).contains(&self.light_mix) {
+            return bad(format!(
+                "light mix must be in [0, 0.95], got {}",
+                self.light_mix
+            ));
+        }
         Ok(())
     }
 
@@ -121,6 +133,9 @@ impl GuidingConfig {
         let mut f = 0;
         if self.record_nee {
             f |= GUIDE_FLAG_RECORD_NEE;
+        }
+        if self.learn_lights {
+            f |= crate::gpu::GUIDE_FLAG_LEARN_LIGHTS;
         }
         if self.spatial_filter == SpatialFilter::StochasticBox {
             f |= GUIDE_FLAG_SPATIAL_JITTER;

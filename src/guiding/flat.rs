@@ -11,7 +11,10 @@
 use super::quadtree::{QuadNode, QuadTree};
 use super::sdtree::{Leaf, SdTree, SpatialNode};
 use super::{GuidingConfig, GuidingError};
-use crate::gpu::{GuideHeader, GuideLeaf, GuideQuadNode, GuideSpatialNode, GUIDE_SPATIAL_LEAF};
+use crate::gpu::{
+    GuideHeader, GuideLeaf, GuideLightSlot, GuideQuadNode, GuideSpatialNode, GUIDE_LIGHT_EMPTY,
+    GUIDE_LIGHT_SLOTS, GUIDE_SPATIAL_LEAF,
+};
 use glam::Vec3;
 use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
@@ -20,6 +23,8 @@ pub(crate) const HEADER_BYTES: u64 = std::mem::size_of::<GuideHeader>() as u64;
 pub(crate) const SPATIAL_NODE_BYTES: u64 = std::mem::size_of::<GuideSpatialNode>() as u64;
 pub(crate) const LEAF_BYTES: u64 = std::mem::size_of::<GuideLeaf>() as u64;
 pub(crate) const QUAD_NODE_BYTES: u64 = std::mem::size_of::<GuideQuadNode>() as u64;
+pub(crate) const LIGHT_SLOT_BYTES: u64 = std::mem::size_of::<GuideLightSlot>() as u64;
+const SLOTS: usize = GUIDE_LIGHT_SLOTS as usize;
 
 /// The contents of the four guiding buffers.
 #[derive(Clone, Debug, PartialEq)]
@@ -31,7 +36,17 @@ pub struct GuideArrays {
     /// Initial contents of the training buffer (sums as the CPU has them: zero right
     /// after a refit).
     pub training: Vec<GuideQuadNode>,
+    /// Learned light tables (BINDING_GUIDE_LIGHTS): GUIDE_LIGHT_SLOTS per leaf, entries
+    /// first, then empty slots.
+    pub lights: Vec<GuideLightSlot>,
+    /// Initial contents of the light training buffer: all slots empty.
+    pub light_training: Vec<GuideLightSlot>,
 }
+
+const EMPTY_SLOT: GuideLightSlot = GuideLightSlot {
+    model: GUIDE_LIGHT_EMPTY,
+    value: 0.0,
+};
 
 impl GuideArrays {
     /// Bytes of the spatial buffer (BINDING_GUIDE_SPATIAL): header, then nodes.
@@ -51,6 +66,7 @@ impl GuideArrays {
         self.spatial_buffer_len()
             + LEAF_BYTES * self.leaves.len() as u64
             + QUAD_NODE_BYTES * (self.sampling.len() + self.training.len()) as u64
+            + LIGHT_SLOT_BYTES * (self.lights.len() + self.light_training.len()) as u64
     }
 }
 
@@ -145,6 +161,7 @@ impl SdTree {
             + SPATIAL_NODE_BYTES * self.nodes.len() as u64
             + LEAF_BYTES * self.leaves.len() as u64
             + QUAD_NODE_BYTES * (sampling + training) as u64
+            + LIGHT_SLOT_BYTES * (2 * SLOTS * self.leaves.len()) as u64
     }
 
     /// The GPU buffers' contents.
@@ -156,7 +173,11 @@ impl SdTree {
             flags: self.config.flags(),
             leaf_count: self.leaves.len() as u32,
             bsdf_fraction: self.config.bsdf_fraction,
-            pad: 0,
+            light_mix: if self.config.learn_lights {
+                self.config.light_mix
+            } else {
+                0.0
+            },
         };
         let spatial = self
             .nodes
@@ -191,13 +212,41 @@ impl SdTree {
                 sampling_weight: leaf.sampling_weight,
             });
         }
+        let mut lights = vec![EMPTY_SLOT; self.leaves.len() * SLOTS];
+        for (leaf, table) in self.leaves.iter().zip(lights.chunks_exact_mut(SLOTS)) {
+            for (slot, &(model, p)) in table.iter_mut().zip(leaf.lights.iter()) {
+                *slot = GuideLightSlot { model, value: p };
+            }
+        }
         GuideArrays {
             header,
             spatial,
             leaves,
             sampling,
             training,
+            light_training: vec![EMPTY_SLOT; lights.len()],
+            lights,
         }
+    }
+
+    /// Take in the light training buffer read back after a pass (learned light
+    /// selection): each leaf's recorded (light model, contribution) pairs.
+    pub fn load_light_readback(&mut self, slots: &[GuideLightSlot]) -> Result<(), GuidingError> {
+        if slots.len() != self.leaves.len() * SLOTS {
+            return Err(GuidingError::TrainingMismatch(format!(
+                "{} light slots read back, {} uploaded",
+                slots.len(),
+                self.leaves.len() * SLOTS
+            )));
+        }
+        for (leaf, table) in self.leaves.iter_mut().zip(slots.chunks_exact(SLOTS)) {
+            leaf.light_training = table
+                .iter()
+                .filter(|s| s.model != GUIDE_LIGHT_EMPTY)
+                .map(|s| (s.model, s.value))
+                .collect();
+        }
+        Ok(())
     }
 
     /// Take in the training buffer read back after a pass: it replaces the training
@@ -329,6 +378,17 @@ impl SdTree {
             if !(g.sampling_weight.is_finite() && training_weight.is_finite()) {
                 return bad(format!("{what}: non-finite weight"));
             }
+            let lights: Vec<(u32, f32)> = arrays
+                .lights
+                .get(i * SLOTS..(i + 1) * SLOTS)
+                .unwrap_or(&[])
+                .iter()
+                .filter(|s| s.model != GUIDE_LIGHT_EMPTY)
+                .map(|s| (s.model, s.value))
+                .collect();
+            if lights.iter().any(|&(_, p)| !(p.is_finite() && p >= 0.0)) {
+                return bad(format!("{what}: bad light table"));
+            }
             leaves.push(Leaf {
                 box_min,
                 box_size,
@@ -337,6 +397,8 @@ impl SdTree {
                 sampling_weight: g.sampling_weight,
                 training,
                 training_weight,
+                lights: Arc::new(lights),
+                light_training: Vec::new(),
             });
         }
         Ok(SdTree {

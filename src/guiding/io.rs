@@ -6,23 +6,25 @@
 //! file, anything that is not such a file, another version, a corrupt file, or a tree
 //! trained on another scene. Files are written to a temporary name and renamed.
 //!
-//! Format version 1, all integers little-endian:
+//! Format version 2, all integers little-endian:
 //! `magic[16] version:u32 scene_hash:u64 iterations:u32 bbox_min:f32×3 bbox_max:f32×3`
 //! `spatial_threshold:f32 rho:f32 max_quad_depth:u32 max_spatial_depth:u32`
 //! `memory_cap:u64 spatial_filter:u32 directional_filter:u32 record_nee:u32`
-//! `bsdf_fraction:f32 n_spatial:u32 n_leaves:u32 n_sampling:u32 n_training:u32`
+//! `bsdf_fraction:f32 learn_lights:u32 light_mix:f32`
+//! `n_spatial:u32 n_leaves:u32 n_sampling:u32 n_training:u32 n_lights:u32`
 //! `GuideHeader GuideSpatialNode[n_spatial] GuideLeaf[n_leaves]`
-//! `GuideQuadNode[n_sampling] GuideQuadNode[n_training] checksum:u64`
+//! `GuideQuadNode[n_sampling] GuideQuadNode[n_training] GuideLightSlot[n_lights] checksum:u64`
+//! (version 2 added the learned light tables).
 
 use super::flat::GuideArrays;
 use super::{DirectionalFilter, GuidingConfig, GuidingError, SdTree, SpatialFilter};
-use crate::gpu::{GuideHeader, GuideLeaf, GuideQuadNode, GuideSpatialNode};
+use crate::gpu::{GuideHeader, GuideLeaf, GuideLightSlot, GuideQuadNode, GuideSpatialNode};
 use std::io::Write;
 use std::path::Path;
 
 const MAGIC: &[u8; 16] = b"lanterna-sdtree\0";
 /// The SD-tree file format version this build writes and reads.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 
 /// FNV-1a, 64 bit: the file checksum, and a scene hash the renderer can feed with the
 /// scene's geometry and materials (`--load-guiding` refuses a tree from another scene).
@@ -145,15 +147,19 @@ impl SdTree {
         });
         w.u32(u32::from(c.record_nee));
         w.f32(c.bsdf_fraction);
+        w.u32(u32::from(c.learn_lights));
+        w.f32(c.light_mix);
         w.u32(arrays.spatial.len() as u32);
         w.u32(arrays.leaves.len() as u32);
         w.u32(arrays.sampling.len() as u32);
         w.u32(arrays.training.len() as u32);
+        w.u32(arrays.lights.len() as u32);
         w.words(std::slice::from_ref(&arrays.header));
         w.words(&arrays.spatial);
         w.words(&arrays.leaves);
         w.words(&arrays.sampling);
         w.words(&arrays.training);
+        w.words(&arrays.lights);
         let sum = SceneHasher::default().update(&w.0).finish();
         w.u64(sum);
 
@@ -261,8 +267,10 @@ fn parse(path: &Path, data: &[u8]) -> Result<(SdTree, SavedTreeInfo), GuidingErr
             },
             record_nee: r.u32()? != 0,
             bsdf_fraction: r.f32()?,
+            learn_lights: r.u32()? != 0,
+            light_mix: r.f32()?,
         };
-        let counts = [r.u32()?, r.u32()?, r.u32()?, r.u32()?];
+        let counts = [r.u32()?, r.u32()?, r.u32()?, r.u32()?, r.u32()?];
         let header = r.words::<GuideHeader>(1)?[0];
         let arrays = GuideArrays {
             header,
@@ -270,7 +278,10 @@ fn parse(path: &Path, data: &[u8]) -> Result<(SdTree, SavedTreeInfo), GuidingErr
             leaves: r.words::<GuideLeaf>(counts[1])?,
             sampling: r.words::<GuideQuadNode>(counts[2])?,
             training: r.words::<GuideQuadNode>(counts[3])?,
+            lights: r.words::<GuideLightSlot>(counts[4])?,
+            light_training: Vec::new(),
         };
+
         let info = SavedTreeInfo {
             scene_hash,
             bbox_min: [b[0], b[1], b[2]],

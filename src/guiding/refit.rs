@@ -53,6 +53,13 @@ impl SdTree {
             leaf.sampling = std::sync::Arc::new(built);
             leaf.sampling_weight = leaf.training_weight;
             leaf.training_weight = 0.0;
+            // Light tables := this iteration's contributions, normalised.
+            let mut recorded = std::mem::take(&mut leaf.light_training);
+            recorded.retain(|&(_, v)| v.is_finite() && v > 0.0);
+            let total: f32 = recorded.iter().map(|&(_, v)| v).sum();
+            recorded.iter_mut().for_each(|e| e.1 /= total);
+            recorded.sort_by(|a, b| b.1.total_cmp(&a.1));
+            leaf.lights = std::sync::Arc::new(recorded);
         }
 
         let threshold = self.config.split_threshold(next_spp);

@@ -35,6 +35,11 @@ pub struct Leaf {
     /// Where this iteration's records go.
     pub training: QuadTree,
     pub training_weight: f32,
+    /// Learned light selection: (light model, probability), probabilities summing to 1,
+    /// or empty; shared with the parent after a split until the next refit.
+    pub lights: Arc<Vec<(u32, f32)>>,
+    /// (light model, summed NEE contribution luminance) recorded this iteration.
+    pub light_training: Vec<(u32, f32)>,
 }
 
 /// The SD-tree. See the module documentation.
@@ -73,6 +78,8 @@ impl SdTree {
             sampling_weight: 0.0,
             training: QuadTree::initial(config.rho, config.max_quad_depth),
             training_weight: 0.0,
+            lights: Arc::new(Vec::new()),
+            light_training: Vec::new(),
         };
         Ok(Self {
             config: config.clone(),

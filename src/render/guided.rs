@@ -79,6 +79,8 @@ pub fn guiding_config(renderer: &Renderer) -> GuidingConfig {
         },
         record_nee: s.record_nee,
         bsdf_fraction: s.bsdf_fraction,
+        learn_lights: s.guiding.learn_lights,
+        light_mix: s.guiding.light_mix,
         ..GuidingConfig::default()
     }
 }
@@ -329,6 +331,10 @@ fn train_iteration(
     let t = Instant::now();
     tree.load_training_readback(&training)
         .map_err(guiding_error)?;
+    if renderer.settings.guiding.learn_lights {
+        let lights = renderer.guide_buffers().read_light_training()?;
+        tree.load_light_readback(&lights).map_err(guiding_error)?;
+    }
     let refit = tree.refit(next_spp);
     let refit_seconds = t.elapsed().as_secs_f64();
 

@@ -91,6 +91,10 @@ pub struct GuideBuffers {
     pub training: Buffer,
     /// Nodes in the training buffer (for the read-back).
     pub training_nodes: usize,
+    /// Learned light tables and their training copy.
+    pub lights: Buffer,
+    pub light_training: Buffer,
+    pub light_slots: usize,
 }
 
 impl GuideBuffers {
@@ -103,6 +107,9 @@ impl GuideBuffers {
             sampling: Buffer::zeroed(device, 64, usage, "guide sampling (unused)")?,
             training: Buffer::zeroed(device, 64, usage, "guide training (unused)")?,
             training_nodes: 0,
+            lights: Buffer::zeroed(device, 64, usage, "guide lights (unused)")?,
+            light_training: Buffer::zeroed(device, 64, usage, "guide light training (unused)")?,
+            light_slots: 0,
         })
     }
 
@@ -133,7 +140,20 @@ impl GuideBuffers {
                 "guide training quadtrees",
             )?,
             training_nodes: arrays.training.len(),
+            lights: Buffer::from_slice(device, &arrays.lights, usage, "guide light tables")?,
+            light_training: Buffer::from_slice(
+                device,
+                &arrays.light_training,
+                usage | raw::BufferUsageFlags::TRANSFER_SRC,
+                "guide light training",
+            )?,
+            light_slots: arrays.light_training.len(),
         })
+    }
+
+    /// Read the light training tables back after a pass.
+    pub fn read_light_training(&self) -> vk::Result<Vec<gpu::GuideLightSlot>> {
+        self.light_training.read(self.light_slots)
     }
 
     /// Read the training quadtrees back after a pass.
@@ -360,6 +380,8 @@ impl Renderer {
             gpu::BINDING_GUIDE_LEAVES,
             gpu::BINDING_GUIDE_SAMPLING,
             gpu::BINDING_GUIDE_TRAINING,
+            gpu::BINDING_GUIDE_LIGHTS,
+            gpu::BINDING_GUIDE_LIGHT_TRAINING,
             gpu::BINDING_OUTLIERS,
         ]
         .into_iter()
@@ -438,6 +460,11 @@ impl Renderer {
             (gpu::BINDING_GUIDE_LEAVES, &self.guide.leaves),
             (gpu::BINDING_GUIDE_SAMPLING, &self.guide.sampling),
             (gpu::BINDING_GUIDE_TRAINING, &self.guide.training),
+            (gpu::BINDING_GUIDE_LIGHTS, &self.guide.lights),
+            (
+                gpu::BINDING_GUIDE_LIGHT_TRAINING,
+                &self.guide.light_training,
+            ),
             (gpu::BINDING_OUTLIERS, &self.outliers),
         ] {
             set.write_buffer(binding, buffer);

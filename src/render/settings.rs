@@ -90,6 +90,10 @@ pub struct GuidingSettings {
     pub spatial_threshold: f32,
     /// Stop splitting before the SD-tree's buffers exceed this.
     pub memory_cap_bytes: u64,
+    /// Learn per SD-tree leaf which lights deliver NEE contributions and choose light
+    /// models from (1 − light_mix)·source + light_mix·learned table.
+    pub learn_lights: bool,
+    pub light_mix: f32,
 }
 
 impl Default for GuidingSettings {
@@ -97,6 +101,8 @@ impl Default for GuidingSettings {
         GuidingSettings {
             spatial_threshold: 12000.0,
             memory_cap_bytes: crate::guiding::DEFAULT_MEMORY_CAP_BYTES,
+            learn_lights: false,
+            light_mix: 0.5,
         }
     }
 }
