@@ -151,3 +151,35 @@ fn inverse_variance_combination_agrees_with_pt() {
     testing::assert_same_expectation(&a, &b, 4, ALPHA);
     testing::assert_no_validation_errors();
 }
+
+/// Learned light selection keeps NEE, RIS and MIS unbiased: guided methods with
+/// --learn-lights agree with pt on the many-light scenes.
+#[test]
+fn learned_light_selection_agrees_with_pt() {
+    for (kind, options, w, h) in [
+        (Kind::CornellLights, Options::default(), 16, 16),
+        (
+            Kind::Street,
+            Options {
+                lamps: Some(120),
+                aspect: Some(1.5),
+                ..Options::default()
+            },
+            24,
+            16,
+        ),
+    ] {
+        let t = testing::generated(kind, &options);
+        let mut pt = testing::settings(Method::Pt, w, h);
+        pt.seed = 51;
+        let a = render_batches(&t.scene, &t.camera, pt, 12, 48);
+        for (i, method) in [Method::Guided, Method::GuidedRis].into_iter().enumerate() {
+            let mut s = testing::settings(method, w, h);
+            s.seed = 52 + i as u32;
+            s.guiding.learn_lights = true;
+            let b = run_batches(&t.scene, &t.camera, s, 12, 48);
+            testing::assert_same_expectation(&a, &b, 4, ALPHA);
+        }
+    }
+    testing::assert_no_validation_errors();
+}

@@ -213,3 +213,64 @@ fn leaf_view_shows_the_leaf() {
     );
     assert!(view.rgb.iter().all(|v| (0.0..=1.0).contains(v)));
 }
+
+#[test]
+fn light_tables_normalise_and_follow_splits() {
+    use lanterna::gpu::{GuideLightSlot, GUIDE_LIGHT_EMPTY, GUIDE_LIGHT_SLOTS};
+    let config = GuidingConfig {
+        learn_lights: true,
+        spatial_threshold: 1.0,
+        ..GuidingConfig::default()
+    };
+    let mut tree = SdTree::new(Vec3::ZERO, Vec3::ONE, &config).unwrap();
+    // Leaf 0 delivered light from models 7 (3 units) and 2 (1 unit), and one bad slot.
+    let mut slots = vec![
+        GuideLightSlot {
+            model: GUIDE_LIGHT_EMPTY,
+            value: 0.0
+        };
+        GUIDE_LIGHT_SLOTS as usize
+    ];
+    slots[3] = GuideLightSlot {
+        model: 7,
+        value: 3.0,
+    };
+    slots[9] = GuideLightSlot {
+        model: 2,
+        value: 1.0,
+    };
+    slots[5] = GuideLightSlot {
+        model: 4,
+        value: f32::NAN,
+    };
+    tree.load_light_readback(&slots).unwrap();
+    for _ in 0..100 {
+        tree.record(Vec3::splat(0.25), Vec3::Z, 1.0, 1.0, [0.5; 3]);
+    }
+    tree.refit(4);
+    assert!(tree.leaves().len() > 1, "the leaf should have split");
+    for leaf in tree.leaves() {
+        assert_eq!(
+            leaf.lights.as_slice(),
+            &[(7, 0.75), (2, 0.25)],
+            "children inherit the parent's table"
+        );
+    }
+    let arrays = tree.gpu_arrays();
+    assert_eq!(
+        arrays.lights.len(),
+        tree.leaves().len() * GUIDE_LIGHT_SLOTS as usize
+    );
+    assert_eq!(
+        arrays.lights[0].model, 7,
+        "entries come first, most probable first"
+    );
+    assert!(arrays
+        .light_training
+        .iter()
+        .all(|s| s.model == GUIDE_LIGHT_EMPTY));
+    assert!(
+        tree.load_light_readback(&slots).is_err(),
+        "wrong slot count is refused"
+    );
+}
