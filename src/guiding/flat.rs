@@ -25,6 +25,8 @@ pub(crate) const LEAF_BYTES: u64 = std::mem::size_of::<GuideLeaf>() as u64;
 pub(crate) const QUAD_NODE_BYTES: u64 = std::mem::size_of::<GuideQuadNode>() as u64;
 pub(crate) const LIGHT_SLOT_BYTES: u64 = std::mem::size_of::<GuideLightSlot>() as u64;
 const SLOTS: usize = GUIDE_LIGHT_SLOTS as usize;
+/// GPU bytes one leaf adds besides its quadtrees: its record and its two light tables.
+pub(crate) const LEAF_TOTAL_BYTES: u64 = LEAF_BYTES + LIGHT_SLOT_BYTES * 2 * SLOTS as u64;
 
 /// The contents of the four guiding buffers.
 #[derive(Clone, Debug, PartialEq)]

@@ -7,7 +7,7 @@
 //! go to the heaviest leaves first and stop before the GPU arrays would exceed the
 //! memory cap; the two halves share the parent's sampling tree.
 
-use super::flat::{LEAF_BYTES, QUAD_NODE_BYTES, SPATIAL_NODE_BYTES};
+use super::flat::{LEAF_TOTAL_BYTES, QUAD_NODE_BYTES, SPATIAL_NODE_BYTES};
 use super::sdtree::{SdTree, SpatialNode};
 use std::collections::BinaryHeap;
 
@@ -102,7 +102,7 @@ impl SdTree {
         while let Some((weight_bits, std::cmp::Reverse(leaf))) = heap.pop() {
             let l = &self.leaves[leaf as usize];
             let cost = 2 * SPATIAL_NODE_BYTES
-                + LEAF_BYTES
+                + LEAF_TOTAL_BYTES
                 + QUAD_NODE_BYTES * (l.training.node_count() as u64 + 1);
             if l.depth >= self.config.max_spatial_depth || bytes + cost > cap {
                 stats.refused_splits += 1;
