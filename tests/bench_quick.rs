@@ -134,13 +134,16 @@ fn quick_bench_writes_results() {
             (got - target).abs() <= 0.1 * target,
             "{got} for target {target}"
         );
-        assert_eq!(methods(&p["methods"], "scaling").len(), 4);
+        assert_eq!(
+            methods(&p["methods"], "scaling"),
+            ["pt", "ris", "guided", "guided-ris", "pt-d1"]
+        );
         for m in p["methods"].as_array().unwrap() {
             check_spread(&m["gpu_seconds_per_spp"], "scaling");
         }
     }
     let growth = scaling["growth"].as_array().unwrap();
-    assert_eq!(growth.len(), 4);
+    assert_eq!(growth.len(), 5);
     for g in growth {
         assert!(num(&g["gpu"], "growth") > 0.0);
     }

@@ -5,7 +5,9 @@
 //! alias tables and RIS draws a fixed M candidates, so the goal is a cost per sample that
 //! does not grow with the light count; the report gives the growth from the smallest to
 //! the largest count. The scene's geometry grows with the lamps too (each lamp is a mesh
-//! instance), so some growth is traversal of a larger BVH, not light sampling.
+//! instance), so some growth is traversal of a larger BVH, not light sampling: the
+//! control column, `pt` at max depth 1 (camera rays and first hits, no light sampling),
+//! measures that growth alone.
 
 use super::harness::RunSample;
 use super::spread::Spread;
@@ -16,7 +18,10 @@ use crate::scene::generate::{self, GenerateSummary, Kind, Options};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// One method at one light count.
+/// Name of the control column: `pt` at max depth 1 (camera rays and first hits only).
+pub const CONTROL: &str = "pt-d1";
+
+/// One method at one light count (or the control).
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct ScalingMethod {
     pub method: String,
@@ -49,6 +54,9 @@ pub struct Growth {
     pub method: String,
     pub gpu: f64,
     pub wall: f64,
+    /// `gpu` over the control's GPU growth: what remains once traversing the larger
+    /// scene is accounted for.
+    pub gpu_over_control: f64,
 }
 
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
@@ -171,6 +179,19 @@ pub fn run(bench: &Bench) -> Result<Scaling> {
             )?;
             methods.push(summarise(method, session.pixels(), &runs));
         }
+        // The control: camera rays and first hits only (no light sampling), whose growth
+        // is that of traversing the larger scene.
+        let mut settings = session.settings(Method::Pt);
+        settings.max_depth = 1;
+        let runs = session.measure(
+            settings,
+            Budget::Spp(bench.sizes.warmup_spp),
+            Budget::Spp(size.spp),
+            bench.repeat,
+        )?;
+        let mut control = summarise(Method::Pt, session.pixels(), &runs);
+        control.method = CONTROL.into();
+        methods.push(control);
         points.push(ScalingPoint {
             target_emissive_triangles: target,
             lamps,
@@ -183,7 +204,7 @@ pub fn run(bench: &Bench) -> Result<Scaling> {
         drop(session);
         let _ = std::fs::remove_dir_all(&scene_dir);
     }
-    let growth = match (points.first(), points.last()) {
+    let mut growth: Vec<Growth> = match (points.first(), points.last()) {
         (Some(a), Some(b)) if points.len() >= 2 => a
             .methods
             .iter()
@@ -192,10 +213,16 @@ pub fn run(bench: &Bench) -> Result<Scaling> {
                 method: x.method.clone(),
                 gpu: y.gpu_seconds_per_spp.median / x.gpu_seconds_per_spp.median,
                 wall: y.wall_seconds_per_spp.median / x.wall_seconds_per_spp.median,
+                gpu_over_control: f64::NAN,
             })
             .collect(),
         _ => Vec::new(),
     };
+    if let Some(control) = growth.iter().find(|g| g.method == CONTROL).map(|g| g.gpu) {
+        for g in &mut growth {
+            g.gpu_over_control = g.gpu / control;
+        }
+    }
     Ok(Scaling {
         scene: "street (generated)".into(),
         width,
