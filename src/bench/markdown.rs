@@ -415,6 +415,10 @@ fn profile(md: &mut String, p: &super::profile::Profile, r: &BenchReport) {
     }
     let _ = writeln!(md);
     if !p.parts.is_empty() {
+        let _ = writeln!(
+            md,
+            "Parts, from differences between those configurations (each configuration's fastest run, the least disturbed by other work):\n"
+        );
         let _ = writeln!(md, "| of | part | GPU ns/sample | share |");
         let _ = writeln!(md, "|---|---|---|---|");
         for x in &p.parts {

@@ -43,7 +43,7 @@ pub struct Part {
     /// The method whose time it divides (`pt` or `ris` at the full depth, …).
     pub of: String,
     pub part: String,
-    /// GPU nanoseconds per camera path (median).
+    /// GPU nanoseconds per camera path (from each configuration's fastest run).
     pub ns_per_sample: f64,
     /// Share of the method's GPU time.
     pub share: f64,
@@ -138,12 +138,14 @@ fn guided_passes(
 }
 
 /// The parts of `pt` and `ris` at full depth and of guiding, from whichever entries exist.
+/// Differences of small numbers amplify noise, so they use each configuration's fastest
+/// run: the one least disturbed by other work on the machine.
 pub fn parts(entries: &[ProfileEntry], depth: u32) -> Vec<Part> {
     let ns = |name: &str| {
         entries
             .iter()
             .find(|e| e.name == name)
-            .map(|e| e.gpu_ns_per_sample.median)
+            .map(|e| e.gpu_ns_per_sample.min)
     };
     let mut out = Vec::new();
     let mut push = |of: &str, part: &str, v: f64, total: f64| {
@@ -203,7 +205,7 @@ pub fn parts(entries: &[ProfileEntry], depth: u32) -> Vec<Part> {
         let pt = entries.iter().find(|e| e.name == full);
         if let (Some(hi), Some(pt)) = (ris.iter().max_by_key(|e| e.ris_candidates), pt) {
             let m_hi = hi.ris_candidates.unwrap_or(1);
-            let t_hi = hi.gpu_ns_per_sample.median;
+            let t_hi = hi.gpu_ns_per_sample.min;
             let of = format!("ris (M = {m_hi}, depth {depth})");
             let rows: Vec<[f64; 4]> = ris
                 .iter()
@@ -213,7 +215,7 @@ pub fn parts(entries: &[ProfileEntry], depth: u32) -> Vec<Part> {
                         1.0,
                         e.shadow_rays_per_sample,
                         m * e.bounce_rays_per_sample,
-                        e.gpu_ns_per_sample.median,
+                        e.gpu_ns_per_sample.min,
                     ]
                 })
                 .collect();
@@ -276,7 +278,7 @@ pub fn parts(entries: &[ProfileEntry], depth: u32) -> Vec<Part> {
                     let rays = e.camera_rays_per_sample
                         + e.bounce_rays_per_sample
                         + e.shadow_rays_per_sample;
-                    (e.gpu_ns_per_sample.median / rays.max(1e-9), rays)
+                    (e.gpu_ns_per_sample.min / rays.max(1e-9), rays)
                 })
             };
             let (Some(base), Some((render, rays)), Some(train)) = (
