@@ -7,6 +7,7 @@
 //! `render` owns the GPU resources of one scene and runs the path-tracing kernel;
 //! `image_io` and `eval` write images and measure error against references.
 
+pub mod bench;
 pub mod eval;
 pub mod gpu;
 pub mod guiding;

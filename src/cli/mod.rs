@@ -5,6 +5,7 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod bench;
 mod common;
 mod compare;
 mod guiding;
@@ -44,6 +45,8 @@ enum Command {
     Merge(merge::Args),
     /// Compare methods against a reference: error vs spp and vs time, with figures.
     Compare(compare::Args),
+    /// Run the performance suite and write bench/results/<date>-<device>.json and .md.
+    Bench(bench::Args),
     /// Inspect trained SD-trees.
     #[command(subcommand)]
     Guiding(guiding::Command),
@@ -65,6 +68,7 @@ pub fn main() -> ExitCode {
         Command::Merge(a) => merge::run(a),
         Command::Compare(a) => compare::run(a),
         Command::Guiding(c) => guiding::run(c),
+        Command::Bench(a) => bench::run(a),
     };
     // With validation on, a validation error is a failure even if the command finished.
     let result = result.and_then(|()| match lanterna::vk::validation_error_count() {

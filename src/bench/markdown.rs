@@ -1,0 +1,514 @@
+//! The results as Markdown (`bench/results/<date>-<device>.md`): one table per suite,
+//! every timing as "median (min–max)" over the repetitions, the sizes stated with each
+//! table, and a paragraph on where the time goes written from the profile's numbers.
+
+use super::report::BenchReport;
+use super::spread::Spread;
+use std::fmt::Write as _;
+
+/// A number with about four significant digits, without exponent notation for the
+/// ranges the bench produces.
+pub fn num(x: f64) -> String {
+    if !x.is_finite() {
+        return "–".into();
+    }
+    let a = x.abs();
+    if a == 0.0 {
+        "0".into()
+    } else if a >= 1000.0 {
+        format!("{x:.0}")
+    } else if a >= 100.0 {
+        format!("{x:.1}")
+    } else if a >= 10.0 {
+        format!("{x:.2}")
+    } else if a >= 1.0 {
+        format!("{x:.3}")
+    } else if a >= 0.01 {
+        format!("{x:.4}")
+    } else {
+        format!("{x:.2e}")
+    }
+}
+
+/// `median (min–max)` of a spread times `k`.
+fn spread(s: &Spread, k: f64) -> String {
+    if s.min == s.max {
+        num(s.median * k)
+    } else {
+        format!(
+            "{} ({}–{})",
+            num(s.median * k),
+            num(s.min * k),
+            num(s.max * k)
+        )
+    }
+}
+
+fn pct(x: f64) -> String {
+    if x.is_finite() {
+        format!("{:.1} %", 100.0 * x)
+    } else {
+        "–".into()
+    }
+}
+
+pub fn render(r: &BenchReport) -> String {
+    let mut md = String::new();
+    let m = &r.machine;
+    let _ = writeln!(md, "# lanterna bench — {}, {}\n", r.date, m.device);
+    if r.quick {
+        let _ = writeln!(
+            md,
+            "**Quick mode**: tiny sizes that prove the bench runs; these numbers measure nothing worth reading.\n"
+        );
+    }
+    let _ = writeln!(
+        md,
+        "Made by `{}` in {:.0} s (load average before / after: {} / {}).\n",
+        r.command,
+        r.total_seconds,
+        r.load_average_start.as_deref().unwrap_or("?"),
+        r.load_average_end.as_deref().unwrap_or("?")
+    );
+    let _ = writeln!(
+        md,
+        "Machine: {} ({}, driver {}, Vulkan {}), {} CPU cores ({}){}, {}; lanterna {}.\n",
+        m.device,
+        m.device_type,
+        m.driver,
+        m.vulkan_api,
+        m.cpu_cores,
+        m.cpu_model,
+        m.lp_num_threads
+            .as_ref()
+            .map(|t| format!(", LP_NUM_THREADS={t}"))
+            .unwrap_or_default(),
+        m.os,
+        m.lanterna_version
+    );
+    let _ = writeln!(
+        md,
+        "Every configuration runs once to warm up ({} spp, not recorded), then {} time(s) with seed {} and the same sample indices; \
+         timings are **median (min–max)** over those runs. Max depth {} (path segments, as Mitsuba's), uniform source distribution, \
+         RIS M = 32, guiding with 30 % of the spp budget training. GPU time is from timestamp queries around each dispatch.\n",
+        r.sizes.warmup_spp, r.repeat, r.seed, r.sizes.max_depth
+    );
+    if let Some(t) = &r.throughput {
+        throughput(&mut md, t);
+    }
+    if let Some(s) = &r.scaling {
+        scaling(&mut md, s);
+    }
+    if let Some(g) = &r.guiding {
+        guiding(&mut md, g);
+    }
+    if let Some(q) = &r.quality {
+        quality(&mut md, q);
+    }
+    mitsuba(&mut md, r);
+    if let Some(p) = &r.profile {
+        profile(&mut md, p, r);
+    }
+    md
+}
+
+fn throughput(md: &mut String, t: &super::throughput::Throughput) {
+    let _ = writeln!(md, "## Throughput\n");
+    for s in &t.scenes {
+        let spp = s.methods.first().map(|m| m.spp).unwrap_or(0);
+        let _ = writeln!(
+            md,
+            "`{}` at {}×{}, {} spp per run ({} triangles, {} emissive in {} light models):\n",
+            s.scene, s.width, s.height, spp, s.triangles, s.emissive_triangles, s.light_models
+        );
+        let _ = writeln!(
+            md,
+            "| method | M samples/s (wall) | M samples/s (GPU) | M rays/s: camera | bounce | shadow | rays/sample (c/b/s) | GPU s | wall s | GPU/wall |"
+        );
+        let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|");
+        for x in &s.methods {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} | {} | {:.2} / {:.2} / {:.2} | {} | {} | {} |",
+                x.method,
+                spread(&x.samples_per_s, 1e-6),
+                spread(&x.samples_per_gpu_s, 1e-6),
+                spread(&x.camera_rays_per_s, 1e-6),
+                spread(&x.bounce_rays_per_s, 1e-6),
+                spread(&x.shadow_rays_per_s, 1e-6),
+                x.camera_rays_per_sample,
+                x.bounce_rays_per_sample,
+                x.shadow_rays_per_sample,
+                spread(&x.gpu_seconds, 1.0),
+                spread(&x.wall_seconds, 1.0),
+                pct(x.gpu_share.median),
+            );
+        }
+        let _ = writeln!(md);
+    }
+    let _ = writeln!(
+        md,
+        "Samples are camera paths; guided methods count their training passes too (their wall time includes training, read-back, refit and upload).\n"
+    );
+}
+
+fn scaling(md: &mut String, s: &super::scaling::Scaling) {
+    let _ = writeln!(md, "## Light-count scaling\n");
+    let _ = writeln!(
+        md,
+        "The street scene generated with more lamps, {}×{}, {} spp per run; **GPU milliseconds per spp** \
+         (guided methods: their render phase only, the tree frozen; RIS with M = {}):\n",
+        s.width, s.height, s.spp, s.ris_candidates
+    );
+    let methods: Vec<String> = s
+        .points
+        .first()
+        .map(|p| p.methods.iter().map(|m| m.method.clone()).collect())
+        .unwrap_or_default();
+    let _ = writeln!(
+        md,
+        "| emissive triangles | lamps | triangles | {} |",
+        methods.join(" | ")
+    );
+    let _ = writeln!(md, "|---|---|---|{}", "---|".repeat(methods.len()));
+    for p in &s.points {
+        let cells: Vec<String> = p
+            .methods
+            .iter()
+            .map(|m| spread(&m.gpu_seconds_per_spp, 1e3))
+            .collect();
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} |",
+            p.emissive_triangles,
+            p.lamps,
+            p.triangles,
+            cells.join(" | ")
+        );
+    }
+    if !s.growth.is_empty() {
+        let cells: Vec<String> = s
+            .growth
+            .iter()
+            .map(|g| format!("**×{:.2}** (wall ×{:.2})", g.gpu, g.wall))
+            .collect();
+        let _ = writeln!(md, "| growth, first → last | | | {} |", cells.join(" | "));
+        let cells: Vec<String> = s
+            .growth
+            .iter()
+            .map(|g| format!("×{:.2}", g.gpu_over_control))
+            .collect();
+        let _ = writeln!(md, "| growth ÷ the control's | | | {} |", cells.join(" | "));
+    }
+    let _ = writeln!(
+        md,
+        "\nThe goal is a cost per sample that does not grow with the light count (growth ×1). \
+         The scene's triangle count grows with the lamps too (every lamp is a mesh instance), so part of any growth is traversal \
+         of a larger scene: the `pt-d1` column (max depth 1: camera rays and first hits, no light sampling) is that control.\n"
+    );
+}
+
+fn guiding(md: &mut String, g: &super::guiding::GuidingOverhead) {
+    let _ = writeln!(md, "## Guiding overhead\n");
+    let _ = writeln!(
+        md,
+        "`{}` at {}×{}. Per training iteration: the training pass (wall and GPU), reading the training quadtrees back, \
+         the CPU refit, and flattening + uploading the tree; then the tree's size after the refit.\n",
+        g.scene, g.width, g.height
+    );
+    for m in &g.methods {
+        let _ = writeln!(
+            md,
+            "`{}`, {} spp ({} training): training {} s; refit + upload = **{}** of the training time \
+             (goal ≤ {}: {}); read-back {}.\n",
+            m.method,
+            m.spp,
+            m.training_spp,
+            spread(&m.training_seconds, 1.0),
+            pct(m.refit_upload_share.median),
+            pct(g.goal_share),
+            if m.goal_met { "met" } else { "**not met**" },
+            pct(m.readback_share.median)
+        );
+        let _ = writeln!(
+            md,
+            "| iteration | spp | pass ms | GPU ms | read-back ms | refit ms | upload ms | leaves | sampling / training nodes | KiB |"
+        );
+        let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|");
+        for i in &m.iterations {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} / {} | {:.1} |",
+                i.iteration,
+                i.spp,
+                spread(&i.pass_seconds, 1e3),
+                spread(&i.gpu_seconds, 1e3),
+                spread(&i.readback_seconds, 1e3),
+                spread(&i.refit_seconds, 1e3),
+                spread(&i.upload_seconds, 1e3),
+                i.leaves,
+                i.sampling_nodes,
+                i.training_nodes,
+                i.gpu_bytes as f64 / 1024.0
+            );
+        }
+        let _ = writeln!(md);
+    }
+}
+
+fn quality(md: &mut String, q: &super::quality::Quality) {
+    let _ = writeln!(md, "## Quality at equal spp and equal time\n");
+    for s in &q.scenes {
+        let _ = writeln!(
+            md,
+            "`{}` at {}×{}: MAE against a `pt` reference of {} spp (its own MAE ≈ {}, from its two halves), \
+             seeds {:?}; **MAE ratio to `pt`** at the same budget (below 1 is better). Equal time includes guided training.\n",
+            s.scene,
+            s.width,
+            s.height,
+            s.reference_spp,
+            num(s.reference_mae),
+            s.seeds
+        );
+        let _ = writeln!(md, "| method | budget | spp reached | MAE | ratio to pt |");
+        let _ = writeln!(md, "|---|---|---|---|---|");
+        for r in &s.records {
+            let budget = if r.budget_kind == "spp" {
+                format!("{} spp", r.budget)
+            } else {
+                format!("{} s", r.budget)
+            };
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | **{}** |",
+                r.method,
+                budget,
+                spread(&r.spp, 1.0),
+                spread(&r.mae, 1.0),
+                spread(&r.mae_ratio_to_pt, 1.0)
+            );
+        }
+        let _ = writeln!(md);
+    }
+}
+
+fn mitsuba(md: &mut String, r: &BenchReport) {
+    if r.mitsuba.is_none() && r.mitsuba_skipped.is_none() {
+        return;
+    }
+    let _ = writeln!(md, "## Peer comparison with Mitsuba 3\n");
+    if let Some(why) = &r.mitsuba_skipped {
+        let _ = writeln!(md, "Skipped: {why}.\n");
+    }
+    let Some(p) = &r.mitsuba else {
+        return;
+    };
+    let _ = writeln!(
+        md,
+        "Scenes exported with `lanterna scene export-mitsuba`, rendered by Mitsuba's `path` integrator at the same max depth and size \
+         (`{}`). Agreement: lanterna `pt` batches vs Mitsuba runs, Welch tests of the image mean, of 8×8 blocks and of pixels \
+         (family-wise α = 10⁻³); it applies only where the export is exact. Equal time: every lanterna method and Mitsuba's `path` \
+         get the time of one lanterna `pt` batch; MAE against a Mitsuba reference.\n",
+        p.script
+    );
+    let _ = writeln!(
+        md,
+        "| scene | size | exact | mean lanterna/Mitsuba − 1 (R, G, B) | blocks / pixels agree | lanterna `pt` M samples/s | Mitsuba `path` M samples/s | speed ratio | equal time | Mitsuba MAE (spp) | best lanterna: MAE (spp) | MAE ratio |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for s in &p.scenes {
+        let diff: Vec<String> = s
+            .mean_rel_diff
+            .iter()
+            .zip(&s.mean_rel_diff_stderr)
+            .map(|(d, e)| format!("{:+.2} % ± {:.2}", 100.0 * d, 100.0 * e))
+            .collect();
+        let best = s
+            .lanterna_equal_time
+            .iter()
+            .find(|m| m.method == s.best_method);
+        let _ = writeln!(
+            md,
+            "| {} | {}×{} | {} | {} | {} / {} | {} | {} | {} | {:.2} s | {} ({}) | `{}`: {} ({}) | **{:.2}** |",
+            s.scene,
+            s.width,
+            s.height,
+            if s.exact { "yes" } else { "no" },
+            diff.join(", "),
+            if s.blocks_agree { "yes" } else { "**no**" },
+            if s.pixels_agree { "yes" } else { "**no**" },
+            spread(&s.lanterna_samples_per_s, 1e-6),
+            num(s.mitsuba_samples_per_s * 1e-6),
+            num(s.speed_ratio),
+            s.equal_time_seconds,
+            num(s.mitsuba_equal_time_mae),
+            s.mitsuba_equal_time_spp,
+            s.best_method,
+            best.map(|b| spread(&b.mae, 1.0)).unwrap_or_default(),
+            best.map(|b| num(b.spp.median)).unwrap_or_default(),
+            s.best_mae_ratio_to_mitsuba
+        );
+    }
+    let _ = writeln!(md);
+    for s in &p.scenes {
+        let cells: Vec<String> = s
+            .lanterna_equal_time
+            .iter()
+            .map(|m| {
+                format!(
+                    "`{}` {} ({} spp)",
+                    m.method,
+                    num(m.mae.median),
+                    num(m.spp.median)
+                )
+            })
+            .collect();
+        let _ = writeln!(
+            md,
+            "- `{}` at equal time, lanterna MAE: {}.",
+            s.scene,
+            cells.join(", ")
+        );
+        if !s.exact {
+            let _ = writeln!(
+                md,
+                "  Not exact ({} approximation(s), e.g. {}): agreement is not expected; speed and MAE still compare like for like.",
+                s.approximations.len(),
+                s.approximations.first().map(String::as_str).unwrap_or("")
+            );
+        }
+    }
+    let _ = writeln!(
+        md,
+        "\nInstall: `pip install mitsuba` (3.x); the comparison uses the `llvm_ad_rgb` variant when Dr.Jit finds LLVM ≥ 16 \
+         (`DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1` with Debian's libllvm19; the bench sets it when that \
+         file exists) and falls back to `scalar_rgb` otherwise. See `bench/README.md`.\n"
+    );
+}
+
+fn profile(md: &mut String, p: &super::profile::Profile, r: &BenchReport) {
+    let _ = writeln!(md, "## Where the time goes\n");
+    let _ = writeln!(
+        md,
+        "`{}` at {}×{}; GPU nanoseconds per camera path under settings that switch the kernel's parts on one at a time \
+         (`ao-d2`: depth 2 with direction sampling only, no light sampling):\n",
+        p.scene, p.width, p.height
+    );
+    let _ = writeln!(
+        md,
+        "| configuration | phase | spp | GPU ns/sample | wall ns/sample | rays/sample (c/b/s) |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    for e in &p.entries {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {:.2} / {:.2} / {:.2} |",
+            e.name,
+            e.phase,
+            e.spp,
+            spread(&e.gpu_ns_per_sample, 1.0),
+            spread(&e.wall_ns_per_sample, 1.0),
+            e.camera_rays_per_sample,
+            e.bounce_rays_per_sample,
+            e.shadow_rays_per_sample
+        );
+    }
+    let _ = writeln!(md);
+    if !p.parts.is_empty() {
+        let _ = writeln!(
+            md,
+            "Parts, from differences between those configurations (each configuration's fastest run, the least disturbed by other work):\n"
+        );
+        let _ = writeln!(md, "| of | part | GPU ns/sample | share |");
+        let _ = writeln!(md, "|---|---|---|---|");
+        for x in &p.parts {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} |",
+                x.of,
+                x.part,
+                num(x.ns_per_sample),
+                pct(x.share)
+            );
+        }
+        let _ = writeln!(md);
+    }
+    let _ = writeln!(md, "{}\n", summary(p, r));
+}
+
+/// The "where the time goes" paragraph, from the numbers.
+fn summary(p: &super::profile::Profile, r: &BenchReport) -> String {
+    let mut text = String::new();
+    let find = |name: &str| p.entries.iter().find(|e| e.name == name);
+    let depth = r.sizes.max_depth;
+    if let Some(pt) = find(&format!("pt-d{depth}")) {
+        let rays =
+            pt.camera_rays_per_sample + pt.bounce_rays_per_sample + pt.shadow_rays_per_sample;
+        let _ = write!(
+            text,
+            "On {}, a `pt` path of depth {depth} costs {} µs of GPU time for {:.2} rays, about {} µs per ray all included. ",
+            r.machine.device,
+            num(pt.gpu_ns_per_sample.median / 1e3),
+            rays,
+            num(pt.gpu_ns_per_sample.median / 1e3 / rays.max(1e-9))
+        );
+        if let Some(d1) = find("pt-d1") {
+            let _ = write!(
+                text,
+                "The camera ray with its first hit alone is {} of it. ",
+                pct(d1.gpu_ns_per_sample.median / pt.gpu_ns_per_sample.median)
+            );
+        }
+        let gpu_share = pt.gpu_ns_per_sample.median / pt.wall_ns_per_sample.median;
+        let _ = write!(
+            text,
+            "GPU time is {} of wall time (the rest is submission and waiting; reading the film back takes {} ms). ",
+            pct(gpu_share),
+            num(p.film_readback_ms.median)
+        );
+    }
+    for part in &p.parts {
+        if part.part.starts_with("RIS candidates") {
+            let _ = write!(
+                text,
+                "In {}, evaluating the candidates (light sample, BSDF and p̂, source pdfs) takes {} of the time \
+                 ({} ns per sample). ",
+                part.of,
+                pct(part.share),
+                num(part.ns_per_sample)
+            );
+        }
+        if part.part.starts_with("shadow rays beyond") {
+            let _ = write!(
+                text,
+                "The extra shadow rays that RIS leads to (it finds a light worth testing more often) take {}. ",
+                pct(part.share)
+            );
+        }
+        if part.part.starts_with("RIS candidates and") {
+            let _ = write!(
+                text,
+                "In {}, the candidates and the extra shadow rays they lead to take {} of the time. ",
+                part.of,
+                pct(part.share)
+            );
+        }
+        if part.part.starts_with("guiding") {
+            let _ = write!(
+                text,
+                "Guiding (tree lookups, sampling and pdfs) is {} of the cost per ray of the {}. ",
+                pct(part.share),
+                part.of
+            );
+        }
+        if part.part.starts_with("recording") {
+            let _ = write!(
+                text,
+                "Recording the training data is {} of the {}. ",
+                pct(part.share),
+                part.of
+            );
+        }
+    }
+    text.trim_end().to_string()
+}

@@ -1,0 +1,164 @@
+//! Every size the suite uses, in one place: image sizes, sample counts, light counts and
+//! reference quality for the full run (chosen so the whole suite takes about 15 minutes
+//! on two CPU cores with lavapipe) and for `--quick` (tiny: it proves the bench works in
+//! CI, it measures nothing worth reading). The results file records the sizes it used.
+
+/// A scene rendered by a suite at one size.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct SceneSize {
+    /// File name in the scenes directory.
+    pub scene: String,
+    pub width: u32,
+    /// Height; `None` follows the camera's aspect ratio.
+    pub height: Option<u32>,
+    /// Samples per pixel of each timed run.
+    pub spp: u64,
+}
+
+/// The quality comparison of one scene.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct QualitySize {
+    pub scene: String,
+    pub width: u32,
+    pub height: Option<u32>,
+    /// spp of the `pt` reference (rendered in two independent halves).
+    pub reference_spp: u64,
+    /// Equal-spp budgets.
+    pub spp: Vec<u64>,
+    /// Equal-time budgets in seconds.
+    pub seconds: Vec<f64>,
+}
+
+/// The Mitsuba 3 peer comparison of one scene.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct PeerSize {
+    pub scene: String,
+    pub width: u32,
+    pub height: Option<u32>,
+    /// Independent lanterna `pt` batches (disjoint sample ranges) and their spp.
+    pub batches: u32,
+    pub spp: u64,
+    /// Independent Mitsuba runs of `spp` each.
+    pub runs: u32,
+    /// spp of the Mitsuba reference the equal-time MAE is measured against.
+    pub reference_spp: u64,
+}
+
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct Sizes {
+    pub max_depth: u32,
+    /// Warm-up budget (spp) before each configuration's recorded runs.
+    pub warmup_spp: u64,
+    pub throughput: Vec<SceneSize>,
+    /// Street scene: emissive-triangle counts to aim for (the lamp count is searched).
+    pub scaling_emissive_triangles: Vec<u64>,
+    pub scaling: SceneSize,
+    pub guiding: SceneSize,
+    pub quality: Vec<QualitySize>,
+    pub mitsuba: Vec<PeerSize>,
+    pub profile: SceneSize,
+    /// RIS candidate counts of the profile.
+    pub profile_ris_candidates: Vec<u32>,
+    /// Max depths of the profile's `pt` runs.
+    pub profile_depths: Vec<u32>,
+}
+
+fn scene(name: &str, width: u32, height: Option<u32>, spp: u64) -> SceneSize {
+    SceneSize {
+        scene: name.into(),
+        width,
+        height,
+        spp,
+    }
+}
+
+impl Sizes {
+    pub fn full() -> Sizes {
+        Sizes {
+            max_depth: 4,
+            warmup_spp: 4,
+            throughput: vec![
+                scene("street.gltf", 128, None, 16),
+                scene("cornell-lights.gltf", 96, None, 64),
+            ],
+            scaling_emissive_triangles: vec![64, 256, 1024, 4096, 16384, 65536],
+            scaling: scene("street.gltf", 64, None, 16),
+            guiding: scene("street.gltf", 128, None, 32),
+            quality: vec![
+                QualitySize {
+                    scene: "cornell-lights.gltf".into(),
+                    width: 64,
+                    height: None,
+                    reference_spp: 4096,
+                    spp: vec![16],
+                    seconds: vec![1.0],
+                },
+                QualitySize {
+                    scene: "street.gltf".into(),
+                    width: 64,
+                    height: None,
+                    reference_spp: 1024,
+                    spp: vec![16],
+                    seconds: vec![2.0],
+                },
+            ],
+            mitsuba: vec![
+                PeerSize {
+                    scene: "cornell-lights.gltf".into(),
+                    width: 64,
+                    height: None,
+                    batches: 8,
+                    spp: 64,
+                    runs: 8,
+                    reference_spp: 4096,
+                },
+                PeerSize {
+                    scene: "street.gltf".into(),
+                    width: 64,
+                    height: None,
+                    batches: 8,
+                    spp: 16,
+                    runs: 8,
+                    reference_spp: 2048,
+                },
+            ],
+            profile: scene("street.gltf", 128, None, 4),
+            profile_ris_candidates: vec![1, 8, 32],
+            profile_depths: vec![1, 2, 3, 4],
+        }
+    }
+
+    pub fn quick() -> Sizes {
+        Sizes {
+            max_depth: 4,
+            warmup_spp: 1,
+            throughput: vec![
+                scene("street.gltf", 32, None, 4),
+                scene("cornell-lights.gltf", 32, Some(24), 4),
+            ],
+            scaling_emissive_triangles: vec![64, 256],
+            scaling: scene("street.gltf", 32, None, 4),
+            guiding: scene("street.gltf", 32, None, 8),
+            quality: vec![QualitySize {
+                scene: "cornell-lights.gltf".into(),
+                width: 32,
+                height: Some(24),
+                reference_spp: 64,
+                spp: vec![4],
+                seconds: vec![0.3],
+            }],
+            mitsuba: vec![PeerSize {
+                scene: "cornell-lights.gltf".into(),
+                width: 32,
+                height: Some(24),
+                batches: 2,
+                spp: 4,
+                runs: 2,
+                reference_spp: 64,
+            }],
+            profile: scene("street.gltf", 32, None, 2),
+            profile_ris_candidates: vec![1, 32],
+            profile_depths: vec![1, 4],
+        }
+    }
+}
