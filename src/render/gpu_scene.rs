@@ -3,6 +3,7 @@
 
 use crate::gpu;
 use crate::lights::LightTable;
+use crate::scene::spatial_order::kd_order;
 use crate::scene::Scene;
 use crate::vk::{
     self, AccelStructure, BlasGeometry, Buffer, Device, Sampler, SamplerDesc, Texture, TlasInstance,
@@ -324,6 +325,36 @@ impl FlattenPlan {
                 rest.push(i);
             }
         }
+        // Instances in kd order of their world-space bounds' centres, both the merged
+        // geometries and the TLAS instances (see `scene::spatial_order`).
+        let centre = |i: usize| {
+            let inst = &scene.instances[i];
+            let p = &scene.primitives[inst.primitive as usize];
+            let (lo, hi) = scene.vertices
+                [p.vertex_offset as usize..(p.vertex_offset + p.vertex_count) as usize]
+                .iter()
+                .map(|v| {
+                    inst.transform
+                        .transform_point3(glam::Vec3::from(v.position))
+                })
+                .fold(
+                    (
+                        glam::Vec3::splat(f32::INFINITY),
+                        glam::Vec3::splat(f32::NEG_INFINITY),
+                    ),
+                    |(lo, hi), w| (lo.min(w), hi.max(w)),
+                );
+            0.5 * (lo + hi)
+        };
+        let sorted = |list: Vec<usize>| -> Vec<usize> {
+            let centres: Vec<glam::Vec3> = list.iter().map(|&i| centre(i)).collect();
+            kd_order(&centres)
+                .into_iter()
+                .map(|k| list[k as usize])
+                .collect()
+        };
+        let mut flat = sorted(flat);
+        let rest = sorted(rest);
         let flattened = flat.len();
         let groups = (0..flattened)
             .step_by(FLATTEN_MAX_GEOMETRIES)

@@ -277,6 +277,21 @@ pub fn load(path: &Path, _options: &LoadOptions) -> Result<Scene, SceneError> {
         extras,
     };
     scene.hash = content_hash(&scene);
+    // Triangles in kd order, for builders that split in submission order. After the
+    // hash: the hash names the file's content, and the order is an implementation detail.
+    for p in &scene.primitives {
+        let positions: Vec<Vec3> = scene.vertices
+            [p.vertex_offset as usize..(p.vertex_offset + p.vertex_count) as usize]
+            .iter()
+            .map(|v| Vec3::from(v.position))
+            .collect();
+        let first = p.index_offset as usize;
+        super::spatial_order::reorder_triangles(
+            &positions,
+            &mut scene.indices[first..first + 3 * p.triangle_count as usize],
+        );
+    }
+
     log::info!(
         "loaded {} in {:.2} s: {} triangles, {} instances, {} materials, {} textures",
         path.display(),

@@ -10,6 +10,7 @@ pub mod export_mitsuba;
 pub mod generate;
 mod load;
 mod material;
+pub mod spatial_order;
 mod stats;
 mod texture;
 
