@@ -52,6 +52,17 @@ float direction_pdf(Surface s, DirectionSampler d, vec3 wi) {
     return p;
 }
 
+// The direction strategy's density as RIS's resampling weights see it: the BSDF part
+// exact, the guided part replaced by the uniform sphere density, so that the M light
+// candidates do not each walk the leaf's quadtree. Balance-heuristic weights built from
+// any such stand-in still sum to one over the strategies, so RIS stays unbiased as long
+// as the direction candidate's weight divides by its true density (ris_denominator).
+float direction_pdf_for_ris(Surface s, DirectionSampler d, vec3 wi) {
+    float p = d.bsdf_fraction * surface_bsdf_pdf(s, wi);
+    if (d.bsdf_fraction < 1.0) p += (1.0 - d.bsdf_fraction) * INV_FOUR_PI;
+    return p;
+}
+
 DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
     DirectionSample ds;
     vec4 u = rng_next4(rng);
@@ -168,13 +179,20 @@ float ris_target(RisContext ctx, inout RisCandidate c) {
 
 // Source densities of all candidate slots at c, in the candidate's measure: area for
 // area lights (direction pdf converted with cosθy/d²), pmf for punctual lights (which
-// direction sampling cannot produce).
+// direction sampling cannot produce). The direction slot's density is the stand-in of
+// direction_pdf_for_ris; the direction candidate itself is further scaled by its true
+// density over the stand-in, so that its weight is m_direction·p̂/q_direction.
 float ris_denominator(RisContext ctx, RisCandidate c, uint M) {
     float q_light = c.from_direction ? light_source_pdf(c.ls.tri) : c.ls.pdf;
     float q_direction = 0.0;
     if (c.ls.area && params.strategy == STRATEGY_MIS)
-        q_direction = direction_pdf(ctx.s, ctx.d, c.ls.wi) * c.ls.cos_y / max(c.ls.dist * c.ls.dist, 1e-20);
-    return float(M) * q_light + q_direction;
+        q_direction = direction_pdf_for_ris(ctx.s, ctx.d, c.ls.wi) * c.ls.cos_y / max(c.ls.dist * c.ls.dist, 1e-20);
+    float denominator = float(M) * q_light + q_direction;
+    if (c.from_direction && ctx.d.bsdf_fraction < 1.0) {
+        float stand_in = direction_pdf_for_ris(ctx.s, ctx.d, c.ls.wi);
+        if (stand_in > 0.0) denominator *= direction_pdf(ctx.s, ctx.d, c.ls.wi) / stand_in;
+    }
+    return denominator;
 }
 
 #include "inc/ris.glsl"
