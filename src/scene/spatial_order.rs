@@ -17,7 +17,8 @@ use glam::Vec3;
 pub fn kd_order(centroids: &[Vec3]) -> Vec<u32> {
     let mut order: Vec<u32> = (0..centroids.len() as u32).collect();
     // An explicit stack of ranges: deep recursion on millions of triangles is avoided.
-    let mut stack = vec![0..order.len()];
+    let mut stack: Vec<std::ops::Range<usize>> = Vec::new();
+    stack.push(0..order.len());
     while let Some(range) = stack.pop() {
         if range.len() <= 2 {
             continue;
@@ -28,7 +29,8 @@ pub fn kd_order(centroids: &[Vec3]) -> Vec<u32> {
             |(lo, hi), &i| (lo.min(centroids[i as usize]), hi.max(centroids[i as usize])),
         );
         let extent = hi - lo;
-        if !(extent.max_element() > 0.0) {
+        // (NaN extents compare false too.)
+        if extent.max_element().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             continue; // all centroids coincide (or are not finite): nothing to split
         }
         let axis = if extent.x >= extent.y && extent.x >= extent.z {
