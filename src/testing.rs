@@ -123,6 +123,20 @@ pub struct Batches {
     pub images: Vec<Vec<f32>>,
 }
 
+/// A renderer on the test device with the built-in kernels.
+fn test_renderer(scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Renderer {
+    let lights = LightTable::build(scene).expect("light table");
+    Renderer::new(
+        device(),
+        scene,
+        &lights,
+        camera.clone(),
+        settings.clone(),
+        Default::default(),
+    )
+    .expect("renderer")
+}
+
 /// Render `batches` × `spp` samples with `settings`.
 pub fn render_batches(
     scene: &Scene,
@@ -131,16 +145,7 @@ pub fn render_batches(
     batches: u32,
     spp: u64,
 ) -> Batches {
-    let lights = LightTable::build(scene).expect("light table");
-    let mut r = Renderer::new(
-        device(),
-        scene,
-        &lights,
-        camera.clone(),
-        settings.clone(),
-        Default::default(),
-    )
-    .expect("renderer");
+    let mut r = test_renderer(scene, camera, &settings);
     let cancel = AtomicBool::new(false);
     let mut stats = RenderStats::default();
     let mut images = Vec::new();
@@ -342,16 +347,7 @@ pub fn run_batches(
     spp: u64,
 ) -> Batches {
     use crate::render::run::{run_method, Budget};
-    let lights = LightTable::build(scene).expect("light table");
-    let mut r = Renderer::new(
-        device(),
-        scene,
-        &lights,
-        camera.clone(),
-        settings.clone(),
-        Default::default(),
-    )
-    .expect("renderer");
+    let mut r = test_renderer(scene, camera, &settings);
     let cancel = AtomicBool::new(false);
     let mut images = Vec::new();
     for b in 0..batches as u64 {
