@@ -184,13 +184,13 @@ float ris_target(RisContext ctx, inout RisCandidate c) {
 // density over the stand-in, so that its weight is m_direction·p̂/q_direction.
 float ris_denominator(RisContext ctx, RisCandidate c, uint M) {
     float q_light = c.from_direction ? light_source_pdf(c.ls.tri) : c.ls.pdf;
-    float q_direction = 0.0;
-    if (c.ls.area && params.strategy == STRATEGY_MIS)
-        q_direction = direction_pdf_for_ris(ctx.s, ctx.d, c.ls.wi) * c.ls.cos_y / max(c.ls.dist * c.ls.dist, 1e-20);
-    float denominator = float(M) * q_light + q_direction;
-    if (c.from_direction && ctx.d.bsdf_fraction < 1.0) {
+    float denominator = float(M) * q_light;
+    // The direction candidate only exists for area lights under MIS.
+    if (c.ls.area && params.strategy == STRATEGY_MIS) {
         float stand_in = direction_pdf_for_ris(ctx.s, ctx.d, c.ls.wi);
-        if (stand_in > 0.0) denominator *= direction_pdf(ctx.s, ctx.d, c.ls.wi) / stand_in;
+        denominator += stand_in * c.ls.cos_y / max(c.ls.dist * c.ls.dist, 1e-20);
+        if (c.from_direction && ctx.d.bsdf_fraction < 1.0 && stand_in > 0.0)
+            denominator *= direction_pdf(ctx.s, ctx.d, c.ls.wi) / stand_in;
     }
     return denominator;
 }
