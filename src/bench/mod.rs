@@ -45,10 +45,11 @@ pub enum BenchError {
     Compare(#[from] crate::eval::compare::CompareError),
     #[error(transparent)]
     Image(#[from] crate::image_io::ImageError),
-    #[error("{}: {source}", path.display())]
+    // `error` is not a `source`: the message already includes it, once.
+    #[error("{}: {error}", path.display())]
     Io {
         path: PathBuf,
-        source: std::io::Error,
+        error: std::io::Error,
     },
     #[error("scene {} not found (give the shipped scenes' directory with --scenes)", .0.display())]
     MissingScene(PathBuf),
@@ -59,10 +60,10 @@ pub enum BenchError {
 }
 
 impl BenchError {
-    pub fn io(path: &Path, source: std::io::Error) -> BenchError {
+    pub fn io(path: &Path, error: std::io::Error) -> BenchError {
         BenchError::Io {
             path: path.to_path_buf(),
-            source,
+            error,
         }
     }
 }
