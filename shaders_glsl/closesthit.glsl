@@ -117,10 +117,15 @@ uint light_model_of(LightSample ls) {
     return ls.tri != INVALID_INDEX ? light_triangles[ls.tri].model : INVALID_INDEX;
 }
 
+// Is the light point of `ls` visible from the surface point? The origin moves off the
+// surface on the side of wo (the BSDFs are opaque: light from below the geometric
+// surface cannot reach the side the path arrived on), the far end off the light toward
+// the shading point (see visible_between in inc/trace.glsl).
 bool shadow_test(Surface s, LightSample ls, inout uint shadow_rays) {
     shadow_rays += 1u;
-    float tmax = ls.dist >= FLT_MAX ? FLT_MAX : ls.dist * (1.0 - 1e-4);
-    return visible(offset_ray(s.p, s.ng), ls.wi, tmax);
+    if (ls.dist >= FLT_MAX) return visible(offset_ray(s.p, s.ng), ls.wi, FLT_MAX);
+    if (!ls.area) return visible_to_point(s.p, s.ng, ls.p);
+    return visible_between(s.p, s.ng, ls.p, ls.n);
 }
 
 // One light sample from the source distribution, MIS-weighted against direction sampling.
@@ -217,6 +222,7 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
         extra.ls.area = true;
         extra.ls.tri = next.light_tri;
         extra.ls.p = next.p;
+        extra.ls.n = next.ng;  // on the side of this vertex, as sample_light's
         extra.value = vec3(0.0);
         extra.from_direction = true;
     }

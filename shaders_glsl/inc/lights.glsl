@@ -16,6 +16,8 @@ struct LightSample {
     bool area;      // area light (MIS applies); false for delta lights
     uint tri;       // light triangle, INVALID_INDEX for punctual
     vec3 p;         // the light point (area and positional lights)
+    vec3 n;         // geometric normal at the light point, on the side facing x (area
+                    // lights; shadow rays start their far end off the light along it)
 };
 
 uint alias_sample(uint begin, uint count, float u, bool models) {
@@ -94,6 +96,7 @@ LightSample sample_punctual(uint index, vec3 x) {
     s.area = false;
     s.tri = INVALID_INDEX;
     s.cos_y = 1.0;
+    s.n = vec3(0.0);
     if (l.kind == PUNCTUAL_DIRECTIONAL) {
         s.wi = -l.direction;
         s.dist = FLT_MAX;
@@ -155,7 +158,9 @@ LightSample sample_light(vec3 x, vec4 u) {
     float d2 = dot(d, d);
     s.dist = sqrt(d2);
     s.wi = d / max(s.dist, 1e-20);
-    s.cos_y = abs(dot(lt.normal, s.wi));
+    float cos_signed = dot(lt.normal, s.wi);
+    s.cos_y = abs(cos_signed);
+    s.n = cos_signed > 0.0 ? -lt.normal : lt.normal;
     s.Le_G = d2 > 0.0 ? light_triangle_radiance(lt, b, -s.wi) * s.cos_y / d2 : vec3(0.0);
     s.pdf = pm * triangle_pmf(tri, m) / lt.area;
     return s;

@@ -62,7 +62,8 @@ Hit trace_closest(vec3 origin, vec3 dir, float tmax) {
     return h;
 }
 
-// True when nothing blocks the segment origin → origin + dir·tmax.
+// True when nothing blocks the segment origin → origin + dir·tmax (`dir` need not be
+// unit length: t is measured in multiples of it, as for every ray query).
 bool visible(vec3 origin, vec3 dir, float tmax) {
     rayQueryEXT rq;
     rayQueryInitializeEXT(rq, tlas, gl_RayFlagsTerminateOnFirstHitEXT, 0xffu, origin, 0.0, dir, tmax);
@@ -79,7 +80,8 @@ bool visible(vec3 origin, vec3 dir, float tmax) {
 }
 
 // Offset a ray origin off the surface along the geometric normal, scaled to the
-// position's magnitude (Wächter & Binder, Ray Tracing Gems ch. 6).
+// position's magnitude (Wächter & Binder, Ray Tracing Gems ch. 6): 256 ulps of each
+// coordinate, or 2^-16 absolute near the origin. `n` picks the side to move to.
 vec3 offset_ray(vec3 p, vec3 n) {
     const float origin = 1.0 / 32.0;
     const float float_scale = 1.0 / 65536.0;
@@ -91,6 +93,35 @@ vec3 offset_ray(vec3 p, vec3 n) {
     return vec3(abs(p.x) < origin ? p.x + float_scale * n.x : p_i.x,
                 abs(p.y) < origin ? p.y + float_scale * n.y : p_i.y,
                 abs(p.z) < origin ? p.z + float_scale * n.z : p_i.z);
+}
+
+// Shadow rays stop this fraction of their (offset-to-offset) length short of the target.
+const float SHADOW_EPSILON = 1e-4;
+
+// Is the segment between two surface points free? (pbrt-v4's SpawnRayTo.)
+//
+// A point computed on a triangle (from barycentrics, or sampled on a light) is only
+// known to within a few ulps of its coordinates, so a ray that starts or ends exactly
+// there may hit the surface it belongs to. Both ends are therefore moved off their own
+// surfaces by offset_ray, each along its geometric normal toward the other end
+// (`origin_n`, `target_n` must already point that way), and the ray is aimed from the
+// moved origin at the moved target, so that its direction and its length describe the
+// same segment. Moving only the origin while keeping the direction and length computed
+// from the unmoved points shifts the segment's far end by the same offset; where the
+// origin moves toward the light (a lamp facing a wall, a lamp on a ledge) that end lands
+// behind the light's face, and the light occludes itself. A relative shortening alone
+// cannot fix that: the offset is absolute (ulps of the position), the shortening scales
+// with the distance, so close lights always lose.
+bool visible_between(vec3 origin_p, vec3 origin_n, vec3 target_p, vec3 target_n) {
+    vec3 o = offset_ray(origin_p, origin_n);
+    vec3 t = offset_ray(target_p, target_n);
+    return visible(o, t - o, 1.0 - SHADOW_EPSILON);
+}
+
+// Is the segment from a surface point to a point in free space (a punctual light) free?
+bool visible_to_point(vec3 origin_p, vec3 origin_n, vec3 target_p) {
+    vec3 o = offset_ray(origin_p, origin_n);
+    return visible(o, target_p - o, 1.0 - SHADOW_EPSILON);
 }
 
 #endif
