@@ -18,7 +18,10 @@ fn main() {
             } else {
                 Vec3::new(u[1] - 0.5, u[2] - 0.5, u[0] - 0.5).normalize()
             };
-            tree.record(Vec3::splat(0.5), dir, 1.0, 1.0, u);
+            tree.record(
+                &lanterna::gpu::GuideRecord::new(Vec3::splat(0.5), dir, 1.0, 1.0),
+                u,
+            );
         }
         tree.refit(1 << (it + 1));
     }

@@ -53,12 +53,23 @@ void record_path(VertexRecord rec[MAX_RECORDED_VERTICES], uint count, inout Rng 
     for (int k = int(count) - 1; k >= 0; --k) {
         if (k + 1 < int(count)) l_in = rec[k].emitted + rec[k + 1].nee + rec[k + 1].weight * l_in;
         else l_in = rec[k].emitted;
-        if (rec[k].pdf > 0.0) {
-            float value = (l_in.x + l_in.y + l_in.z) / (3.0 * rec[k].pdf);
-            guide_record(rec[k].p, rec[k].wi, value, 1.0, vec3(rng_next2(rng), rng_next(rng)));
+        // The vertex's direction record carries its statistical weight (value 0 when no
+        // direction was sampled); its NEE record only adds the light NEE found (see
+        // GuideRecord in shared/guiding.h).
+        GuideRecord dir_rec;
+        dir_rec.pos = rec[k].p;
+        dir_rec.dir = rec[k].wi;
+        dir_rec.value = rec[k].pdf > 0.0 ? (l_in.x + l_in.y + l_in.z) / (3.0 * rec[k].pdf) : 0.0;
+        dir_rec.weight = 1.0;
+        guide_record(dir_rec, vec3(rng_next2(rng), rng_next(rng)));
+        if ((guide_header.flags & GUIDE_FLAG_RECORD_NEE) != 0u && rec[k].nee_value > 0.0) {
+            GuideRecord nee_rec;
+            nee_rec.pos = rec[k].p;
+            nee_rec.dir = rec[k].nee_dir;
+            nee_rec.value = rec[k].nee_value;
+            nee_rec.weight = 0.0;
+            guide_record(nee_rec, vec3(rng_next2(rng), rng_next(rng)));
         }
-        if ((guide_header.flags & GUIDE_FLAG_RECORD_NEE) != 0u && rec[k].nee_value > 0.0)
-            guide_record(rec[k].p, rec[k].nee_dir, rec[k].nee_value, 0.0, vec3(rng_next2(rng), rng_next(rng)));
         if ((guide_header.flags & GUIDE_FLAG_LEARN_LIGHTS) != 0u && rec[k].nee_model != INVALID_INDEX && rec[k].nee_lum > 0.0)
             guide_light_record(guide_find_leaf(rec[k].p), rec[k].nee_model, rec[k].nee_lum);
     }
@@ -93,7 +104,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
     info.normal = s.n;
     info.depth = hit.t;
     info.position = s.p;
-    vec3 L = s.emission;
+    vec3 L = params.hide_emitters != 0u ? vec3(0.0) : s.emission;
     vec3 beta = vec3(1.0);
 
     VertexRecord rec[MAX_RECORDED_VERTICES];

@@ -244,13 +244,22 @@ pub fn mean_var(x: &[f64]) -> (f64, f64) {
 pub fn welch(a: &[f64], b: &[f64]) -> f64 {
     let (ma, va) = mean_var(a);
     let (mb, vb) = mean_var(b);
-    let (na, nb) = (a.len() as f64, b.len() as f64);
-    let se2 = va / na + vb / nb;
+    welch_summary(
+        (ma, va / a.len() as f64, a.len()),
+        (mb, vb / b.len() as f64, b.len()),
+    )
+}
+
+/// Welch's t-test from summaries `(mean, squared standard error of the mean, number of
+/// independent estimates)` of each side; returns the two-sided p-value.
+pub fn welch_summary(a: (f64, f64, usize), b: (f64, f64, usize)) -> f64 {
+    let ((ma, sa, na), (mb, sb, nb)) = (a, b);
+    let se2 = sa + sb;
     if se2 <= 0.0 {
         return if ma == mb { 1.0 } else { 0.0 };
     }
     let t = (ma - mb) / se2.sqrt();
-    let dof = se2 * se2 / ((va / na).powi(2) / (na - 1.0) + (vb / nb).powi(2) / (nb - 1.0));
+    let dof = se2 * se2 / (sa * sa / (na as f64 - 1.0) + sb * sb / (nb as f64 - 1.0));
     student_t_two_sided(t, dof.max(1.0))
 }
 

@@ -123,16 +123,23 @@ pub struct Batches {
     pub images: Vec<Vec<f32>>,
 }
 
-/// A renderer on the test device with the built-in kernels.
+/// A renderer on the test device with the built-in kernels, or, when
+/// `LANTERNA_TEST_SHADER_DIR` names a copy of `shaders_glsl/`, with kernels compiled from
+/// it: the way to inject a defect into the estimators and see which tests fail, without
+/// rebuilding.
 fn test_renderer(scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Renderer {
     let lights = LightTable::build(scene).expect("light table");
+    let shaders = match std::env::var_os("LANTERNA_TEST_SHADER_DIR") {
+        Some(dir) => ShaderSource::Directory(dir.into()),
+        None => ShaderSource::Builtin,
+    };
     Renderer::new(
         device(),
         scene,
         &lights,
         camera.clone(),
         settings.clone(),
-        Default::default(),
+        shaders,
     )
     .expect("renderer")
 }

@@ -5,6 +5,7 @@
 //! the output of the `tests/guiding_sample` kernel to the same `check_guide_samples`.
 
 use glam::Vec3;
+use lanterna::gpu::GuideRecord;
 use lanterna::guiding::{
     check_guide_samples, chi2_directions, GuideSample, GuidingConfig, QuadTree, SdTree,
     SpatialFilter, INV_4PI,
@@ -62,7 +63,10 @@ fn trained(iterations: u32, max_quad_depth: u32, spread: f32, seed: u64) -> SdTr
                 continue;
             }
             let u = [rng.f32(), rng.f32(), rng.f32()];
-            tree.record(Vec3::splat(0.5), dir, 1.0 + rng.f32(), 1.0, u);
+            tree.record(
+                &GuideRecord::new(Vec3::splat(0.5), dir, 1.0 + rng.f32(), 1.0),
+                u,
+            );
         }
         tree.refit(1);
     }

@@ -4,6 +4,7 @@
 //! data and another scene.
 
 use glam::Vec3;
+use lanterna::gpu::GuideRecord;
 use lanterna::guiding::{GuidingConfig, GuidingError, SceneHasher, SdTree};
 
 /// SplitMix64 → floats in [0, 1).
@@ -28,7 +29,7 @@ fn record_some(tree: &mut SdTree, n: u32, rng: &mut Rng) {
         let to_light = (Vec3::new(0.0, 2.9, 0.0) - p).normalize_or(Vec3::Y);
         let dir = (to_light + 0.05 * Vec3::new(rng.f32(), rng.f32(), rng.f32())).normalize();
         let u = [rng.f32(), rng.f32(), rng.f32()];
-        tree.record(p, dir, 2.0 * rng.f32(), 1.0, u);
+        tree.record(&GuideRecord::new(p, dir, 2.0 * rng.f32(), 1.0), u);
     }
 }
 
@@ -245,7 +246,10 @@ fn light_tables_normalise_and_follow_splits() {
     };
     tree.load_light_readback(&slots).unwrap();
     for _ in 0..100 {
-        tree.record(Vec3::splat(0.25), Vec3::Z, 1.0, 1.0, [0.5; 3]);
+        tree.record(
+            &GuideRecord::new(Vec3::splat(0.25), Vec3::Z, 1.0, 1.0),
+            [0.5; 3],
+        );
     }
     tree.refit(4);
     assert!(tree.leaves().len() > 1, "the leaf should have split");

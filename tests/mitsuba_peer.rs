@@ -47,6 +47,7 @@ fn export_loaded(scene: &Scene, camera: Option<&str>, w: u32, h: u32, dir: &Path
         max_depth: 4,
         spp: 16,
         seed: 0,
+        hide_emitters: false,
     };
     export_mitsuba::export(scene, &lights, &cam, &options, dir).expect("export");
     options
@@ -142,6 +143,7 @@ fn export_keeps_front_faces_and_double_sided_sheets() {
             max_depth: 4,
             spp: 1,
             seed: 0,
+            hide_emitters: false,
         },
         &foreign,
     )

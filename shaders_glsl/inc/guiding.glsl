@@ -317,43 +317,47 @@ void guide_splat_box(uint root, vec2 p, float v) {
     }
 }
 
-// Record into the training tree of leaf `leaf`: `weight` to its statistical weight and
-// value × weight to the direction's cell(s).
-void guide_record_into(uint leaf, vec3 dir, float value, float weight) {
+// Record `r` into the training tree of leaf `leaf`: its weight into the leaf's
+// statistical weight, its value into the cell(s) of its direction (see GuideRecord).
+void guide_record_into(uint leaf, GuideRecord r) {
     uint root = guide_leaves[leaf].training_root;
-    atomicAdd(guide_training[root - 1u].sum.x, weight);
-    if (!(value > 0.0) || isinf(value)) {
+    if (r.weight > 0.0) atomicAdd(guide_training[root - 1u].sum.x, r.weight);
+    if (!(r.value > 0.0) || isinf(r.value)) {
         return;
     }
-    vec2 p = guide_dir_to_square(dir);
-    float v = value * weight;
+    vec2 p = guide_dir_to_square(r.dir);
     if ((guide_header.flags & GUIDE_FLAG_DIRECTIONAL_BOX) != 0u) {
-        guide_splat_box(root, p, v);
+        guide_splat_box(root, p, r.value);
     } else {
-        guide_splat_nearest(root, p, v);
+        guide_splat_nearest(root, p, r.value);
     }
 }
 
-// Record one training sample taken at `p` (whose spatial leaf is `leaf_at_p`): the
-// incident radiance from `dir` divided by the pdf of `dir`, averaged over RGB, with
-// statistical weight `weight`. `u` (uniform in [0,1)³) jitters the position within the
-// leaf's box when the stochastic spatial filter is on.
-void guide_record_from_leaf(uint leaf_at_p, vec3 p, vec3 dir, float value, float weight, vec3 u) {
-    if (!(weight > 0.0) || isinf(weight)) {
+// Record one training sample taken at r.pos, whose spatial leaf is `leaf_at_p`. `u`
+// (uniform in [0,1)³) jitters the position within the leaf's box when the stochastic
+// spatial filter is on.
+void guide_record_from_leaf(uint leaf_at_p, GuideRecord r, vec3 u) {
+    // A weight that is not a finite number ≥ 0 marks a broken record: drop it whole.
+    if (!(r.weight >= 0.0) || isinf(r.weight)) {
+        return;
+    }
+    bool counts = r.weight > 0.0;
+    bool splats = r.value > 0.0 && !isinf(r.value);
+    if (!counts && !splats) {
         return;
     }
     uint leaf = leaf_at_p;
     if ((guide_header.flags & GUIDE_FLAG_SPATIAL_JITTER) != 0u) {
         // precise: no fused multiply-add, so the CPU mirror picks the same leaf.
-        precise vec3 q = p + (u - 0.5) * guide_leaves[leaf_at_p].box_size;
+        precise vec3 q = r.pos + (u - 0.5) * guide_leaves[leaf_at_p].box_size;
         q = clamp(q, guide_header.origin, guide_header.origin + guide_header.size);
         leaf = guide_find_leaf(q);
     }
-    guide_record_into(leaf, dir, value, weight);
+    guide_record_into(leaf, r);
 }
 
-void guide_record(vec3 p, vec3 dir, float value, float weight, vec3 u) {
-    guide_record_from_leaf(guide_find_leaf(p), p, dir, value, weight, u);
+void guide_record(GuideRecord r, vec3 u) {
+    guide_record_from_leaf(guide_find_leaf(r.pos), r, u);
 }
 
 // ---- learned light selection -------------------------------------------------------------

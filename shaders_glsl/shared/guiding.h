@@ -81,9 +81,18 @@ struct GuideQuadNode {
     uvec4 child;
 };
 
-// One training record, for the records mode (the kernel appends, the CPU accumulates)
-// and for test kernels: the radiance arriving at `pos` from `dir` divided by the pdf of
-// `dir` (averaged over RGB), and its statistical weight.
+// One training record (Müller's DTreeRecord, reduced to what the tree uses):
+//   value   the radiance arriving at `pos` from `dir` divided by the pdf of `dir`,
+//           averaged over RGB, with any MIS weight applied; splatted into the quadtree
+//           cell of `dir` as it is (never scaled by `weight`);
+//   weight  the statistical weight: how many samples of the incident radiance this
+//           record stands for; added to the leaf's sample count (split decisions).
+// A path vertex takes one MIS-combined sample of its incident radiance with two
+// techniques: its direction record (weight 1; value 0 when no direction was sampled)
+// and its NEE record (weight 0). Their MIS-weighted values add up to one unbiased
+// estimate, so every vertex counts once and direct light once. (Müller et al.'s
+// reference gives each half the weight and scales the splats by it, which counts the
+// vertex once too but halves the estimate of the radiance.)
 struct GuideRecord {
     vec3 pos;
     float value;

@@ -17,5 +17,5 @@ void main() {
         return;
     }
     GuideTestRecord t = inputs[i];
-    guide_record(t.record.pos, t.record.dir, t.record.value, t.record.weight, t.u);
+    guide_record(t.record, t.u);
 }

@@ -186,6 +186,7 @@ fn scene_peer(bench: &Bench, size: &PeerSize) -> Result<PeerScene> {
             max_depth: depth,
             spp: size.spp as u32,
             seed: 0,
+            hide_emitters: false,
         },
         &export_dir,
     )

@@ -131,6 +131,10 @@ pub struct EstimatorArgs {
     /// alone (a debugging switch: all three converge to the same image).
     #[arg(long, value_enum, default_value = "mis")]
     pub strategy: Strategy,
+    /// Emitters seen directly by the camera contribute nothing (Mitsuba's
+    /// `hide_emitters`); the light they cast still counts.
+    #[arg(long)]
+    pub hide_emitters: bool,
     /// Guiding: c in the spatial split threshold c·√(spp of the next iteration / 4)
     /// (Müller et al.'s 12000), for a 1280×720 image: it is scaled by the square root of
     /// the image's pixel count relative to that, since records per leaf scale with it.
@@ -191,6 +195,7 @@ impl EstimatorArgs {
             train_fraction: self.train_fraction,
             record_nee: !self.no_record_nee,
             strategy: self.strategy,
+            hide_emitters: self.hide_emitters,
             guided_output: self.guided_output,
             spatial_jitter: self.spatial_filter == SpatialFilterArg::Jitter,
             directional_box: self.directional_filter == DirectionalFilterArg::Box,
@@ -277,6 +282,7 @@ pub fn render_meta(
             "strategy",
             format!("{:?}", settings.strategy).to_lowercase(),
         ),
+        ("hide_emitters", settings.hide_emitters.to_string()),
     ] {
         meta.extra.insert(k.to_string(), v);
     }

@@ -32,6 +32,13 @@ enum KindArg {
     Gap,
     /// Alpha-masked checkerboard in front of an emitter; --emission.
     AlphaTest,
+    /// Conformance: lamps on, near and inside walls and ledges, closed emissive boxes,
+    /// a 1 cm lamp, a thin slab, a grazing strip, a large panel.
+    Sconces,
+    /// Conformance: point and spot lights 1–5 cm from surfaces; --intensity.
+    PunctualNear,
+    /// Conformance: a lamp behind an alpha-masked lattice screen.
+    AlphaLights,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -81,6 +88,19 @@ pub struct GenerateArgs {
     /// furnace: the enclosure's shape.
     #[arg(long, value_enum)]
     shape: Option<ShapeArg>,
+    /// Any kind: move the whole scene (cameras and lights too) by X,Y,Z, e.g. to test
+    /// precision far from the origin.
+    #[arg(long, value_parser = parse_offset, allow_hyphen_values = true)]
+    offset: Option<[f32; 3]>,
+}
+
+fn parse_offset(s: &str) -> Result<[f32; 3], String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("expected X,Y,Z: {e}"))?;
+    <[f32; 3]>::try_from(v).map_err(|v| format!("expected three numbers X,Y,Z, got {}", v.len()))
 }
 
 pub fn run(command: Command) -> anyhow::Result<()> {
@@ -99,6 +119,9 @@ fn run_generate(a: GenerateArgs) -> anyhow::Result<()> {
         KindArg::PlanePoint => Kind::PlanePoint,
         KindArg::Gap => Kind::Gap,
         KindArg::AlphaTest => Kind::AlphaTest,
+        KindArg::Sconces => Kind::Sconces,
+        KindArg::PunctualNear => Kind::PunctualNear,
+        KindArg::AlphaLights => Kind::AlphaLights,
     };
     let options = Options {
         seed: a.seed,
@@ -115,6 +138,7 @@ fn run_generate(a: GenerateArgs) -> anyhow::Result<()> {
             ShapeArg::Box => Shape::Box,
             ShapeArg::Sphere => Shape::Sphere,
         }),
+        offset: a.offset,
     };
     let start = std::time::Instant::now();
     if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {

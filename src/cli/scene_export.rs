@@ -33,6 +33,9 @@ pub struct ExportArgs {
     /// Default seed of the XML's sampler (`$seed`).
     #[arg(long, default_value_t = 0)]
     pub seed: u32,
+    /// Emitters seen directly by the camera contribute nothing (`hide_emitters`).
+    #[arg(long)]
+    pub hide_emitters: bool,
 }
 
 pub fn run(args: ExportArgs) -> Result<()> {
@@ -55,6 +58,7 @@ pub fn run(args: ExportArgs) -> Result<()> {
         max_depth: args.max_depth,
         spp: args.spp,
         seed: args.seed,
+        hide_emitters: args.hide_emitters,
     };
     let summary = export_mitsuba::export(
         &loaded.scene,

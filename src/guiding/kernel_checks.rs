@@ -80,13 +80,7 @@ pub fn scene_tree(config: &GuidingConfig) -> SdTree {
     for k in 0..5u32 {
         for r in scene_records(65_536 << k, 100 + u64::from(k)) {
             let rec = r.record;
-            tree.record(
-                Vec3::from_array(rec.pos),
-                Vec3::from_array(rec.dir),
-                rec.value,
-                rec.weight,
-                r.u,
-            );
+            tree.record(&rec, r.u);
         }
         tree.refit(2 << k);
     }
@@ -110,10 +104,7 @@ pub fn deep_tree() -> SdTree {
                 Vec3::new(r(0), r(1), r(2)) - 0.5
             };
             tree.record(
-                Vec3::splat(0.5),
-                d.normalize_or(Vec3::Z),
-                1.0,
-                1.0,
+                &GuideRecord::new(Vec3::splat(0.5), d.normalize_or(Vec3::Z), 1.0, 1.0),
                 [r(3), r(4), r(5)],
             );
         }
@@ -245,13 +236,7 @@ pub fn check_record_kernel(
     let mut cpu = tree.clone();
     for r in &records {
         let rec = r.record;
-        cpu.record(
-            Vec3::from_array(rec.pos),
-            Vec3::from_array(rec.dir),
-            rec.value,
-            rec.weight,
-            r.u,
-        );
+        cpu.record(&rec, r.u);
     }
     let (mut l1, mut total) = (0.0f64, 0.0f64);
     for (i, (a, b)) in device.leaves().iter().zip(cpu.leaves()).enumerate() {
@@ -330,13 +315,7 @@ pub fn cpu_record_runner(
         let mut tree = SdTree::from_gpu_arrays(arrays, config).expect("valid arrays");
         for r in records {
             let rec = r.record;
-            tree.record(
-                Vec3::from_array(rec.pos),
-                Vec3::from_array(rec.dir),
-                rec.value,
-                rec.weight,
-                r.u,
-            );
+            tree.record(&rec, r.u);
         }
         tree.gpu_arrays().training
     }

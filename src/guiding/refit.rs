@@ -165,7 +165,10 @@ mod tests {
                 (i % 11) as f32 / 11.0,
                 (i % 13) as f32 / 13.0,
             ];
-            t.record(p, Vec3::new(0.3, 0.4, 0.866), 1.0, 1.0, u);
+            t.record(
+                &crate::gpu::GuideRecord::new(p, Vec3::new(0.3, 0.4, 0.866), 1.0, 1.0),
+                u,
+            );
         }
     }
 

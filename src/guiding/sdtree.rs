@@ -158,27 +158,26 @@ impl SdTree {
         self.leaf(leaf).sampling.pdf(dir)
     }
 
-    /// Record a training sample taken at `pos` (`guide_record`): the incident radiance
-    /// from `dir` divided by the pdf of `dir`, averaged over RGB, with statistical
-    /// weight `weight`; `u` ∈ [0,1)³ jitters the position (stochastic spatial filter).
-    pub fn record(&mut self, pos: Vec3, dir: Vec3, value: f32, weight: f32, u: [f32; 3]) {
-        let leaf = self.find_leaf(pos);
-        self.record_from_leaf(leaf, pos, dir, value, weight, u);
+    /// Record a training sample (`guide_record`; see [`GuideRecord`] for what its value
+    /// and statistical weight mean); `u` ∈ [0,1)³ jitters the position (stochastic
+    /// spatial filter).
+    pub fn record(&mut self, rec: &GuideRecord, u: [f32; 3]) {
+        let leaf = self.find_leaf(Vec3::from_array(rec.pos));
+        self.record_from_leaf(leaf, rec, u);
     }
 
-    /// `record` for a caller that already knows the leaf holding `pos`.
-    pub fn record_from_leaf(
-        &mut self,
-        leaf_at_pos: u32,
-        pos: Vec3,
-        dir: Vec3,
-        value: f32,
-        weight: f32,
-        u: [f32; 3],
-    ) {
-        if !weight.is_finite() || weight <= 0.0 {
+    /// `record` for a caller that already knows the leaf holding `rec.pos`.
+    pub fn record_from_leaf(&mut self, leaf_at_pos: u32, rec: &GuideRecord, u: [f32; 3]) {
+        // A weight that is not a finite number ≥ 0 marks a broken record: drop it whole.
+        if !(rec.weight.is_finite() && rec.weight >= 0.0) {
             return;
         }
+        let counts = rec.weight > 0.0;
+        let splats = rec.value.is_finite() && rec.value > 0.0;
+        if !counts && !splats {
+            return;
+        }
+        let pos = Vec3::from_array(rec.pos);
         let mut leaf = leaf_at_pos;
         if self.config.spatial_filter == SpatialFilter::StochasticBox {
             let box_size = self.leaves[leaf_at_pos as usize].box_size;
@@ -188,15 +187,17 @@ impl SdTree {
         }
         let box_filter = self.config.directional_filter == DirectionalFilter::Box;
         let l = &mut self.leaves[leaf as usize];
-        l.training_weight += weight;
-        if !value.is_finite() || value <= 0.0 {
+        if counts {
+            l.training_weight += rec.weight;
+        }
+        if !splats {
             return;
         }
-        let p = dir_to_square(dir);
+        let p = dir_to_square(Vec3::from_array(rec.dir));
         if box_filter {
-            l.training.splat_box(p, value * weight);
+            l.training.splat_box(p, rec.value);
         } else {
-            l.training.splat_nearest(p, value * weight);
+            l.training.splat_nearest(p, rec.value);
         }
     }
 
@@ -207,13 +208,20 @@ impl SdTree {
             let h = hash64(seed ^ (i as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
             let unit = |bits: u64| (bits & 0xff_ffff) as f32 * (1.0 / 16_777_216.0);
             let u = [unit(h), unit(h >> 24), unit(h >> 40)];
-            self.record(
-                Vec3::from_array(r.pos),
-                Vec3::from_array(r.dir),
-                r.value,
-                r.weight,
-                u,
-            );
+            self.record(r, u);
+        }
+    }
+}
+
+impl GuideRecord {
+    /// A record of `value` (radiance / pdf) arriving at `pos` from `dir`, standing for
+    /// `weight` samples.
+    pub fn new(pos: Vec3, dir: Vec3, value: f32, weight: f32) -> Self {
+        GuideRecord {
+            pos: pos.to_array(),
+            value,
+            dir: dir.to_array(),
+            weight,
         }
     }
 }
@@ -238,12 +246,16 @@ mod tests {
         }
     }
 
+    fn rec(pos: Vec3, dir: Vec3, value: f32, weight: f32) -> GuideRecord {
+        GuideRecord::new(pos, dir, value, weight)
+    }
+
     /// A tree split once along x (records at both ends, weight above c at 4 spp).
     fn split_tree(cfg: &GuidingConfig) -> SdTree {
         let mut t = SdTree::new(Vec3::ZERO, Vec3::new(2.0, 1.0, 1.0), cfg).unwrap();
         for i in 0..12001 {
             let x = if i % 2 == 0 { 0.1 } else { 1.9 };
-            t.record(Vec3::new(x, 0.5, 0.5), Vec3::Z, 1.0, 1.0, [0.5; 3]);
+            t.record(&rec(Vec3::new(x, 0.5, 0.5), Vec3::Z, 1.0, 1.0), [0.5; 3]);
         }
         t.refit(4);
         assert_eq!(t.leaves().len(), 2);
@@ -271,21 +283,25 @@ mod tests {
     }
 
     #[test]
+    /// The record's value is splatted whatever its statistical weight (an NEE record has
+    /// weight 0 and must still teach the tree: a splat of value × weight lost them all),
+    /// the weight counts even without energy, and broken values or weights are dropped.
     fn weight_counts_even_without_energy_and_bad_values_are_ignored() {
         let cfg = config(SpatialFilter::Nearest, DirectionalFilter::Nearest);
         let mut t = SdTree::new(Vec3::ZERO, Vec3::ONE, &cfg).unwrap();
         let p = Vec3::splat(0.5);
-        t.record(p, Vec3::Z, 0.0, 1.0, [0.5; 3]);
-        t.record(p, Vec3::Z, f32::NAN, 1.0, [0.5; 3]);
-        t.record(p, Vec3::Z, f32::INFINITY, 1.0, [0.5; 3]);
-        t.record(p, Vec3::Z, 2.0, 0.5, [0.5; 3]);
-        t.record(p, Vec3::Z, 2.0, f32::NAN, [0.5; 3]);
-        t.record(p, Vec3::Z, 2.0, -1.0, [0.5; 3]);
+        t.record(&rec(p, Vec3::Z, 0.0, 1.0), [0.5; 3]);
+        t.record(&rec(p, Vec3::Z, f32::NAN, 1.0), [0.5; 3]);
+        t.record(&rec(p, Vec3::Z, f32::INFINITY, 1.0), [0.5; 3]);
+        t.record(&rec(p, Vec3::Z, 2.0, 0.5), [0.5; 3]);
+        t.record(&rec(p, Vec3::Z, 2.0, f32::NAN), [0.5; 3]);
+        t.record(&rec(p, Vec3::Z, 2.0, -1.0), [0.5; 3]);
+        t.record(&rec(p, Vec3::Z, 3.0, 0.0), [0.5; 3]);
         let l = &t.leaves()[0];
         assert_eq!(l.training_weight, 3.5);
         let mut built = l.training.clone();
         built.build();
-        assert_eq!(built.total(), 1.0);
+        assert_eq!(built.total(), 5.0);
     }
 
     #[test]
@@ -293,7 +309,7 @@ mod tests {
         let cfg = config(SpatialFilter::Nearest, DirectionalFilter::Nearest);
         let mut t = split_tree(&cfg);
         let dir = Vec3::new(0.0, 0.6, -0.8);
-        t.record(Vec3::new(1.5, 0.2, 0.9), dir, 3.0, 1.0, [0.0; 3]);
+        t.record(&rec(Vec3::new(1.5, 0.2, 0.9), dir, 3.0, 1.0), [0.0; 3]);
         assert_eq!(t.leaves()[0].training_weight, 0.0);
         assert_eq!(t.leaves()[1].training_weight, 1.0);
         let mut built = t.leaves()[1].training.clone();
@@ -314,17 +330,20 @@ mod tests {
         // Leaves are 1 wide in x. From x = 0.9 a jitter of (u - 0.5) · 1 reaches the
         // other leaf iff u > 0.6; it never leaves the cube (clamped).
         let p = Vec3::new(0.9, 0.5, 0.5);
-        t.record(p, Vec3::Z, 1.0, 1.0, [0.55, 0.5, 0.5]);
+        t.record(&rec(p, Vec3::Z, 1.0, 1.0), [0.55, 0.5, 0.5]);
         assert_eq!(
             (t.leaves()[0].training_weight, t.leaves()[1].training_weight),
             (1.0, 0.0)
         );
-        t.record(p, Vec3::Z, 1.0, 1.0, [0.65, 0.5, 0.5]);
+        t.record(&rec(p, Vec3::Z, 1.0, 1.0), [0.65, 0.5, 0.5]);
         assert_eq!(
             (t.leaves()[0].training_weight, t.leaves()[1].training_weight),
             (1.0, 1.0)
         );
-        t.record(Vec3::new(0.0, 0.0, 0.0), Vec3::Z, 1.0, 1.0, [0.0, 0.0, 0.0]);
+        t.record(
+            &rec(Vec3::new(0.0, 0.0, 0.0), Vec3::Z, 1.0, 1.0),
+            [0.0, 0.0, 0.0],
+        );
         assert_eq!(t.leaves()[0].training_weight, 2.0);
         // Uniform jitter from x = 0.9: a fraction 0.4 lands in the other leaf.
         let mut rng = 1u64;
@@ -332,7 +351,7 @@ mod tests {
         for _ in 0..n {
             rng = hash64(rng);
             let u = [(rng >> 40) as f32 / (1u64 << 24) as f32, 0.5, 0.5];
-            t.record(p, Vec3::Z, 1.0, 1.0, u);
+            t.record(&rec(p, Vec3::Z, 1.0, 1.0), u);
         }
         let frac = f64::from(t.leaves()[1].training_weight - 1.0) / f64::from(n);
         // Binomial: σ = √(0.24 / n) ≈ 0.0015; 5σ bound.

@@ -322,6 +322,7 @@ impl Renderer {
                 Strategy::Bsdf => gpu::STRATEGY_BSDF_ONLY,
             },
             aov_first_sample: self.film_offset as u32,
+            hide_emitters: u32::from(s.hide_emitters),
         }
     }
 

@@ -145,6 +145,9 @@ pub struct RenderSettings {
     /// Guiding: box directional filter (else nearest).
     pub directional_box: bool,
     pub strategy: Strategy,
+    /// Emitters seen directly by the camera contribute nothing (Mitsuba's
+    /// `hide_emitters`); light they send into the scene still counts.
+    pub hide_emitters: bool,
     /// Accumulate first-hit AOVs and per-pixel outliers (costs memory and a little time).
     pub aovs: bool,
     pub guiding: GuidingSettings,
@@ -168,6 +171,7 @@ impl Default for RenderSettings {
             spatial_jitter: true,
             directional_box: true,
             strategy: Strategy::Mis,
+            hide_emitters: false,
             aovs: false,
             guiding: GuidingSettings::default(),
             guided_output: GuidedOutput::RenderPhase,

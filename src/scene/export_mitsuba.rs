@@ -43,6 +43,8 @@ pub struct ExportOptions {
     pub spp: u32,
     /// Default seed of the XML's sampler (`$seed`).
     pub seed: u32,
+    /// The path integrator's `hide_emitters` (lanterna's `--hide-emitters`).
+    pub hide_emitters: bool,
 }
 
 /// What an export wrote.

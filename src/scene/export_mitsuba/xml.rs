@@ -12,8 +12,9 @@ pub(super) fn integrator_xml(o: &ExportOptions) -> String {
     // Russian roulette only adds noise here (lanterna's is off by default): start it
     // beyond the last segment.
     format!(
-        "  <integrator type=\"path\">\n    <integer name=\"max_depth\" value=\"$max_depth\"/>\n    <integer name=\"rr_depth\" value=\"{}\"/>\n    <boolean name=\"hide_emitters\" value=\"false\"/>\n  </integrator>\n",
-        o.max_depth.max(1) + 1000
+        "  <integrator type=\"path\">\n    <integer name=\"max_depth\" value=\"$max_depth\"/>\n    <integer name=\"rr_depth\" value=\"{}\"/>\n    <boolean name=\"hide_emitters\" value=\"{}\"/>\n  </integrator>\n",
+        o.max_depth.max(1) + 1000,
+        o.hide_emitters
     )
 }
 

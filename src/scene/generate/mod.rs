@@ -11,6 +11,7 @@
 
 mod alpha_test;
 mod analytic;
+mod conformance;
 mod cornell;
 mod furnace;
 mod gap;
@@ -43,10 +44,16 @@ pub enum Kind {
     Gap,
     /// An alpha-masked checkerboard quad in front of an emitter.
     AlphaTest,
+    /// Lamps on, near and inside walls and ledges (the conformance suite).
+    Sconces,
+    /// Point and spot lights centimetres from surfaces (the conformance suite).
+    PunctualNear,
+    /// A lamp behind an alpha-masked lattice screen (the conformance suite).
+    AlphaLights,
 }
 
 impl Kind {
-    pub const ALL: [Kind; 7] = [
+    pub const ALL: [Kind; 10] = [
         Kind::Street,
         Kind::CornellLights,
         Kind::Furnace,
@@ -54,6 +61,9 @@ impl Kind {
         Kind::PlanePoint,
         Kind::Gap,
         Kind::AlphaTest,
+        Kind::Sconces,
+        Kind::PunctualNear,
+        Kind::AlphaLights,
     ];
 
     pub fn name(self) -> &'static str {
@@ -65,6 +75,9 @@ impl Kind {
             Kind::PlanePoint => "plane-point",
             Kind::Gap => "gap",
             Kind::AlphaTest => "alpha-test",
+            Kind::Sconces => "sconces",
+            Kind::PunctualNear => "punctual-near",
+            Kind::AlphaLights => "alpha-lights",
         }
     }
 
@@ -82,6 +95,8 @@ impl Kind {
             Kind::PlanePoint => &["albedo", "intensity", "height", "spot"],
             Kind::Gap => &["albedo", "emission"],
             Kind::AlphaTest => &["emission"],
+            Kind::Sconces | Kind::AlphaLights => &[],
+            Kind::PunctualNear => &["intensity"],
         }
     }
 }
@@ -124,6 +139,9 @@ pub struct Options {
     pub spot: bool,
     /// `furnace`: box or sphere.
     pub shape: Option<Shape>,
+    /// Every kind: translate the whole scene, cameras and lights included (precision
+    /// tests far from the origin).
+    pub offset: Option<[f32; 3]>,
 }
 
 impl Default for Options {
@@ -140,6 +158,7 @@ impl Default for Options {
             intensity: None,
             spot: false,
             shape: None,
+            offset: None,
         }
     }
 }
@@ -249,7 +268,7 @@ pub fn generate(
 ) -> Result<GenerateSummary, GenerateError> {
     for option in options.given() {
         if !kind.accepted().contains(&option) {
-            let accepted = ["seed", "aspect"]
+            let accepted = ["seed", "aspect", "offset"]
                 .iter()
                 .chain(kind.accepted())
                 .map(|s| format!("--{s}"))
@@ -288,7 +307,25 @@ pub fn generate(
         Kind::PlanePoint => analytic::build_plane_point(options)?,
         Kind::Gap => gap::build(options)?,
         Kind::AlphaTest => alpha_test::build(options)?,
+        Kind::Sconces => conformance::build_sconces(options)?,
+        Kind::PunctualNear => conformance::build_punctual_near(options)?,
+        Kind::AlphaLights => conformance::build_alpha_lights(options)?,
     };
+    let mut built = built;
+    if let Some(offset) = options.offset {
+        if offset.iter().any(|x| !x.is_finite() || x.abs() > 1e7) {
+            return Err(GenerateError::InvalidOption {
+                option: "offset",
+                value: format!("{offset:?}"),
+                reason: "must be three finite numbers of magnitude at most 1e7".into(),
+            });
+        }
+        built.gltf.set_offset(glam::Vec3::from_array(offset));
+        built.options.insert(
+            "offset".into(),
+            Value::String(offset.map(|x| x.to_string()).join(",")),
+        );
+    }
     let stats = built.gltf.stats().clone();
     let mut lanterna = Map::new();
     lanterna.insert("kind".into(), json!(kind.name()));

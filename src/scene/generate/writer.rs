@@ -182,6 +182,8 @@ pub struct Gltf {
     nodes: Vec<Value>,
     uses_emissive_strength: bool,
     stats: Stats,
+    /// Translation of a root node that holds every other node (`--offset`).
+    offset: Vec3,
 }
 
 impl Default for Gltf {
@@ -212,11 +214,17 @@ impl Gltf {
             lights: Vec::new(),
             nodes: Vec::new(),
             uses_emissive_strength: false,
+            offset: Vec3::ZERO,
             stats: Stats {
                 min_light_power: f64::INFINITY,
                 ..Default::default()
             },
         }
+    }
+
+    /// Move the whole scene by `offset` (written as one root node holding all others).
+    pub fn set_offset(&mut self, offset: Vec3) {
+        self.offset = offset;
     }
 
     pub fn stats(&self) -> &Stats {
@@ -576,11 +584,16 @@ impl Gltf {
             root.insert("extensionsUsed".into(), json!(used));
         }
         root.insert("scene".into(), json!(0));
-        root.insert(
-            "scenes".into(),
-            json!([{"name": stem, "nodes": (0..self.nodes.len()).collect::<Vec<_>>()}]),
-        );
-        root.insert("nodes".into(), Value::Array(self.nodes));
+        let mut nodes = self.nodes;
+        let children: Vec<usize> = (0..nodes.len()).collect();
+        let roots = if self.offset == Vec3::ZERO {
+            children
+        } else {
+            nodes.push(json!({"name": "offset", "translation": nums(&self.offset.to_array()), "children": children}));
+            vec![nodes.len() - 1]
+        };
+        root.insert("scenes".into(), json!([{"name": stem, "nodes": roots}]));
+        root.insert("nodes".into(), Value::Array(nodes));
         let put = |root: &mut Map<String, Value>, key: &str, v: Vec<Value>| {
             if !v.is_empty() {
                 root.insert(key.into(), Value::Array(v));
