@@ -123,25 +123,28 @@ pub struct Batches {
     pub images: Vec<Vec<f32>>,
 }
 
-/// A renderer on the test device with the built-in kernels, or, when
-/// `LANTERNA_TEST_SHADER_DIR` names a copy of `shaders_glsl/`, with kernels compiled from
-/// it: the way to inject a defect into the estimators and see which tests fail, without
-/// rebuilding.
+/// A renderer on the test device with the kernels of [`shader_source`].
 fn test_renderer(scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Renderer {
     let lights = LightTable::build(scene).expect("light table");
-    let shaders = match std::env::var_os("LANTERNA_TEST_SHADER_DIR") {
-        Some(dir) => ShaderSource::Directory(dir.into()),
-        None => ShaderSource::Builtin,
-    };
     Renderer::new(
         device(),
         scene,
         &lights,
         camera.clone(),
         settings.clone(),
-        shaders,
+        shader_source(),
     )
     .expect("renderer")
+}
+
+/// The kernels tests render with: built in, or, when `LANTERNA_TEST_SHADER_DIR` names a
+/// copy of `shaders_glsl/`, compiled from it — the way to inject a defect into the
+/// estimators and see which tests fail, without rebuilding.
+pub fn shader_source() -> ShaderSource {
+    match std::env::var_os("LANTERNA_TEST_SHADER_DIR") {
+        Some(dir) => ShaderSource::Directory(dir.into()),
+        None => ShaderSource::Builtin,
+    }
 }
 
 /// Render `batches` × `spp` samples with `settings`.
