@@ -5,7 +5,7 @@
 CARGO ?= cargo
 SETUP_STAMP := .cache/setup-done
 
-.PHONY: demo test setup bench lint fmt
+.PHONY: demo test setup bench lint fmt conformance-references
 
 $(SETUP_STAMP): scripts/setup
 	@scripts/setup
@@ -26,3 +26,8 @@ bench: $(SETUP_STAMP)
 lint:
 	$(CARGO) fmt --all -- --check
 	$(CARGO) clippy --all-targets -- -D warnings
+
+# Re-render the committed Mitsuba references of the conformance suite (needs Mitsuba:
+# scripts/setup --mitsuba) after a conformance scene changed.
+conformance-references: $(SETUP_STAMP)
+	LANTERNA_WRITE_REFERENCES=1 $(CARGO) test --release --test conformance -- --test-threads 1

@@ -7,8 +7,6 @@
 #ifndef RAYGEN_GLSL
 #define RAYGEN_GLSL
 
-#define MAX_RECORDED_VERTICES 16
-
 struct RayCounts {
     uint camera;
     uint bounce;
@@ -46,7 +44,7 @@ void camera_ray(uvec2 pixel, vec2 jitter, out vec3 origin, out vec3 dir) {
     dir = normalize(mat3(params.camera_to_world) * d);
 }
 
-void record_path(VertexRecord rec[MAX_RECORDED_VERTICES], uint count, inout Rng rng) {
+void record_path(VertexRecord rec[GUIDE_MAX_RECORDED_VERTICES], uint count, inout Rng rng) {
     // Incident radiance along each vertex's direction, from the back of the path:
     // L_in(k) = emitted(k) + nee(k+1) + weight(k+1) · L_in(k+1).
     vec3 l_in = vec3(0.0);
@@ -107,7 +105,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
     vec3 L = params.hide_emitters != 0u ? vec3(0.0) : s.emission;
     vec3 beta = vec3(1.0);
 
-    VertexRecord rec[MAX_RECORDED_VERTICES];
+    VertexRecord rec[GUIDE_MAX_RECORDED_VERTICES];
     uint recorded = 0u;
     bool record_nee = TRAINING && (guide_header.flags & GUIDE_FLAG_RECORD_NEE) != 0u;
 
@@ -160,7 +158,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
             else weight /= q;
         }
 
-        if (TRAINING && recorded < MAX_RECORDED_VERTICES) {
+        if (TRAINING && recorded < GUIDE_MAX_RECORDED_VERTICES) {
             VertexRecord r;
             r.p = s.p;
             r.wi = ds.wi;
@@ -195,6 +193,7 @@ void main() {
 
     RayCounts rays = RayCounts(0u, 0u, 0u);
     uint nonfinite = 0u;
+    uint clamped = 0u;
     u64vec3 sum = u64vec3(0ul);
     float aov_sum[AOV_CHANNELS];
     for (uint c = 0u; c < AOV_CHANNELS; ++c) aov_sum[c] = 0.0;
@@ -214,8 +213,10 @@ void main() {
             continue;
         }
         // Fixed point: each sample is rounded alone, so sums do not depend on how the
-        // samples were split into dispatches.
-        sum += u64vec3(min(L, vec3(1e9)) * FILM_FIXED_SCALE + 0.5);
+        // samples were split into dispatches. A sample above the fixed-point range is
+        // clamped and counted (the render reports how many).
+        if (any(greaterThan(L, vec3(FILM_MAX_SAMPLE)))) clamped += 1u;
+        sum += u64vec3(min(L, vec3(FILM_MAX_SAMPLE)) * FILM_FIXED_SCALE + 0.5);
         if (AOVS) {
             aov_sum[AOV_ALBEDO + 0] += info.albedo.x;
             aov_sum[AOV_ALBEDO + 1] += info.albedo.y;
@@ -260,10 +261,11 @@ void main() {
         }
     }
 
-    atomicAdd(stats[STAT_CAMERA_RAYS], rays.camera);
-    atomicAdd(stats[STAT_BOUNCE_RAYS], rays.bounce);
-    atomicAdd(stats[STAT_SHADOW_RAYS], rays.shadow);
-    if (nonfinite > 0u) atomicAdd(stats[STAT_NONFINITE_SAMPLES], nonfinite);
+    atomicAdd(stats[STAT_CAMERA_RAYS], uint64_t(rays.camera));
+    atomicAdd(stats[STAT_BOUNCE_RAYS], uint64_t(rays.bounce));
+    atomicAdd(stats[STAT_SHADOW_RAYS], uint64_t(rays.shadow));
+    if (nonfinite > 0u) atomicAdd(stats[STAT_NONFINITE_SAMPLES], uint64_t(nonfinite));
+    if (clamped > 0u) atomicAdd(stats[STAT_CLAMPED_SAMPLES], uint64_t(clamped));
 }
 
 #endif

@@ -19,7 +19,7 @@ layout(set = 0, binding = BINDING_PUNCTUAL_LIGHTS, scalar) readonly buffer Punct
 layout(set = 0, binding = BINDING_TRIANGLE_LIGHT_INDEX, scalar) readonly buffer TriangleLightIndexBuffer { uint triangle_light_index[]; };
 layout(set = 0, binding = BINDING_FILM, scalar) buffer FilmBuffer { uint64_t film[]; };
 layout(set = 0, binding = BINDING_AOV, scalar) buffer AovBuffer { float aov[]; };
-layout(set = 0, binding = BINDING_STATS, scalar) buffer StatsBuffer { uint stats[]; };
+layout(set = 0, binding = BINDING_STATS, scalar) buffer StatsBuffer { uint64_t stats[]; };
 layout(set = 0, binding = BINDING_OUTLIERS, scalar) buffer OutlierBuffer { float outliers[]; };
 
 layout(push_constant, scalar) uniform Push { PushConstants pc; };

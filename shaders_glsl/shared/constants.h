@@ -42,13 +42,18 @@
 // Film accumulation is fixed point so that sums are exact and order-independent:
 // a sample value v adds round(v * FILM_FIXED_SCALE) to a 64-bit integer.
 #define FILM_FIXED_SCALE 1048576.0
+// Largest sample value the film takes (1e9 · 2²⁰ < 2⁶⁴ / 2¹⁴ leaves room for 16k
+// samples of it per pixel per channel); larger ones are clamped and counted.
+#define FILM_MAX_SAMPLE 1e9
 
-// Stats counters (BINDING_STATS, uint each).
+// Stats counters (BINDING_STATS, uint64_t each: bounce rays alone pass 2³² at
+// 1080p × 1024 spp).
 #define STAT_CAMERA_RAYS 0
 #define STAT_BOUNCE_RAYS 1
 #define STAT_SHADOW_RAYS 2
 #define STAT_NONFINITE_SAMPLES 3
 #define STAT_GUIDE_RECORDS 4
+#define STAT_CLAMPED_SAMPLES 5
 #define STAT_COUNT 8
 
 // AOV channels (BINDING_AOV holds AOV_CHANNELS floats per pixel, summed over samples).

@@ -28,6 +28,9 @@
 // Loop bounds of the kernels' tree walks; the CPU never builds deeper trees.
 #define GUIDE_MAX_SPATIAL_DEPTH 48
 #define GUIDE_MAX_QUAD_DEPTH 20
+// Path vertices a training path records (raygen.glsl); the renderer refuses guided
+// methods with max_depth > GUIDE_MAX_RECORDED_VERTICES + 1.
+#define GUIDE_MAX_RECORDED_VERTICES 16
 // Tries guide_sample makes to keep a direction inside its cell (see there).
 #define GUIDE_SAMPLE_ATTEMPTS 6
 // Box-splat stack: a depth-first walk pushes at most 3 more nodes than it pops per level.

@@ -77,6 +77,13 @@ impl SampleRenderer for GpuSamples {
         if done != count {
             return Err(format!("rendered {done} of {count} samples").into());
         }
+        if stats.clamped_samples > 0 {
+            log::warn!(
+                "{} samples above {:e} clamped",
+                stats.clamped_samples,
+                lanterna::gpu::FILM_MAX_SAMPLE
+            );
+        }
         if stats.nonfinite_samples > 0 {
             log::warn!("{} non-finite samples dropped", stats.nonfinite_samples);
         }

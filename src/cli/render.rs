@@ -361,6 +361,10 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
     meta.render_seconds = Some(render_seconds);
     meta.extra
         .insert("gpu_seconds".into(), format!("{:.6}", stats.gpu_seconds));
+    if stats.clamped_samples > 0 {
+        meta.extra
+            .insert("clamped_samples".into(), stats.clamped_samples.to_string());
+    }
     let mut image = common::outcome_image(&outcome, width, height, meta)?;
     if !args.aov.is_empty() {
         let data = renderer.aovs()?;
@@ -429,6 +433,14 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
                 o.luminance
             );
         }
+    }
+    if stats.clamped_samples > 0 {
+        log::warn!(
+            "{} samples had a value above {:e} and were clamped to it (the image is darker \
+             than the scene there; lower the emission or use --exposure)",
+            stats.clamped_samples,
+            lanterna::gpu::FILM_MAX_SAMPLE
+        );
     }
     if stats.nonfinite_samples > 0 {
         log::warn!(

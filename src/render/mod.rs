@@ -50,6 +50,8 @@ pub struct RenderStats {
     pub bounce_rays: u64,
     pub shadow_rays: u64,
     pub nonfinite_samples: u64,
+    /// Samples with a channel above FILM_MAX_SAMPLE, clamped to it in the film.
+    pub clamped_samples: u64,
     /// GPU time from timestamp queries (0 when the device has none).
     pub gpu_seconds: f64,
     /// Wall time spent in the dispatch loop.
@@ -219,6 +221,16 @@ impl Renderer {
                 "--max-depth must be at least 1".into(),
             ));
         }
+        // A training path keeps a record per vertex in registers until it ends; guided
+        // methods refuse longer paths rather than silently dropping their far vertices.
+        let max_guided_depth = gpu::GUIDE_MAX_RECORDED_VERTICES + 1;
+        if settings.method.uses_guiding() && settings.max_depth > max_guided_depth {
+            return Err(RenderError::Invalid(format!(
+                "--max-depth {} is too long for the guided methods: their training records \
+                 follow at most {max_guided_depth} path segments (use pt or ris for longer paths)",
+                settings.max_depth
+            )));
+        }
         if settings.ris_candidates == 0 {
             return Err(RenderError::Invalid(
                 "--ris-candidates must be at least 1".into(),
@@ -239,7 +251,7 @@ impl Renderer {
             "frame params",
         )?;
         let film = Buffer::zeroed(&device, pixels * 3 * 8, usage, "film")?;
-        let stats = Buffer::zeroed(&device, gpu::STAT_COUNT as u64 * 4, usage, "stats")?;
+        let stats = Buffer::zeroed(&device, gpu::STAT_COUNT as u64 * 8, usage, "stats")?;
         let (aov_floats, outlier_floats) = if settings.aovs {
             (
                 pixels * gpu::AOV_CHANNELS as u64,
@@ -729,11 +741,12 @@ impl Renderer {
     }
 
     fn collect_stats(&mut self, stats: &mut RenderStats) -> Result<()> {
-        let counters: Vec<u32> = self.stats.read(gpu::STAT_COUNT as usize)?;
-        stats.camera_rays += counters[gpu::STAT_CAMERA_RAYS as usize] as u64;
-        stats.bounce_rays += counters[gpu::STAT_BOUNCE_RAYS as usize] as u64;
-        stats.shadow_rays += counters[gpu::STAT_SHADOW_RAYS as usize] as u64;
-        stats.nonfinite_samples += counters[gpu::STAT_NONFINITE_SAMPLES as usize] as u64;
+        let counters: Vec<u64> = self.stats.read(gpu::STAT_COUNT as usize)?;
+        stats.camera_rays += counters[gpu::STAT_CAMERA_RAYS as usize];
+        stats.bounce_rays += counters[gpu::STAT_BOUNCE_RAYS as usize];
+        stats.shadow_rays += counters[gpu::STAT_SHADOW_RAYS as usize];
+        stats.nonfinite_samples += counters[gpu::STAT_NONFINITE_SAMPLES as usize];
+        stats.clamped_samples += counters[gpu::STAT_CLAMPED_SAMPLES as usize];
         self.stats.fill_zero()?;
         Ok(())
     }

@@ -80,6 +80,19 @@ pub fn choose_camera(
         }
         None => scene.cameras.first().cloned(),
     };
+    // --look-at is in the file's coordinates; the scene may render relative to a
+    // moved origin (Scene::origin).
+    let rebased;
+    let o = match o.look_at {
+        Some((eye, target)) if scene.origin != glam::Vec3::ZERO => {
+            rebased = CameraOverride {
+                look_at: Some((eye - scene.origin, target - scene.origin)),
+                ..o.clone()
+            };
+            &rebased
+        }
+        _ => o,
+    };
     match (found, o.look_at) {
         (Some(c), _) => Ok(c.with_override(o)),
         (None, Some((eye, target))) => Ok(Camera::look_at(

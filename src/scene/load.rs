@@ -275,8 +275,10 @@ pub fn load(path: &Path, _options: &LoadOptions) -> Result<Scene, SceneError> {
         bounds_max: hi,
         hash: String::new(),
         extras,
+        origin: Vec3::ZERO,
     };
     scene.hash = content_hash(&scene);
+    rebase(&mut scene);
     // Triangles in kd order, for builders that split in submission order. After the
     // hash: the hash names the file's content, and the order is an implementation detail.
     for p in &scene.primitives {
@@ -302,6 +304,54 @@ pub fn load(path: &Path, _options: &LoadOptions) -> Result<Scene, SceneError> {
         scene.textures.len()
     );
     Ok(scene)
+}
+
+/// The point to move to the origin before rendering: zero for a scene around the
+/// origin, else the centre of its bounds, rounded to whole units.
+///
+/// Single-precision positions are spaced by their magnitude: 10⁴ units from the origin
+/// they are a millimetre apart, and ray offsets that avoid self-intersection must be
+/// several of those spacings (offset_ray uses 256), so lamps 1 cm from a wall would lose
+/// their light there. Rendering relative to the scene's centre (production renderers
+/// render camera-relative for the same reason) gives a scene far from the origin the
+/// precision it has at the origin: the translation is subtracted from each node's
+/// transform before any vertex is transformed, so no vertex is rounded at the far
+/// position.
+pub fn rebase_origin(bounds_min: Vec3, bounds_max: Vec3) -> Vec3 {
+    let center = 0.5 * (bounds_min + bounds_max);
+    let radius = 0.5 * (bounds_max - bounds_min).length();
+    if center.abs().max_element() <= 4.0 * radius.max(1.0) {
+        return Vec3::ZERO;
+    }
+    center.round()
+}
+
+/// Moves the scene by `-rebase_origin` (instances, cameras, punctual lights, bounds).
+fn rebase(scene: &mut Scene) {
+    let origin = rebase_origin(scene.bounds_min, scene.bounds_max);
+    if origin == Vec3::ZERO {
+        return;
+    }
+    let shift = |m: &mut Mat4| m.w_axis -= origin.extend(0.0);
+    for inst in &mut scene.instances {
+        shift(&mut inst.transform);
+    }
+    for cam in &mut scene.cameras {
+        shift(&mut cam.to_world);
+    }
+    for l in &mut scene.punctual {
+        l.position = (Vec3::from(l.position) - origin).into();
+    }
+    scene.bounds_min -= origin;
+    scene.bounds_max -= origin;
+    scene.origin = origin;
+    log::info!(
+        "{}: rendering relative to ({}, {}, {}), the centre of the scene, for precision",
+        scene.path.display(),
+        origin.x,
+        origin.y,
+        origin.z
+    );
 }
 
 fn node_name(node: &gltf::Node<'_>) -> String {

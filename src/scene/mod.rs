@@ -94,6 +94,9 @@ pub struct Scene {
     pub hash: String,
     /// The glTF asset's `extras` (generators record their options there).
     pub extras: Option<serde_json::Value>,
+    /// Where the file's world origin moved (see `load::rebase_origin`): every position
+    /// here (instances, cameras, lights, bounds) is the file's minus this.
+    pub origin: Vec3,
 }
 
 impl Scene {

@@ -66,7 +66,7 @@ impl FeatureReport {
                 self.descriptor_indexing,
                 "descriptor indexing (runtime arrays, partially bound)",
             ),
-            (self.shader_int64, "shaderInt64"),
+            (self.shader_int64, "shaderInt64 + shaderBufferInt64Atomics"),
             (self.host_query_reset, "hostQueryReset"),
         ];
         for (ok, name) in req {
@@ -93,7 +93,11 @@ impl FeatureReport {
             ),
             ("scalarBlockLayout", self.scalar_block_layout, "required"),
             ("descriptor indexing", self.descriptor_indexing, "required"),
-            ("shaderInt64", self.shader_int64, "required"),
+            (
+                "shaderInt64 + shaderBufferInt64Atomics",
+                self.shader_int64,
+                "required",
+            ),
             ("hostQueryReset", self.host_query_reset, "required"),
             (
                 "shaderBufferFloat32AtomicAdd",
@@ -217,7 +221,9 @@ fn describe(instance: &Instance, index: usize, pd: vk::PhysicalDevice) -> Result
         descriptor_indexing: f12.runtime_descriptor_array == vk::TRUE
             && f12.descriptor_binding_partially_bound == vk::TRUE
             && f12.shader_sampled_image_array_non_uniform_indexing == vk::TRUE,
-        shader_int64: base.shader_int64 == vk::TRUE,
+        // 64-bit integers, and 64-bit atomics on storage buffers (ray and sample counters
+        // that would wrap at 2³² on large renders).
+        shader_int64: base.shader_int64 == vk::TRUE && f12.shader_buffer_int64_atomics == vk::TRUE,
         host_query_reset: f12.host_query_reset == vk::TRUE,
         float_atomics: has_af && f_af.shader_buffer_float32_atomic_add == vk::TRUE,
         shader_clock: has_clock && f_clock.shader_subgroup_clock == vk::TRUE,
@@ -379,6 +385,7 @@ impl Device {
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
             .buffer_device_address(true)
             .scalar_block_layout(true)
+            .shader_buffer_int64_atomics(true)
             .runtime_descriptor_array(true)
             .descriptor_binding_partially_bound(true)
             .shader_sampled_image_array_non_uniform_indexing(true)
@@ -477,6 +484,12 @@ impl Device {
     }
 
     /// Record commands with `record`, submit them, and wait for completion.
+    ///
+    /// Every submission is bracketed by two barriers, so that callers need none between
+    /// submissions: at its start, all earlier device writes (earlier submissions: uploads,
+    /// acceleration-structure builds, dispatches) are made visible to every command; at its
+    /// end, its writes are made visible to host reads of mapped memory, which the fence
+    /// wait alone does not do.
     pub fn submit<R>(&self, record: impl FnOnce(vk::CommandBuffer) -> R) -> Result<R> {
         Ok(self.submit_timed(record, false)?.0)
     }
@@ -517,7 +530,9 @@ impl Device {
                         .cmd_write_timestamp(cmd, vk::PipelineStageFlags::TOP_OF_PIPE, qp, 0)
                 };
             }
+            self.full_barrier(cmd);
             let r = record(cmd);
+            self.host_read_barrier(cmd);
             if let Some(qp) = query_pool {
                 unsafe {
                     self.raw
@@ -577,6 +592,24 @@ impl Device {
                 cmd,
                 vk::PipelineStageFlags::ALL_COMMANDS,
                 vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::DependencyFlags::empty(),
+                &barrier,
+                &[],
+                &[],
+            )
+        };
+    }
+
+    /// Make all device writes recorded so far in `cmd` visible to host reads.
+    pub fn host_read_barrier(&self, cmd: vk::CommandBuffer) {
+        let barrier = [vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
+            .dst_access_mask(vk::AccessFlags::HOST_READ)];
+        unsafe {
+            self.raw.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::PipelineStageFlags::HOST,
                 vk::DependencyFlags::empty(),
                 &barrier,
                 &[],

@@ -98,16 +98,25 @@ impl Instance {
         if has_debug_utils {
             ext_names.push(ash::ext::debug_utils::NAME.as_ptr());
         }
+        // Debug printf (for --pixel traces) and synchronization validation exclude each
+        // other in the layer; every other validating run checks synchronization.
         let printf_features = [vk::ValidationFeatureEnableEXT::DEBUG_PRINTF];
-        let mut validation_features =
-            vk::ValidationFeaturesEXT::default().enabled_validation_features(&printf_features);
+        let sync_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+        let debug_printf = validation && options.debug_printf;
+        let mut validation_features = vk::ValidationFeaturesEXT::default()
+            .enabled_validation_features(if debug_printf {
+                &printf_features
+            } else {
+                &sync_features
+            });
         let mut info = vk::InstanceCreateInfo::default()
             .application_info(&app_info)
             .enabled_layer_names(&layer_names)
             .enabled_extension_names(&ext_names);
-        let debug_printf = validation && options.debug_printf;
-        if debug_printf {
+        if validation {
             info = info.push_next(&mut validation_features);
+        }
+        if debug_printf {
             configure_printf_layer();
         }
         let raw = unsafe { entry.create_instance(&info, None) }.check("vkCreateInstance")?;
