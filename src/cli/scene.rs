@@ -37,7 +37,7 @@ enum KindArg {
     Sconces,
     /// Conformance: point and spot lights 1–5 cm from surfaces; --intensity.
     PunctualNear,
-    /// Conformance: a lamp behind an alpha-masked lattice screen.
+    /// Conformance: a lantern, a lamp inside an alpha-masked lattice cage.
     AlphaLights,
 }
 

@@ -11,9 +11,10 @@
 //!   ceiling panel.
 //! - `punctual-near`: point and spot lights 1–5 cm from walls, floor, a box top and the
 //!   ceiling corner.
-//! - `alpha-lights`: a lamp behind an alpha-masked lattice screen (MASK, nearest-filtered
-//!   binary alpha), lighting the floor and wall through the holes; Mitsuba has no exact
-//!   counterpart, so the suite compares lanterna's strategies with each other there.
+//! - `alpha-lights`: a lantern — a lamp inside a cage of alpha-masked lattice walls (MASK,
+//!   nearest-filtered binary alpha) — lighting the floor and walls through the holes only;
+//!   Mitsuba has no exact counterpart, so the suite compares lanterna's strategies with
+//!   each other there.
 //!
 //! All kinds take `--offset X,Y,Z` (handled by the writer: the whole scene, camera
 //! included, moves), which the suite uses to check precision far from the origin.
@@ -281,31 +282,36 @@ pub fn build_alpha_lights(o: &Options) -> Result<Built, GenerateError> {
         8 | 32,
     );
     place(&mut g, "room", &room, wall);
-    // A lattice screen between the lamp and the room, tilted, 13–19 cm in front of it.
-    let mut screen = MeshData::new();
-    screen.rect_mapped(
-        Vec3::new(-0.6, 0.9, -0.9),
-        Vec3::X * 1.2,
-        Vec3::new(0.0, 0.8, -0.3),
-        Vec2::ZERO,
-        Vec2::ONE,
-    );
-    place(&mut g, "screen", &screen, screen_m);
-    // The lamp behind the screen: a closed cube, and a panel on the back wall.
+    // A lantern: a lamp inside a cage of lattice walls (four sides and a top, each face
+    // an alpha-masked checkerboard), so that all of its light leaves through the holes.
+    let (lo, hi) = (Vec3::new(-0.25, 0.3, -0.75), Vec3::new(0.25, 0.8, -0.25));
+    let mut cage = MeshData::new();
+    let d = hi - lo;
+    let faces = [
+        (lo, Vec3::X * d.x, Vec3::Y * d.y),
+        (Vec3::new(lo.x, lo.y, hi.z), Vec3::X * d.x, Vec3::Y * d.y),
+        (lo, Vec3::Z * d.z, Vec3::Y * d.y),
+        (Vec3::new(hi.x, lo.y, lo.z), Vec3::Z * d.z, Vec3::Y * d.y),
+        (Vec3::new(lo.x, hi.y, lo.z), Vec3::X * d.x, Vec3::Z * d.z),
+    ];
+    for (o, u, v) in faces {
+        cage.rect_mapped(o, u, v, Vec2::ZERO, Vec2::ONE);
+    }
+    place(&mut g, "cage", &cage, screen_m);
+    // The lamp, and the cage's solid base plate under it.
     cube_lamp(
         &mut g,
         "lamp",
-        Vec3::new(-0.075, 1.2, -1.35),
+        Vec3::new(-0.075, 0.45, -0.575),
         0.15,
         scaled(WARM, 25.0),
     );
-    let mut panel = MeshData::new();
-    panel.rect(Vec3::new(-0.4, 1.0, -1.49), Vec3::X * 0.8, Vec3::Y * 0.5); // faces +z
-    let m = g.material(Material::emitter("wall-panel", scaled(COOL, 4.0)));
-    place(&mut g, "wall-panel", &panel, m);
+    let mut base = MeshData::new();
+    base.cuboid(Vec3::new(lo.x, 0.0, lo.z), Vec3::new(hi.x, lo.y, hi.z));
+    place(&mut g, "base", &base, wall);
 
     let cam = g.camera("room", 55.0, aspect);
-    g.camera_node(cam, Vec3::new(0.0, 1.6, 1.4), Vec3::new(0.0, 0.6, -1.2));
+    g.camera_node(cam, Vec3::new(0.0, 1.6, 1.4), Vec3::new(0.0, 0.5, -0.8));
     Ok(finish(
         g,
         o,

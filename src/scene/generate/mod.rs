@@ -48,7 +48,7 @@ pub enum Kind {
     Sconces,
     /// Point and spot lights centimetres from surfaces (the conformance suite).
     PunctualNear,
-    /// A lamp behind an alpha-masked lattice screen (the conformance suite).
+    /// A lantern: a lamp inside an alpha-masked lattice cage (the conformance suite).
     AlphaLights,
 }
 
