@@ -577,6 +577,14 @@ impl PyRenderer {
         json_value(py, &report)
     }
 
+    /// Live device-memory allocations of the renderer's device and their bytes (the
+    /// memory test checks that renders do not leak device objects).
+    fn _device_memory(&self) -> PyResult<(usize, u64)> {
+        let inner = self.lock()?;
+        let report = inner.renderer.device.allocator().generate_report();
+        Ok((report.allocations.len(), report.total_allocated_bytes))
+    }
+
     fn __repr__(&self) -> PyResult<String> {
         let inner = self.lock()?;
         let s = &inner.renderer.settings;
