@@ -1,11 +1,13 @@
 # lanterna — the two commands of the README's quick start, and a few helpers.
 #   make demo   render the demo scene to out/ (installs what is missing first)
-#   make test   run the test suite on lavapipe (installs what is missing first)
+#   make test   run the test suite on lavapipe (installs what is missing first): the Rust
+#               tests, then the Python package's (built into .cache/pyenv, see
+#               scripts/python-test)
 
 CARGO ?= cargo
 SETUP_STAMP := .cache/setup-done
 
-.PHONY: demo test setup bench lint fmt conformance-references
+.PHONY: demo test python-test setup bench lint fmt conformance-references
 
 $(SETUP_STAMP): scripts/setup
 	@scripts/setup
@@ -19,6 +21,12 @@ demo: $(SETUP_STAMP)
 
 test: $(SETUP_STAMP)
 	$(CARGO) test --release
+	$(MAKE) python-test
+
+# The Python tests compare renders with the release CLI, so build it first.
+python-test: $(SETUP_STAMP)
+	$(CARGO) build --release
+	scripts/python-test -q
 
 bench: $(SETUP_STAMP)
 	$(CARGO) run --release -- bench
@@ -26,6 +34,7 @@ bench: $(SETUP_STAMP)
 lint:
 	$(CARGO) fmt --all -- --check
 	$(CARGO) clippy --all-targets -- -D warnings
+	$(CARGO) clippy --all-targets --features python -- -D warnings
 
 # Re-render the committed Mitsuba references of the conformance suite (needs Mitsuba:
 # scripts/setup --mitsuba) after a conformance scene changed.

@@ -890,6 +890,18 @@ pub fn tonemap(rgb: &[[f32; 3]], exposure: f32) -> Vec<[u8; 3]> {
 
 /// Encodes an 8-bit RGB buffer as PNG at `path` (temp file + rename).
 pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb8: &[u8]) -> Result<(), ImageError> {
+    let bytes = encode_png_rgb8(width, height, rgb8).map_err(|e| match e {
+        ImageError::Png { reason, .. } => ImageError::Png {
+            path: path.to_path_buf(),
+            reason,
+        },
+        e => e,
+    })?;
+    write_atomically(path, &bytes)
+}
+
+/// Encodes an 8-bit RGB buffer as PNG in memory (errors name no file).
+pub fn encode_png_rgb8(width: u32, height: u32, rgb8: &[u8]) -> Result<Vec<u8>, ImageError> {
     use image::ImageEncoder;
     if rgb8.len() != width as usize * height as usize * 3 {
         return Err(ImageError::Shape(format!(
@@ -901,10 +913,10 @@ pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb8: &[u8]) -> Resu
     image::codecs::png::PngEncoder::new(&mut bytes)
         .write_image(rgb8, width, height, image::ExtendedColorType::Rgb8)
         .map_err(|e| ImageError::Png {
-            path: path.to_path_buf(),
+            path: PathBuf::new(),
             reason: e.to_string(),
         })?;
-    write_atomically(path, &bytes)
+    Ok(bytes)
 }
 
 /// Writes the tonemapped image (see [`tonemap`]) as an 8-bit sRGB PNG. Non-finite pixels

@@ -5,7 +5,8 @@
 //! GPU-ready arrays; `lights` builds the light table and the source distributions NEE
 //! samples from; `guiding` holds the SD-tree that is refit on the CPU between passes;
 //! `render` owns the GPU resources of one scene and runs the path-tracing kernel;
-//! `image_io` and `eval` write images and measure error against references.
+//! `image_io` and `eval` write images and measure error against references. With the
+//! `python` feature, `python` is the extension module behind `import lanterna`.
 
 pub mod bench;
 pub mod eval;
@@ -13,6 +14,8 @@ pub mod gpu;
 pub mod guiding;
 pub mod image_io;
 pub mod lights;
+#[cfg(feature = "python")]
+pub mod python;
 pub mod render;
 pub mod scene;
 pub mod shaders;

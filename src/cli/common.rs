@@ -4,7 +4,7 @@
 use anyhow::{Context, Result};
 use lanterna::render::session::{self, DeviceOptions, LoadedScene};
 use lanterna::render::{GuidedOutput, LightSource, Method, RenderSettings, Strategy};
-use lanterna::scene::{Camera, CameraOverride};
+use lanterna::scene::Camera;
 use lanterna::shaders::ShaderSource;
 use lanterna::vk::DeviceSelector;
 use std::path::PathBuf;
@@ -213,21 +213,14 @@ impl EstimatorArgs {
 /// Load the scene and choose the view.
 pub fn load(args: &SceneArgs) -> Result<(LoadedScene, Camera, u32, u32)> {
     let loaded = session::load_scene(&args.scene)?;
-    let o = CameraOverride {
-        look_at: args.look_at.map(|v| {
-            (
-                glam::Vec3::new(v[0], v[1], v[2]),
-                glam::Vec3::new(v[3], v[4], v[5]),
-            )
-        }),
-        up: None,
-        fov_degrees: args.fov,
+    let view = session::ViewOptions {
+        camera: args.camera.clone(),
+        look_at: args.look_at,
+        fov: args.fov,
+        width: args.width,
+        height: args.height,
     };
-    let camera = session::choose_camera(&loaded.scene, args.camera.as_deref(), &o)?;
-    let (w, h) = session::resolution(&camera, args.width, args.height);
-    if w == 0 || h == 0 || w as u64 * h as u64 > 1 << 28 {
-        anyhow::bail!("image size {w}×{h} is out of range");
-    }
+    let (camera, w, h) = session::choose_view(&loaded.scene, &view)?;
     Ok((loaded, camera, w, h))
 }
 
@@ -267,70 +260,23 @@ pub fn render_meta(
     scene_hash: &str,
     device: &lanterna::vk::Device,
 ) -> lanterna::image_io::RenderMeta {
-    let mut meta = lanterna::image_io::RenderMeta::new();
-    meta.method = Some(settings.method.name().to_string());
-    meta.seed = Some(settings.seed as u64);
-    meta.max_depth = Some(settings.max_depth);
-    meta.device = Some(device.info.name.clone());
-    meta.scene_path = Some(scene.scene.display().to_string());
-    meta.scene_hash = Some(scene_hash.to_string());
-    for (k, v) in [
-        ("source", format!("{:?}", settings.source).to_lowercase()),
-        ("ris_candidates", settings.ris_candidates.to_string()),
-        ("rr_depth", settings.rr_depth.to_string()),
-        (
-            "strategy",
-            format!("{:?}", settings.strategy).to_lowercase(),
-        ),
-        ("hide_emitters", settings.hide_emitters.to_string()),
-    ] {
-        meta.extra.insert(k.to_string(), v);
-    }
-    if settings.method.uses_guiding() {
-        meta.extra
-            .insert("bsdf_fraction".into(), settings.bsdf_fraction.to_string());
-        meta.extra
-            .insert("train_fraction".into(), settings.train_fraction.to_string());
-        meta.extra
-            .insert("record_nee".into(), settings.record_nee.to_string());
-    }
-    meta
+    lanterna::render::output::render_meta(
+        settings,
+        &scene.scene.display().to_string(),
+        scene_hash,
+        &device.info.name,
+    )
 }
 
 /// The image a run outputs: the film's exact sums, or the inverse-variance combination
-/// of a guided run (float means only; its spp counts every pass).
+/// of a guided run.
 pub fn outcome_image(
     out: &lanterna::render::run::RunOutcome,
     width: u32,
     height: u32,
-    mut meta: lanterna::image_io::RenderMeta,
+    meta: lanterna::image_io::RenderMeta,
 ) -> anyhow::Result<lanterna::image_io::Image> {
-    use lanterna::image_io::Image;
-    meta.sample_offset = Some(out.film.sample_offset);
-    match &out.combined {
-        Some(rgb) => {
-            let trained: u64 = out
-                .guiding
-                .as_ref()
-                .map_or(0, |g| g.iterations.iter().map(|i| i.spp).sum());
-            meta.spp = Some(out.film.spp + trained);
-            meta.sample_offset = Some(out.film.sample_offset - trained);
-            meta.extra
-                .insert("guided_output".into(), "inverse-variance".into());
-            let pixels = rgb.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-            let mut image = Image::new(width, height, pixels)?;
-            image.meta = meta;
-            Ok(image)
-        }
-        None => {
-            meta.spp = Some(out.film.spp);
-            let sums = out
-                .film
-                .sums
-                .chunks_exact(3)
-                .map(|c| [c[0], c[1], c[2]])
-                .collect();
-            Ok(Image::from_sums(width, height, sums, meta)?)
-        }
-    }
+    Ok(lanterna::render::output::outcome_image(
+        out, width, height, meta,
+    )?)
 }

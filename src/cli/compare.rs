@@ -8,12 +8,10 @@ use std::time::Instant;
 
 use super::common::{self, DeviceArgs, EstimatorArgs, SceneArgs};
 use anyhow::Context;
-use lanterna::eval::compare::{
-    run_compare, Budget, CompareConfig, Crop, MethodResult, MethodRunner, METHODS,
-};
-use lanterna::eval::BoxError;
+use lanterna::eval::compare::{run_compare, CompareConfig, Crop, METHODS};
 use lanterna::image_io::{read_exr, Image};
-use lanterna::render::{run, session, Method, Renderer};
+use lanterna::render::runner::CompareRunner;
+use lanterna::render::{session, Method, Renderer};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -79,71 +77,16 @@ pub fn config(args: &Args) -> CompareConfig {
 /// Reads and checks the reference against the arguments.
 pub fn load_reference(args: &Args, config: &CompareConfig) -> anyhow::Result<Image> {
     let reference = read_exr(&args.reference).context("reading the reference")?;
-    config.validate(&reference)?;
-    reference.check_finite(&args.reference.display().to_string())?;
-    if let Some(depth) = reference.meta.max_depth {
-        if depth != args.estimator.max_depth {
-            anyhow::bail!(
-                "{} was rendered with max depth {depth}, but --max-depth is {}",
-                args.reference.display(),
-                args.estimator.max_depth
-            );
-        }
-    }
+    config.check_reference(&reference, args.estimator.max_depth)?;
     Ok(reference)
 }
 
-/// The GPU renderer behind the comparison: one scene on the device, the method switched
-/// per run.
-struct GpuRunner {
-    renderer: Renderer,
-    estimator: EstimatorArgs,
-    setup_seconds: f64,
-    meta: lanterna::image_io::RenderMeta,
-    cancel: &'static std::sync::atomic::AtomicBool,
-}
-
-impl MethodRunner for GpuRunner {
-    fn render(&mut self, method: &str, budget: Budget) -> Result<MethodResult, BoxError> {
-        let method: Method = method.parse()?;
-        let (w, h) = (self.renderer.settings.width, self.renderer.settings.height);
-        self.renderer
-            .set_settings(self.estimator.settings(method, w, h))?;
-        let prep = Instant::now();
-        self.renderer.prepare()?;
-        log::debug!(
-            "{method}: pipelines ready in {:.1} s",
-            prep.elapsed().as_secs_f64()
-        );
-        let budget = match budget {
-            Budget::Spp(n) => run::Budget::Spp(n),
-            Budget::Seconds(s) => run::Budget::Seconds(s),
-        };
-        let out = run::run_method(&mut self.renderer, budget, 0, self.cancel, &mut |_| {})?;
-        if self.cancel.load(std::sync::atomic::Ordering::SeqCst) {
-            return Err("interrupted".into());
-        }
-        let mut meta = self.meta.clone();
-        meta.method = Some(method.name().to_string());
-        meta.render_seconds = Some(out.seconds);
-        let image = common::outcome_image(&out, w, h, meta)?;
-        log::info!(
-            "{method} {budget:?}: {} spp in {:.2} s",
-            out.film.spp,
-            out.seconds
-        );
-        Ok(MethodResult {
-            spp: out.film.spp,
-            render_seconds: out.seconds,
-            setup_seconds: self.setup_seconds,
-            gpu_seconds: Some(out.stats.gpu_seconds),
-            training_seconds: method.uses_guiding().then_some(out.training_seconds),
-            image,
-        })
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let config = config(&args);
+    let reference = load_reference(&args, &config)?;
+    if !args.view.scene.exists() {
+        anyhow::bail!("scene {} not found", args.view.scene.display());
     }
-}
-
-fn open_runner(args: &Args, reference: &Image) -> anyhow::Result<Box<dyn MethodRunner>> {
     let started = Instant::now();
     let mut view = args.view.clone();
     view.width = Some(view.width.unwrap_or(reference.width));
@@ -166,35 +109,27 @@ fn open_runner(args: &Args, reference: &Image) -> anyhow::Result<Box<dyn MethodR
         .map(|m| m.parse::<Method>())
         .transpose()
         .map_err(anyhow::Error::msg)?;
-    let settings = args
+    let base = args
         .estimator
         .settings(first.unwrap_or(Method::Pt), width, height);
-    let renderer = Renderer::new(
+    let mut renderer = Renderer::new(
         device.clone(),
         &loaded.scene,
         &loaded.lights,
         camera,
-        settings,
+        base.clone(),
         args.device.shaders(),
     )?;
     let meta = common::render_meta(&renderer.settings, &view, &loaded.scene.hash, &device);
-    Ok(Box::new(GpuRunner {
-        renderer,
-        estimator: args.estimator.clone(),
+    let mut runner = CompareRunner {
+        renderer: &mut renderer,
+        base,
         setup_seconds: started.elapsed().as_secs_f64(),
         meta,
         cancel: common::cancel_flag(),
-    }))
-}
-
-pub fn run(args: Args) -> anyhow::Result<()> {
-    let config = config(&args);
-    let reference = load_reference(&args, &config)?;
-    if !args.view.scene.exists() {
-        anyhow::bail!("scene {} not found", args.view.scene.display());
-    }
-    let mut runner = open_runner(&args, &reference)?;
-    let report = run_compare(runner.as_mut(), &reference, &config)?;
+        progress: &mut |_| {},
+    };
+    let report = run_compare(&mut runner, &reference, &config)?;
     log::info!(
         "{} renders compared; report in {}",
         report.records.len(),

@@ -4,6 +4,7 @@ use super::common::{self, DeviceArgs, MethodArgs, SceneArgs};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use lanterna::image_io;
+use lanterna::render::output::{aov_layers, Aov};
 use lanterna::render::{run, session, Renderer};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -74,11 +75,6 @@ pub struct Args {
     pub watch: bool,
 }
 
-/// Saved SD-trees carry the scene's content hash (hex) as a number.
-fn scene_hash_u64(hash: &str) -> u64 {
-    u64::from_str_radix(hash, 16).unwrap_or(0)
-}
-
 fn report_guiding(g: &lanterna::render::GuidingOutcome, training_seconds: f64) {
     for it in &g.iterations {
         log::info!(
@@ -95,52 +91,6 @@ fn report_guiding(g: &lanterna::render::GuidingOutcome, training_seconds: f64) {
     }
     if !g.iterations.is_empty() {
         log::info!("training took {training_seconds:.2} s");
-    }
-}
-
-/// AOV layers.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Aov {
-    Albedo,
-    Normal,
-    Depth,
-    Position,
-    LightCount,
-    RisWeight,
-    SelectedLight,
-    GuideFraction,
-    SampleCount,
-}
-
-impl Aov {
-    fn name(self) -> &'static str {
-        match self {
-            Aov::Albedo => "albedo",
-            Aov::Normal => "normal",
-            Aov::Depth => "depth",
-            Aov::Position => "position",
-            Aov::LightCount => "light-count",
-            Aov::RisWeight => "ris-weight",
-            Aov::SelectedLight => "selected-light",
-            Aov::GuideFraction => "guide-fraction",
-            Aov::SampleCount => "sample-count",
-        }
-    }
-
-    /// (first channel in the kernel's AOV buffer, channel names); None: computed on the host.
-    fn layout(self) -> Option<(u32, &'static [&'static str])> {
-        use lanterna::gpu::*;
-        Some(match self {
-            Aov::Albedo => (AOV_ALBEDO, &["R", "G", "B"]),
-            Aov::Normal => (AOV_NORMAL, &["X", "Y", "Z"]),
-            Aov::Depth => (AOV_DEPTH, &["Z"]),
-            Aov::Position => (AOV_POSITION, &["X", "Y", "Z"]),
-            Aov::LightCount => (AOV_LIGHT_COUNT, &["Y"]),
-            Aov::RisWeight => (AOV_RIS_WEIGHT, &["Y"]),
-            Aov::SelectedLight => (AOV_SELECTED_LIGHT, &["Y"]),
-            Aov::GuideFraction => (AOV_GUIDE_FRACTION, &["Y"]),
-            Aov::SampleCount => return None,
-        })
     }
 }
 
@@ -162,16 +112,10 @@ fn describe_sample(x: u32, y: u32, sample: u32, rgb: [f32; 3]) -> String {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if let Some(t) = args.time {
-        anyhow::ensure!(
-            t.is_finite() && t > 0.0,
-            "--time must be a positive number of seconds"
-        );
-    }
-    let spp = args
-        .spp
-        .unwrap_or(if args.time.is_some() { u64::MAX } else { 16 });
-    anyhow::ensure!(spp > 0, "--spp must be at least 1");
+    let spp = match run::Budget::from_request(args.spp, args.time)? {
+        run::Budget::Spp(n) => n,
+        run::Budget::Seconds(_) => u64::MAX,
+    };
     let output = args.output.clone().unwrap_or_else(|| {
         let stem = args
             .scene
@@ -211,7 +155,10 @@ pub fn run(args: Args) -> Result<()> {
             renderer.settings.method.uses_guiding(),
             "--load-guiding needs --method guided or guided-ris"
         );
-        let tree = lanterna::guiding::SdTree::load(path, scene_hash_u64(&loaded.scene.hash))?;
+        let tree = lanterna::guiding::SdTree::load(
+            path,
+            lanterna::guiding::scene_hash_number(&loaded.scene.hash),
+        )?;
         renderer.preloaded_tree = Some(tree);
     }
     if let Some((x, y)) = args.pixel {
@@ -348,7 +295,7 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
             g.tree
                 .save(
                     path,
-                    scene_hash_u64(&loaded.scene.hash),
+                    lanterna::guiding::scene_hash_number(&loaded.scene.hash),
                     (lo.into(), hi.into()),
                 )
                 .with_context(|| format!("cannot save the SD-tree to {}", path.display()))?;
@@ -367,38 +314,15 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
     }
     let mut image = common::outcome_image(&outcome, width, height, meta)?;
     if !args.aov.is_empty() {
-        let data = renderer.aovs()?;
-        for aov in &args.aov {
-            let layer = match aov.layout() {
-                Some((first, channels)) => {
-                    let n = lanterna::gpu::AOV_CHANNELS as usize;
-                    let values: Vec<f32> = data
-                        .chunks_exact(n)
-                        .flat_map(|px| {
-                            px[first as usize..first as usize + channels.len()]
-                                .iter()
-                                .copied()
-                        })
-                        .collect();
-                    image_io::Aov::new(aov.name(), channels, values)?
-                }
-                None => image_io::Aov::new(
-                    aov.name(),
-                    &["Y"],
-                    vec![film.spp as f32; (width * height) as usize],
-                )?,
-            };
-            image.aovs.push(layer);
-        }
-        if args.aov.contains(&Aov::SelectedLight) {
-            let n = lanterna::gpu::AOV_CHANNELS as usize;
-            let ids: Vec<f32> = data
-                .chunks_exact(n)
-                .map(|px| px[lanterna::gpu::AOV_SELECTED_LIGHT as usize])
-                .collect();
+        image.aovs = aov_layers(renderer, &args.aov)?;
+        if let Some(layer) = image
+            .aovs
+            .iter()
+            .find(|a| a.name == Aov::SelectedLight.name())
+        {
             let path = output.with_extension("selected-light.png");
             common::ensure_parent(&path)?;
-            image_io::write_png_rgb8(&path, width, height, &false_colour(&ids))
+            image_io::write_png_rgb8(&path, width, height, &false_colour(&layer.data))
                 .with_context(|| format!("cannot write {}", path.display()))?;
             log::info!(
                 "wrote {} (light model NEE picked at the first hit, false-coloured)",

@@ -181,6 +181,8 @@ pub enum CompareError {
     },
     #[error("{}: {problem}", path.display())]
     Figure { path: PathBuf, problem: String },
+    #[error("{0}")]
+    Reference(String),
 }
 
 impl CompareConfig {
@@ -224,6 +226,21 @@ impl CompareConfig {
                 .map_err(CompareError::Config)?;
         }
         Ok(())
+    }
+
+    /// Checks the reference (named `self.reference`): the settings against its size, its
+    /// values finite, and the max depth it was rendered with (when it says) against the
+    /// runs' `max_depth`.
+    pub fn check_reference(&self, reference: &Image, max_depth: u32) -> Result<(), CompareError> {
+        self.validate(reference)?;
+        reference.check_finite(&self.reference)?;
+        match reference.meta.max_depth {
+            Some(depth) if depth != max_depth => Err(CompareError::Reference(format!(
+                "{} was rendered with max depth {depth}, but --max-depth is {max_depth}",
+                self.reference
+            ))),
+            _ => Ok(()),
+        }
     }
 
     /// The budget whose images the grid shows: the longest equal-time budget if there is

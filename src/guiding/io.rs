@@ -51,6 +51,11 @@ impl SceneHasher {
     }
 }
 
+/// The number a saved tree stores for a scene's content hash (the scene's hex string).
+pub fn scene_hash_number(hex: &str) -> u64 {
+    u64::from_str_radix(hex, 16).unwrap_or(0)
+}
+
 struct Writer(Vec<u8>);
 
 impl Writer {

@@ -31,13 +31,13 @@ pub use chi2::{
 };
 pub use config::{DirectionalFilter, GuidingConfig, SpatialFilter, DEFAULT_MEMORY_CAP_BYTES};
 pub use flat::GuideArrays;
-pub use io::{SavedTreeInfo, SceneHasher, FORMAT_VERSION};
+pub use io::{scene_hash_number, SavedTreeInfo, SceneHasher, FORMAT_VERSION};
 pub use quadtree::{Cell, QuadNode, QuadTree};
 pub use refit::RefitStats;
 pub use schedule::{SppSchedule, TimeSchedule, DEFAULT_TRAIN_FRACTION};
 pub use sdtree::{Leaf, SdTree};
 pub use sphere::{dir_to_square, square_to_dir, INV_4PI};
-pub use view::{draw_quadtree, LeafInfo, LeafView};
+pub use view::{density_grid, draw_quadtree, LeafInfo, LeafView};
 
 use std::path::PathBuf;
 

@@ -38,6 +38,15 @@ impl SppSchedule {
         }
     }
 
+    /// Training alone: the doubling iterations whose total fits in `total_spp`; the
+    /// last refit prepares the tree for twice the last iteration's samples (what another
+    /// iteration would render), since the renders that follow are not known yet.
+    pub fn training_only(total_spp: u32) -> Self {
+        let mut s = Self::new(total_spp.saturating_add(1), 1.0);
+        s.final_spp = s.training.last().map_or(1, |&last| last.saturating_mul(2));
+        s
+    }
+
     pub fn training_spp(&self) -> u32 {
         self.training.iter().sum()
     }
@@ -108,6 +117,16 @@ mod tests {
         let s = SppSchedule::new(4, 1.0);
         assert_eq!((s.training, s.final_spp), (vec![1, 2], 1));
         assert_eq!(SppSchedule::new(0, 0.3).final_spp, 0);
+    }
+
+    #[test]
+    fn training_only_schedules() {
+        let s = SppSchedule::training_only(15);
+        assert_eq!((s.training.clone(), s.final_spp), (vec![1, 2, 4, 8], 16));
+        assert_eq!(s.spp_after(2), 8);
+        assert_eq!(SppSchedule::training_only(14).training, vec![1, 2, 4]);
+        assert_eq!(SppSchedule::training_only(1).training, vec![1]);
+        assert!(SppSchedule::training_only(0).training.is_empty());
     }
 
     #[test]

@@ -87,9 +87,9 @@ fn colour(t: f32) -> [f32; 3] {
     std::array::from_fn(|k| STOPS[i][k] + (STOPS[i + 1][k] - STOPS[i][k]) * f)
 }
 
-/// Draw `tree` as a `size` × `size` image. Cell borders at least 4 pixels apart are
-/// drawn in grey.
-pub fn draw_quadtree(tree: &QuadTree, size: u32) -> (Vec<f32>, f32, f32) {
+/// The density of `tree` (1 = uniform over the square) at the centres of a `size` ×
+/// `size` grid over the (cosθ, φ) square, row-major: `x = (cosθ + 1)/2`, `y = φ/2π`.
+pub fn density_grid(tree: &QuadTree, size: u32) -> Vec<f32> {
     let n = size as usize;
     let mut density = vec![0.0f32; n * n];
     for j in 0..n {
@@ -101,6 +101,14 @@ pub fn draw_quadtree(tree: &QuadTree, size: u32) -> (Vec<f32>, f32, f32) {
             density[j * n + i] = tree.density(p);
         }
     }
+    density
+}
+
+/// Draw `tree` as a `size` × `size` image. Cell borders at least 4 pixels apart are
+/// drawn in grey.
+pub fn draw_quadtree(tree: &QuadTree, size: u32) -> (Vec<f32>, f32, f32) {
+    let n = size as usize;
+    let density = density_grid(tree, size);
     let max = density.iter().copied().fold(0.0f32, f32::max);
     let min = density
         .iter()

@@ -89,6 +89,126 @@ fn guiding_error(e: crate::guiding::GuidingError) -> RenderError {
     RenderError::Invalid(e.to_string())
 }
 
+/// How much to train: a schedule of doubling iterations in samples per pixel, or a
+/// share of a time budget.
+#[derive(Clone, Debug)]
+pub enum TrainingPlan {
+    Spp(SppSchedule),
+    Seconds(TimeSchedule),
+}
+
+impl TrainingPlan {
+    /// The training phase of a render of `budget` that trains `train_fraction` of it.
+    pub fn for_budget(budget: Budget, train_fraction: f64) -> TrainingPlan {
+        match budget {
+            Budget::Spp(n) => TrainingPlan::Spp(SppSchedule::new(
+                n.min(u32::MAX as u64) as u32,
+                train_fraction,
+            )),
+            Budget::Seconds(total) => {
+                TrainingPlan::Seconds(TimeSchedule::new(total, train_fraction))
+            }
+        }
+    }
+
+    /// Training alone, with the whole of `budget` (for a tree that later renders use).
+    pub fn whole(budget: Budget) -> TrainingPlan {
+        match budget {
+            Budget::Spp(n) => {
+                TrainingPlan::Spp(SppSchedule::training_only(n.min(u32::MAX as u64) as u32))
+            }
+            Budget::Seconds(total) => TrainingPlan::Seconds(TimeSchedule::new(total, 1.0)),
+        }
+    }
+}
+
+/// A trained SD-tree and what training it took.
+pub struct Training {
+    pub tree: SdTree,
+    pub iterations: Vec<IterationStats>,
+    /// The sample index after the last training sample.
+    pub next_sample: u64,
+}
+
+/// Train a new SD-tree on samples from `first` on, following `plan`. `progress` gets the
+/// samples per pixel done so far; `passes` collects each pass's image and estimated
+/// variance (for the inverse-variance combination).
+#[allow(clippy::too_many_arguments)]
+pub fn train(
+    renderer: &mut Renderer,
+    plan: TrainingPlan,
+    first: u64,
+    cancel: &AtomicBool,
+    progress: &mut dyn FnMut(u64),
+    stats: &mut RenderStats,
+    mut passes: Option<&mut Vec<(Vec<f32>, f64)>>,
+) -> Result<Training> {
+    let config = guiding_config(renderer);
+    config.validate().map_err(guiding_error)?;
+    let (lo, hi) = renderer.bounds;
+    let mut tree = SdTree::new(lo, hi, &config).map_err(guiding_error)?;
+    let mut iterations = Vec::new();
+    let mut sample = first;
+    match plan {
+        TrainingPlan::Spp(schedule) => {
+            for (k, &spp) in schedule.training.iter().enumerate() {
+                if cancel.load(Ordering::SeqCst) {
+                    break;
+                }
+                let it = train_iteration(
+                    renderer,
+                    &mut tree,
+                    k,
+                    spp as u64,
+                    schedule.spp_after(k),
+                    sample,
+                    cancel,
+                    &mut |d| progress(sample - first + d),
+                    stats,
+                    passes.as_deref_mut(),
+                )?;
+                sample += it.spp;
+                progress(sample - first);
+                iterations.push(it);
+            }
+        }
+        TrainingPlan::Seconds(mut schedule) => {
+            let mut next = schedule.first();
+            let mut k = 0;
+            while let Some(spp) = next {
+                if cancel.load(Ordering::SeqCst) {
+                    break;
+                }
+                let t = Instant::now();
+                // The refit prepares the tree for twice the samples, as the schedule
+                // predicts; the final pass may render fewer.
+                let it = train_iteration(
+                    renderer,
+                    &mut tree,
+                    k,
+                    spp as u64,
+                    spp * 2,
+                    sample,
+                    cancel,
+                    &mut |d| progress(sample - first + d),
+                    stats,
+                    passes.as_deref_mut(),
+                )?;
+                sample += it.spp;
+                progress(sample - first);
+                iterations.push(it);
+                next = schedule.next(t.elapsed().as_secs_f64());
+                k += 1;
+            }
+        }
+    }
+    Ok(Training {
+        tree,
+        iterations,
+        next_sample: sample,
+    })
+}
+
 pub fn run_guided(
     renderer: &mut Renderer,
     budget: Budget,
@@ -113,63 +233,19 @@ pub fn run_guided(
             t
         }
         None => {
-            let (lo, hi) = renderer.bounds;
-            let mut tree = SdTree::new(lo, hi, &config).map_err(guiding_error)?;
-            let train_fraction = renderer.settings.train_fraction as f64;
-            match budget {
-                Budget::Spp(n) => {
-                    let schedule = SppSchedule::new(n.min(u32::MAX as u64) as u32, train_fraction);
-                    for (k, &spp) in schedule.training.iter().enumerate() {
-                        if cancel.load(Ordering::SeqCst) {
-                            break;
-                        }
-                        let it = train_iteration(
-                            renderer,
-                            &mut tree,
-                            k,
-                            spp as u64,
-                            schedule.spp_after(k),
-                            sample,
-                            cancel,
-                            &mut stats,
-                            combine.then_some(&mut passes),
-                        )?;
-                        sample += it.spp;
-                        progress(sample - first);
-                        iterations.push(it);
-                    }
-                }
-                Budget::Seconds(total) => {
-                    let mut schedule = TimeSchedule::new(total, train_fraction);
-                    let mut next = schedule.first();
-                    let mut k = 0;
-                    while let Some(spp) = next {
-                        if cancel.load(Ordering::SeqCst) {
-                            break;
-                        }
-                        let t = Instant::now();
-                        // The refit prepares the tree for twice the samples, as the
-                        // schedule predicts; the final pass may render fewer.
-                        let it = train_iteration(
-                            renderer,
-                            &mut tree,
-                            k,
-                            spp as u64,
-                            spp * 2,
-                            sample,
-                            cancel,
-                            &mut stats,
-                            combine.then_some(&mut passes),
-                        )?;
-                        sample += it.spp;
-                        progress(sample - first);
-                        iterations.push(it);
-                        next = schedule.next(t.elapsed().as_secs_f64());
-                        k += 1;
-                    }
-                }
-            }
-            tree
+            let plan = TrainingPlan::for_budget(budget, renderer.settings.train_fraction as f64);
+            let trained = train(
+                renderer,
+                plan,
+                first,
+                cancel,
+                progress,
+                &mut stats,
+                combine.then_some(&mut passes),
+            )?;
+            iterations = trained.iterations;
+            sample = trained.next_sample;
+            trained.tree
         }
     };
     let training_seconds = started.elapsed().as_secs_f64();
@@ -285,6 +361,7 @@ fn train_iteration(
     next_spp: u32,
     sample: u64,
     cancel: &AtomicBool,
+    progress: &mut dyn FnMut(u64),
     stats: &mut RenderStats,
     passes: Option<&mut Vec<(Vec<f32>, f64)>>,
 ) -> Result<IterationStats> {
@@ -301,7 +378,7 @@ fn train_iteration(
     } else {
         spp
     };
-    let mut done = renderer.render_samples(sample, split, true, cancel, &mut |_| {}, stats)?;
+    let mut done = renderer.render_samples(sample, split, true, cancel, progress, stats)?;
     let mut half = None;
     if split < spp {
         half = Some(renderer.film()?);
@@ -310,7 +387,7 @@ fn train_iteration(
             spp - split,
             true,
             cancel,
-            &mut |_| {},
+            &mut |d| progress(split + d),
             stats,
         )?;
     }

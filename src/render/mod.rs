@@ -9,13 +9,15 @@
 mod film;
 mod gpu_scene;
 mod guided;
+pub mod output;
 pub mod run;
+pub mod runner;
 pub mod session;
 mod settings;
 
 pub use film::Film;
 pub use gpu_scene::GpuScene;
-pub use guided::{GuidingOutcome, IterationStats};
+pub use guided::{train, GuidingOutcome, IterationStats, Training, TrainingPlan};
 pub use settings::{GuidedOutput, GuidingSettings, LightSource, Method, RenderSettings, Strategy};
 
 use crate::gpu;

@@ -2,7 +2,7 @@
 //! renderer: what `render`, `compare` and `bench` share. Guided methods spend the
 //! configured share of the budget training the SD-tree first (see `guided.rs`).
 
-use super::{Film, RenderStats, Renderer, Result};
+use super::{Film, RenderError, RenderStats, Renderer, Result};
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
@@ -13,6 +13,24 @@ pub enum Budget {
     Spp(u64),
     /// Wall-clock seconds (training included); every pixel gets the same spp.
     Seconds(f64),
+}
+
+impl Budget {
+    /// The budget of a request for `spp` samples per pixel or `seconds` of rendering (the
+    /// command line's `--spp` and `--time`; 16 spp when neither is given), checked.
+    pub fn from_request(spp: Option<u64>, seconds: Option<f64>) -> Result<Budget> {
+        let invalid = |m: &str| Err(RenderError::Invalid(m.into()));
+        match (spp, seconds) {
+            (Some(_), Some(_)) => invalid("give --spp or --time, not both"),
+            (Some(0), None) => invalid("--spp must be at least 1"),
+            (Some(n), None) => Ok(Budget::Spp(n)),
+            (None, Some(t)) if !(t.is_finite() && t > 0.0) => {
+                invalid("--time must be a positive number of seconds")
+            }
+            (None, Some(t)) => Ok(Budget::Seconds(t)),
+            (None, None) => Ok(Budget::Spp(16)),
+        }
+    }
 }
 
 /// What a run produced.

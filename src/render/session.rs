@@ -1,10 +1,15 @@
 //! What every command that renders does first: open a device, load the scene and its
-//! light table, pick the camera and the resolution.
+//! light table, pick the camera and the resolution. The command line and the Python
+//! module both start here, so they accept and refuse the same views with the same words.
 
+use super::{Method, RenderError, RenderSettings, RenderStats, Renderer};
+use crate::gpu;
 use crate::lights::LightTable;
 use crate::scene::{Camera, CameraOverride, LoadOptions, Projection, Scene, SceneError};
+use crate::shaders::ShaderSource;
 use crate::vk::{self, Device, DeviceSelector, Instance, InstanceOptions};
 use std::path::Path;
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 /// How to open the device.
@@ -123,4 +128,107 @@ pub fn resolution(camera: &Camera, width: Option<u32>, height: Option<u32>) -> (
         (None, Some(h)) => (((h as f32 * aspect).round() as u32).max(1), h),
         (None, None) => (512, ((512.0 / aspect).round() as u32).max(1)),
     }
+}
+
+/// The view a render asks for: the command line's `--camera`, `--look-at`, `--fov`,
+/// `--width` and `--height`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ViewOptions {
+    /// Camera of the file, by index or name (default: the first).
+    pub camera: Option<String>,
+    /// Eye and target, `[ex, ey, ez, tx, ty, tz]`, replacing the file's camera.
+    pub look_at: Option<[f32; 6]>,
+    /// Vertical field of view in degrees.
+    pub fov: Option<f32>,
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+}
+
+/// Why a view cannot be rendered.
+#[derive(Debug, thiserror::Error)]
+pub enum ViewError {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// The camera and the image size of `options` in `scene`.
+pub fn choose_view(scene: &Scene, options: &ViewOptions) -> Result<(Camera, u32, u32), ViewError> {
+    if let Some(v) = &options.look_at {
+        if !v.iter().all(|x| x.is_finite()) {
+            return Err(ViewError::Invalid("numbers must be finite".into()));
+        }
+    }
+    let o = CameraOverride {
+        look_at: options.look_at.map(|v| {
+            (
+                glam::Vec3::new(v[0], v[1], v[2]),
+                glam::Vec3::new(v[3], v[4], v[5]),
+            )
+        }),
+        up: None,
+        fov_degrees: options.fov,
+    };
+    let camera = choose_camera(scene, options.camera.as_deref(), &o)?;
+    let (w, h) = resolution(&camera, options.width, options.height);
+    if w == 0 || h == 0 || w as u64 * h as u64 > 1 << 28 {
+        return Err(ViewError::Invalid(format!(
+            "image size {w}×{h} is out of range"
+        )));
+    }
+    Ok((camera, w, h))
+}
+
+/// The first surface the camera sees through pixel (x, y) of a `width` × `height` image:
+/// the mean position of a few samples' first hits, from a depth-1 render with AOVs (what
+/// `guiding view` looks the SD-tree leaf up with). None when the pixel sees no surface.
+#[allow(clippy::too_many_arguments)]
+pub fn first_hit(
+    device: &Arc<Device>,
+    loaded: &LoadedScene,
+    camera: Camera,
+    width: u32,
+    height: u32,
+    (x, y): (u32, u32),
+    shaders: ShaderSource,
+) -> Result<Option<glam::Vec3>, RenderError> {
+    if x >= width || y >= height {
+        return Err(RenderError::Invalid(format!(
+            "pixel ({x}, {y}) is outside the {width}×{height} image"
+        )));
+    }
+    let settings = RenderSettings {
+        method: Method::Pt,
+        width,
+        height,
+        max_depth: 1,
+        aovs: true,
+        ..RenderSettings::default()
+    };
+    let mut r = Renderer::new(
+        device.clone(),
+        &loaded.scene,
+        &loaded.lights,
+        camera,
+        settings,
+        shaders,
+    )?;
+    let mut stats = RenderStats::default();
+    r.render_samples(
+        0,
+        4,
+        false,
+        &AtomicBool::new(false),
+        &mut |_| {},
+        &mut stats,
+    )?;
+    let aov = r.aovs()?;
+    let n = gpu::AOV_CHANNELS as usize;
+    let px = &aov[(y * width + x) as usize * n..][..n];
+    if px[gpu::AOV_DEPTH as usize] <= 0.0 {
+        return Ok(None);
+    }
+    let p = gpu::AOV_POSITION as usize;
+    Ok(Some(glam::Vec3::new(px[p], px[p + 1], px[p + 2])))
 }

@@ -1,0 +1,102 @@
+"""Renders through Python against the CLI, bit for bit, and exact merging of sample
+ranges."""
+
+import numpy as np
+
+import lanterna
+from conftest import SCENE, H, W
+
+
+def cli_render(cli, tmp_path, *args):
+    out = tmp_path / "cli.exr"
+    p = cli("render", str(SCENE), "--width", str(W), "--height", str(H), "--no-png",
+            "--quiet", "-o", str(out), *args)
+    assert p.returncode == 0, p.stderr
+    return lanterna.read_exr(out)
+
+
+def test_render_equals_cli_bit_for_bit(ris, cli, tmp_path):
+    img = ris.render(spp=6, sample_offset=5)
+    ref = cli_render(cli, tmp_path, "--method", "ris", "--seed", "3", "--max-depth", "3",
+                     "--spp", "6", "--sample-offset", "5")
+    assert img.dtype == np.float32 and img.shape == (H, W, 3)
+    assert img.sums is not None and img.sums.dtype == np.uint64
+    np.testing.assert_array_equal(img.sums, ref.sums)
+    np.testing.assert_array_equal(np.asarray(img), np.asarray(ref))
+    for key in ("spp", "sample_offset", "method", "seed", "max_depth", "scene_hash",
+                "source", "ris_candidates", "strategy", "rr_depth"):
+        assert img.meta[key] == ref.meta[key], key
+    assert img.meta["spp"] == 6 and img.meta["sample_offset"] == 5
+    assert img.meta["rays"] == img.meta["camera_rays"] + img.meta["bounce_rays"] + img.meta["shadow_rays"]
+    assert img.meta["camera_rays"] == 6 * W * H
+    assert img.meta["gpu_seconds"] > 0 and img.meta["render_seconds"] > 0
+
+
+def test_disjoint_sample_offsets_merge_to_the_one_shot_render(ris):
+    a = ris.render(spp=3, sample_offset=0)
+    b = ris.render(spp=5, sample_offset=3)
+    one = ris.render(spp=8)
+    np.testing.assert_array_equal(a.sums + b.sums, one.sums)
+    merged = lanterna.merge([a, b])
+    np.testing.assert_array_equal(merged.sums, one.sums)
+    np.testing.assert_array_equal(np.asarray(merged), np.asarray(one))
+    assert merged.meta["spp"] == 8 and merged.meta["sample_offset"] == 0
+
+
+def test_aovs_match_the_cli(pt, cli, tmp_path):
+    img = pt.render(spp=2, aovs=["albedo", "depth", "sample-count"])
+    ref = cli_render(cli, tmp_path, "--spp", "2", "--aov", "albedo,depth,sample-count")
+    assert set(img.aovs) == {"albedo", "depth", "sample-count"}
+    assert img.aovs["albedo"].shape == (H, W, 3) and img.aovs["depth"].shape == (H, W)
+    assert img.aov_channels["albedo"] == ("R", "G", "B")
+    np.testing.assert_array_equal(img.aovs["sample-count"], 2.0)
+    for name in img.aovs:
+        np.testing.assert_array_equal(img.aovs[name], ref.aovs[name])
+    # The film does not depend on whether AOVs are accumulated.
+    np.testing.assert_array_equal(img.sums, ref.sums)
+    plain = cli_render(cli, tmp_path, "--spp", "2")
+    np.testing.assert_array_equal(img.sums, plain.sums)
+
+
+def test_time_budget_and_progress(pt):
+    calls = []
+    img = pt.render(seconds=0.5, progress=lambda done, t: calls.append((done, t)))
+    assert img.meta["spp"] >= 1
+    assert calls and calls[-1][0] == img.meta["spp"]
+    assert [c[0] for c in calls] == sorted(c[0] for c in calls)
+
+
+def test_progress_callback_errors_propagate(pt):
+    def stop(done, t):
+        raise RuntimeError("stop here")
+
+    try:
+        pt.render(spp=4, progress=stop)
+    except RuntimeError as e:
+        assert "stop here" in str(e)
+    else:
+        raise AssertionError("the callback's exception was swallowed")
+    assert pt.render(spp=1).meta["spp"] == 1
+
+
+def test_gil_is_released_while_rendering(pt):
+    import threading
+
+    done = threading.Event()
+    t = threading.Thread(target=lambda: (pt.render(spp=64), done.set()))
+    t.start()
+    ticks = 0
+    while not done.is_set():
+        ticks += 1
+        done.wait(0.001)
+    t.join()
+    # With the GIL held for the whole render the loop would not run at all.
+    assert ticks > 20
+
+
+def test_image_shows_itself_as_png(pt):
+    img = pt.render(spp=1)
+    png = img._repr_png_()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "32×24" in repr(img)
+    assert img[:, :, 0]._repr_png_() is None

@@ -1,0 +1,124 @@
+//! `Renderer(..., **options)`: the command line's estimator and device flags as keyword
+//! arguments, named like the flags with `_` for `-` (`--ris-candidates` is
+//! `ris_candidates=`, `--no-record-nee` is `record_nee=False`). Values are checked where
+//! the command line checks them (the renderer, the guiding configuration), so the same
+//! values fail with the same messages.
+
+use crate::render::{GuidedOutput, LightSource, RenderSettings, Strategy};
+use crate::shaders::ShaderSource;
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// The keyword options `Renderer` accepts besides its named parameters.
+pub const OPTIONS: [&str; 17] = [
+    "rr_depth",
+    "source",
+    "ris_candidates",
+    "bsdf_fraction",
+    "train_fraction",
+    "record_nee",
+    "strategy",
+    "hide_emitters",
+    "guiding_threshold",
+    "guiding_memory",
+    "spatial_filter",
+    "directional_filter",
+    "guided_output",
+    "learn_lights",
+    "light_mix",
+    "validation",
+    "shader_dir",
+];
+
+/// Device-side options.
+#[derive(Clone, Debug, Default)]
+pub struct DeviceExtras {
+    pub validation: bool,
+    pub shaders: ShaderSource,
+}
+
+/// A value of one of the command line's value enums, with clap's message when unknown.
+fn value_enum<T: clap::ValueEnum>(flag: &str, value: &str) -> PyResult<T> {
+    T::from_str(value, false).map_err(|_| {
+        let possible: Vec<String> = T::value_variants()
+            .iter()
+            .filter_map(|v| v.to_possible_value())
+            .map(|p| p.get_name().to_string())
+            .collect();
+        PyValueError::new_err(format!(
+            "invalid value '{value}' for '--{flag}' [possible values: {}]",
+            possible.join(", ")
+        ))
+    })
+}
+
+fn choice(flag: &str, value: &str, choices: [&str; 2]) -> PyResult<bool> {
+    match choices.iter().position(|c| *c == value) {
+        Some(i) => Ok(i == 0),
+        None => Err(PyValueError::new_err(format!(
+            "invalid value '{value}' for '--{flag}' [possible values: {}]",
+            choices.join(", ")
+        ))),
+    }
+}
+
+/// Apply `options` to `settings`; returns the device-side ones.
+pub fn apply(
+    settings: &mut RenderSettings,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<DeviceExtras> {
+    let mut extras = DeviceExtras::default();
+    let Some(options) = options else {
+        return Ok(extras);
+    };
+    for (k, v) in options.iter() {
+        let key: String = k.extract()?;
+        let flag = key.replace('_', "-");
+        match key.as_str() {
+            "rr_depth" => settings.rr_depth = v.extract()?,
+            "source" => {
+                settings.source = value_enum::<LightSource>(&flag, &v.extract::<String>()?)?
+            }
+            "ris_candidates" => settings.ris_candidates = v.extract()?,
+            "bsdf_fraction" => settings.bsdf_fraction = v.extract()?,
+            "train_fraction" => settings.train_fraction = v.extract()?,
+            "record_nee" => settings.record_nee = v.extract()?,
+            "strategy" => {
+                settings.strategy = value_enum::<Strategy>(&flag, &v.extract::<String>()?)?
+            }
+            "hide_emitters" => settings.hide_emitters = v.extract()?,
+            "guiding_threshold" => settings.guiding.spatial_threshold = v.extract()?,
+            "guiding_memory" => {
+                let mib: u64 = v.extract()?;
+                settings.guiding.memory_cap_bytes = mib.saturating_mul(1 << 20);
+            }
+            "spatial_filter" => {
+                settings.spatial_jitter =
+                    choice(&flag, &v.extract::<String>()?, ["jitter", "nearest"])?
+            }
+            "directional_filter" => {
+                settings.directional_box =
+                    choice(&flag, &v.extract::<String>()?, ["box", "nearest"])?
+            }
+            "guided_output" => {
+                settings.guided_output = value_enum::<GuidedOutput>(&flag, &v.extract::<String>()?)?
+            }
+            "learn_lights" => settings.guiding.learn_lights = v.extract()?,
+            "light_mix" => settings.guiding.light_mix = v.extract()?,
+            "validation" => extras.validation = v.extract()?,
+            "shader_dir" => {
+                if !v.is_none() {
+                    extras.shaders = ShaderSource::Directory(v.extract()?);
+                }
+            }
+            _ => {
+                return Err(PyTypeError::new_err(format!(
+                    "Renderer() got an unexpected keyword argument '{key}' (options: {})",
+                    OPTIONS.join(", ")
+                )))
+            }
+        }
+    }
+    Ok(extras)
+}

@@ -1,0 +1,187 @@
+//! What a render hands back as an image: its metadata, the exact film (or the guided
+//! inverse-variance combination) and the AOV layers. The command line writes these to an
+//! EXR and the Python module returns them as arrays; both build them here, so the two
+//! agree bit for bit.
+
+use super::run::RunOutcome;
+use super::{RenderSettings, Renderer, Result};
+use crate::gpu;
+use crate::image_io::{self, Image, ImageError, RenderMeta};
+use std::fmt;
+use std::str::FromStr;
+
+/// Metadata every render's EXR carries, from what was rendered and how.
+pub fn render_meta(
+    settings: &RenderSettings,
+    scene_path: &str,
+    scene_hash: &str,
+    device_name: &str,
+) -> RenderMeta {
+    let mut meta = RenderMeta::new();
+    meta.method = Some(settings.method.name().to_string());
+    meta.seed = Some(settings.seed as u64);
+    meta.max_depth = Some(settings.max_depth);
+    meta.device = Some(device_name.to_string());
+    meta.scene_path = Some(scene_path.to_string());
+    meta.scene_hash = Some(scene_hash.to_string());
+    for (k, v) in [
+        ("source", format!("{:?}", settings.source).to_lowercase()),
+        ("ris_candidates", settings.ris_candidates.to_string()),
+        ("rr_depth", settings.rr_depth.to_string()),
+        (
+            "strategy",
+            format!("{:?}", settings.strategy).to_lowercase(),
+        ),
+        ("hide_emitters", settings.hide_emitters.to_string()),
+    ] {
+        meta.extra.insert(k.to_string(), v);
+    }
+    if settings.method.uses_guiding() {
+        meta.extra
+            .insert("bsdf_fraction".into(), settings.bsdf_fraction.to_string());
+        meta.extra
+            .insert("train_fraction".into(), settings.train_fraction.to_string());
+        meta.extra
+            .insert("record_nee".into(), settings.record_nee.to_string());
+    }
+    meta
+}
+
+/// The image a run outputs: the film's exact sums, or the inverse-variance combination
+/// of a guided run (float means only; its spp counts every pass).
+pub fn outcome_image(
+    out: &RunOutcome,
+    width: u32,
+    height: u32,
+    mut meta: RenderMeta,
+) -> std::result::Result<Image, ImageError> {
+    meta.sample_offset = Some(out.film.sample_offset);
+    match &out.combined {
+        Some(rgb) => {
+            let trained: u64 = out
+                .guiding
+                .as_ref()
+                .map_or(0, |g| g.iterations.iter().map(|i| i.spp).sum());
+            meta.spp = Some(out.film.spp + trained);
+            meta.sample_offset = Some(out.film.sample_offset - trained);
+            meta.extra
+                .insert("guided_output".into(), "inverse-variance".into());
+            let pixels = rgb.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+            let mut image = Image::new(width, height, pixels)?;
+            image.meta = meta;
+            Ok(image)
+        }
+        None => {
+            meta.spp = Some(out.film.spp);
+            let sums = out
+                .film
+                .sums
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect();
+            Image::from_sums(width, height, sums, meta)
+        }
+    }
+}
+
+/// AOV layers: first-hit data the kernel accumulates when `settings.aovs` is on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Aov {
+    Albedo,
+    Normal,
+    Depth,
+    Position,
+    LightCount,
+    RisWeight,
+    SelectedLight,
+    GuideFraction,
+    SampleCount,
+}
+
+impl Aov {
+    pub const ALL: [Aov; 9] = [
+        Aov::Albedo,
+        Aov::Normal,
+        Aov::Depth,
+        Aov::Position,
+        Aov::LightCount,
+        Aov::RisWeight,
+        Aov::SelectedLight,
+        Aov::GuideFraction,
+        Aov::SampleCount,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Aov::Albedo => "albedo",
+            Aov::Normal => "normal",
+            Aov::Depth => "depth",
+            Aov::Position => "position",
+            Aov::LightCount => "light-count",
+            Aov::RisWeight => "ris-weight",
+            Aov::SelectedLight => "selected-light",
+            Aov::GuideFraction => "guide-fraction",
+            Aov::SampleCount => "sample-count",
+        }
+    }
+
+    /// (first channel in the kernel's AOV buffer, channel names); None: computed on the host.
+    fn layout(self) -> Option<(u32, &'static [&'static str])> {
+        use gpu::*;
+        Some(match self {
+            Aov::Albedo => (AOV_ALBEDO, &["R", "G", "B"]),
+            Aov::Normal => (AOV_NORMAL, &["X", "Y", "Z"]),
+            Aov::Depth => (AOV_DEPTH, &["Z"]),
+            Aov::Position => (AOV_POSITION, &["X", "Y", "Z"]),
+            Aov::LightCount => (AOV_LIGHT_COUNT, &["Y"]),
+            Aov::RisWeight => (AOV_RIS_WEIGHT, &["Y"]),
+            Aov::SelectedLight => (AOV_SELECTED_LIGHT, &["Y"]),
+            Aov::GuideFraction => (AOV_GUIDE_FRACTION, &["Y"]),
+            Aov::SampleCount => return None,
+        })
+    }
+}
+
+impl fmt::Display for Aov {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Aov {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, Self::Err> {
+        Aov::ALL.into_iter().find(|a| a.name() == s).ok_or_else(|| {
+            let names: Vec<&str> = Aov::ALL.iter().map(|a| a.name()).collect();
+            format!("unknown AOV `{s}` (expected {})", names.join(", "))
+        })
+    }
+}
+
+/// The layers `aovs` of the renderer's film (rendered with `settings.aovs` on), each as
+/// named channels per pixel.
+pub fn aov_layers(renderer: &Renderer, aovs: &[Aov]) -> Result<Vec<image_io::Aov>> {
+    let data = renderer.aovs()?;
+    let n = gpu::AOV_CHANNELS as usize;
+    let pixels = renderer.settings.width as usize * renderer.settings.height as usize;
+    let mut layers = Vec::with_capacity(aovs.len());
+    for aov in aovs {
+        let (channels, values): (&[&str], Vec<f32>) = match aov.layout() {
+            Some((first, channels)) => (
+                channels,
+                data.chunks_exact(n)
+                    .flat_map(|px| {
+                        px[first as usize..first as usize + channels.len()]
+                            .iter()
+                            .copied()
+                    })
+                    .collect(),
+            ),
+            None => (&["Y"], vec![renderer.film_spp() as f32; pixels]),
+        };
+        let layer = image_io::Aov::new(aov.name(), channels, values)
+            .map_err(|e| super::RenderError::Invalid(e.to_string()))?;
+        layers.push(layer);
+    }
+    Ok(layers)
+}

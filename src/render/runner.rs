@@ -1,0 +1,68 @@
+//! The GPU renderer behind `eval::compare`: one scene on the device, the method switched
+//! per run, every other setting as given. The command line's `compare` and the Python
+//! module's `compare()` both run their comparisons through it.
+
+use super::output::outcome_image;
+use super::{run, Method, RenderSettings, Renderer};
+use crate::eval::compare::{Budget, MethodResult, MethodRunner};
+use crate::eval::BoxError;
+use crate::image_io::RenderMeta;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+pub struct CompareRunner<'a> {
+    pub renderer: &'a mut Renderer,
+    /// Settings of every run but the method.
+    pub base: RenderSettings,
+    /// Scene load and device setup, reported with every result.
+    pub setup_seconds: f64,
+    /// Metadata of every image (the method and the render time are filled in per run).
+    pub meta: RenderMeta,
+    /// Set to stop: the run in progress ends at its next chunk and fails as interrupted.
+    pub cancel: &'a AtomicBool,
+    /// Called with the spp done between chunks (a place to notice interruptions).
+    pub progress: &'a mut dyn FnMut(u64),
+}
+
+impl MethodRunner for CompareRunner<'_> {
+    fn render(&mut self, method: &str, budget: Budget) -> Result<MethodResult, BoxError> {
+        let method: Method = method.parse()?;
+        let settings = RenderSettings {
+            method,
+            ..self.base.clone()
+        };
+        let (w, h) = (settings.width, settings.height);
+        self.renderer.set_settings(settings)?;
+        let prep = Instant::now();
+        self.renderer.prepare()?;
+        log::debug!(
+            "{method}: pipelines ready in {:.1} s",
+            prep.elapsed().as_secs_f64()
+        );
+        let budget = match budget {
+            Budget::Spp(n) => run::Budget::Spp(n),
+            Budget::Seconds(s) => run::Budget::Seconds(s),
+        };
+        let out = run::run_method(self.renderer, budget, 0, self.cancel, self.progress)?;
+        if self.cancel.load(Ordering::SeqCst) {
+            return Err("interrupted".into());
+        }
+        let mut meta = self.meta.clone();
+        meta.method = Some(method.name().to_string());
+        meta.render_seconds = Some(out.seconds);
+        let image = outcome_image(&out, w, h, meta)?;
+        log::info!(
+            "{method} {budget:?}: {} spp in {:.2} s",
+            out.film.spp,
+            out.seconds
+        );
+        Ok(MethodResult {
+            spp: out.film.spp,
+            render_seconds: out.seconds,
+            setup_seconds: self.setup_seconds,
+            gpu_seconds: Some(out.stats.gpu_seconds),
+            training_seconds: method.uses_guiding().then_some(out.training_seconds),
+            image,
+        })
+    }
+}
