@@ -20,6 +20,7 @@
 struct DirectionSampler {
     float bsdf_fraction;   // probability of sampling the BSDF (1: no guiding here)
     uint leaf;             // SD-tree leaf of the vertex
+    LightContext lights;   // light selection at the vertex (NEE, RIS, MIS weights)
 };
 
 struct DirectionSample {
@@ -43,6 +44,7 @@ DirectionSampler direction_sampler(Surface s) {
             d.bsdf_fraction = guide_header.bsdf_fraction;
         }
     }
+    d.lights = light_context(s.p, d.leaf);
     return d;
 }
 
@@ -132,7 +134,7 @@ bool shadow_test(Surface s, LightSample ls, inout uint shadow_rays) {
 NeeResult nee_single(Surface s, DirectionSampler d, inout Rng rng, inout uint shadow_rays) {
     NeeResult r = nee_none();
     if (params.strategy == STRATEGY_BSDF_ONLY) return r;
-    LightSample ls = sample_light(s.p, rng_next4(rng));
+    LightSample ls = sample_light(d.lights, rng_next4(rng));
     r.chosen_model = light_model_of(ls);
     if (!(ls.pdf > 0.0) || max3(ls.Le_G) <= 0.0) return r;
     vec3 f = surface_bsdf_eval(s, ls.wi);
@@ -170,7 +172,7 @@ struct RisCandidate {
 
 RisCandidate ris_draw(RisContext ctx, inout Rng rng) {
     RisCandidate c;
-    c.ls = sample_light(ctx.s.p, rng_next4(rng));
+    c.ls = sample_light(ctx.d.lights, rng_next4(rng));
     c.value = vec3(0.0);
     c.from_direction = false;
     return c;
@@ -188,7 +190,7 @@ float ris_target(RisContext ctx, inout RisCandidate c) {
 // direction_pdf_for_ris; the direction candidate itself is further scaled by its true
 // density over the stand-in, so that its weight is m_direction·p̂/q_direction.
 float ris_denominator(RisContext ctx, RisCandidate c, uint M) {
-    float q_light = c.from_direction ? light_source_pdf(c.ls.tri) : c.ls.pdf;
+    float q_light = c.from_direction ? light_source_pdf(ctx.d.lights, c.ls.tri) : c.ls.pdf;
     float denominator = float(M) * q_light;
     // The direction candidate only exists for area lights under MIS.
     if (c.ls.area && params.strategy == STRATEGY_MIS) {
@@ -218,7 +220,7 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
         extra.ls.dist = next_t;
         extra.ls.cos_y = abs(dot(next.ng, ds.wi));
         extra.ls.Le_G = next.emission * extra.ls.cos_y / max(next_t * next_t, 1e-20);
-        extra.ls.pdf = light_source_pdf(next.light_tri);
+        extra.ls.pdf = light_source_pdf(d.lights, next.light_tri);
         extra.ls.area = true;
         extra.ls.tri = next.light_tri;
         extra.ls.p = next.p;
@@ -247,10 +249,10 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
     return r;
 }
 
-// MIS weight of emission reached by direction sampling from a vertex whose direction
-// pdf was `dir_pdf` (see the header comment).
-float emission_weight(Surface next, vec3 wi, float t, float dir_pdf) {
-    float q = light_source_pdf(next.light_tri);
+// MIS weight of emission reached by direction sampling from a vertex whose light
+// context was `lights` and direction pdf `dir_pdf` (see the header comment).
+float emission_weight(LightContext lights, Surface next, vec3 wi, float t, float dir_pdf) {
+    float q = light_source_pdf(lights, next.light_tri);
     // Emitters NEE cannot sample are found by direction sampling alone.
     if (q <= 0.0 || params.strategy == STRATEGY_BSDF_ONLY) return 1.0;
     if (params.strategy == STRATEGY_NEE_ONLY || NEE_MODE == NEE_RIS) return 0.0;

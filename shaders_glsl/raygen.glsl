@@ -115,7 +115,6 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
         TRACE4("  base colour %v3f metallic %f alpha %f throughput %v3f\n", s.bsdf.base_color, s.bsdf.metallic, s.bsdf.alpha,
                beta);
         DirectionSampler d = direction_sampler(s);
-        if (GUIDING) light_selection_begin(d.leaf, s.p);
         DirectionSample ds = sample_direction(s, d, rng);
         info.directions += 1.0;
         if (ds.guided) info.guided += 1.0;
@@ -141,7 +140,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
         vec3 emitted = vec3(0.0);
         vec3 emitted_recorded = vec3(0.0);
         if (hit_next && max3(ns.emission) > 0.0) {
-            float w = emission_weight(ns, ds.wi, next.t, ds.pdf);
+            float w = emission_weight(d.lights, ns, ds.wi, next.t, ds.pdf);
             emitted = ns.emission * w;
             // Without NEE records, direct light reaches the guide through hits alone.
             emitted_recorded = record_nee ? emitted : ns.emission;

@@ -46,23 +46,29 @@ float source_model_pmf(uint model) {
 // point whose SD-tree leaf has a learned table, light models are chosen from the
 // defensive mixture (1 − mix)·source + mix·table. The source term keeps every light
 // samplable, and every pdf below is the mixture's, so NEE, RIS and MIS stay unbiased.
-uint g_light_leaf = INVALID_INDEX;
-float g_light_mix = 0.0;
+//
+// What light sampling depends on at a shading point, passed explicitly to every
+// sampling and pdf function (pbrt's LightSampleContext).
+struct LightContext {
+    vec3 p;       // the shading point
+    uint leaf;    // its SD-tree leaf when it has a learned table, else INVALID_INDEX
+    float mix;    // probability of choosing the model from that table (0: source only)
+};
 
-// Set the model distribution for shading point p (`leaf`: its SD-tree leaf if known).
-void light_selection_begin(uint leaf, vec3 p) {
-    g_light_leaf = INVALID_INDEX;
-    g_light_mix = 0.0;
-    if (!GUIDING || (guide_header.flags & GUIDE_FLAG_LEARN_LIGHTS) == 0u) return;
+// The light-sampling context of shading point p (`leaf`: its SD-tree leaf if known).
+LightContext light_context(vec3 p, uint leaf) {
+    LightContext c = LightContext(p, INVALID_INDEX, 0.0);
+    if (!GUIDING || (guide_header.flags & GUIDE_FLAG_LEARN_LIGHTS) == 0u) return c;
     if (leaf == INVALID_INDEX) leaf = guide_find_leaf(p);
-    g_light_leaf = leaf;
-    if (guide_lights[leaf * GUIDE_LIGHT_SLOTS].model == GUIDE_LIGHT_EMPTY) return;  // CPU puts entries first
-    g_light_mix = guide_header.light_mix;
+    c.leaf = leaf;
+    if (guide_lights[leaf * GUIDE_LIGHT_SLOTS].model == GUIDE_LIGHT_EMPTY) return c;  // CPU puts entries first
+    c.mix = guide_header.light_mix;
+    return c;
 }
 
-float model_pmf(uint model) {
+float model_pmf(LightContext ctx, uint model) {
     float p = source_model_pmf(model);
-    if (GUIDING && g_light_mix > 0.0) p = (1.0 - g_light_mix) * p + g_light_mix * guide_light_pmf(g_light_leaf, model);
+    if (GUIDING && ctx.mix > 0.0) p = (1.0 - ctx.mix) * p + ctx.mix * guide_light_pmf(ctx.leaf, model);
     return p;
 }
 
@@ -71,11 +77,11 @@ float triangle_pmf(uint tri, LightModel m) {
     return 1.0 / float(m.triangle_count);
 }
 
-// Source density (per unit area) of a point on light triangle `tri`.
-float light_source_pdf(uint tri) {
+// Source density (per unit area) of a point on light triangle `tri`, seen from ctx.p.
+float light_source_pdf(LightContext ctx, uint tri) {
     if (tri == INVALID_INDEX) return 0.0;
     LightTriangle lt = light_triangles[tri];
-    return model_pmf(lt.model) * triangle_pmf(tri, light_models[lt.model]) / lt.area;
+    return model_pmf(ctx, lt.model) * triangle_pmf(tri, light_models[lt.model]) / lt.area;
 }
 
 // Radiance leaving light triangle `lt` at barycentrics (b1, b2) in direction `dir`.
@@ -119,26 +125,27 @@ LightSample sample_punctual(uint index, vec3 x) {
     return s;
 }
 
-// Draw a light point for shading point x with four uniform numbers.
-LightSample sample_light(vec3 x, vec4 u) {
+// Draw a light point for shading point ctx.p with four uniform numbers.
+LightSample sample_light(LightContext ctx, vec4 u) {
+    vec3 x = ctx.p;
     uint count = params.light_model_count;
     float um = u.x;
     uint model = INVALID_INDEX;
-    if (GUIDING && g_light_mix > 0.0) {
+    if (GUIDING && ctx.mix > 0.0) {
         // Reuse u.x: the first `mix` of its range picks from the table, the rest, rescaled,
         // from the source.
-        if (um < g_light_mix) {
+        if (um < ctx.mix) {
             float unused;
-            model = guide_light_sample(g_light_leaf, um / g_light_mix, unused);
+            model = guide_light_sample(ctx.leaf, um / ctx.mix, unused);
         } else {
-            um = (um - g_light_mix) / (1.0 - g_light_mix);
+            um = (um - ctx.mix) / (1.0 - ctx.mix);
         }
     }
     if (model == INVALID_INDEX)
         model = params.ris_source == RIS_SOURCE_POWER ? alias_sample(0u, count, um, true)
                                                        : min(uint(um * float(count)), count - 1u);
     LightModel m = light_models[model];
-    float pm = model_pmf(model);
+    float pm = model_pmf(ctx, model);
     if (m.punctual != INVALID_INDEX) {
         LightSample s = sample_punctual(m.punctual, x);
         s.pdf = pm;
