@@ -234,3 +234,39 @@ fn bad_flags() {
         assert!(stderr.contains("error"), "{args:?}: {stderr}");
     }
 }
+
+/// Guided training records at most 16 path vertices: a longer --max-depth is refused with
+/// the limit, rather than silently training on truncated paths (pt renders it).
+#[test]
+fn guided_methods_refuse_paths_longer_than_their_records() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), &scene_json("[1,1,1]", true, "quad.bin"));
+    let out = dir.path().join("deep.exr");
+    let args = |method: &'static str| {
+        vec![
+            "render".to_string(),
+            scene.clone(),
+            "--spp".into(),
+            "1".into(),
+            "--width".into(),
+            "8".into(),
+            "--max-depth".into(),
+            "18".into(),
+            "--method".into(),
+            method.into(),
+            "-o".into(),
+            out.to_str().unwrap().into(),
+            "--quiet".into(),
+        ]
+    };
+    let run = |method| {
+        let a = args(method);
+        lanterna(&a.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    let (ok, stderr) = run("guided");
+    assert!(!ok, "guided at depth 18 rendered");
+    assert!(stderr.contains("--max-depth 18") && stderr.contains("17"), "{stderr}");
+    assert!(!out.exists());
+    let (ok, stderr) = run("pt");
+    assert!(ok, "{stderr}");
+}
