@@ -20,16 +20,19 @@
 //!   difference (the same family-wise level; the standard error, printed, is about
 //!   0.2–0.4 % at these budgets).
 //!
-//! Defects each test was seen to catch (injected once, by hand, through the kernels):
-//! - `sconces_*`: the shadow ray aimed from an offset origin along the unmoved direction
-//!   with `tmax = dist·(1 − 10⁻⁴)` (the code before `visible_between`): blocks around the
-//!   lamps fail, p < 10⁻⁸ for `pt` and `ris`, mean −1.9 % / −4.6 %;
-//!   an MIS weight of emission hits computed with the BSDF pdf alone (mean +3 %);
-//!   a light pdf off by a factor 2 for triangles of two-sided emitters (the fin's block).
-//! - `punctual_near_*`: spot falloff squared once more; point light at the unoffset origin.
-//! - `alpha_lights_*`: shadow rays that ignore the alpha mask (blocks under the screen).
-//! - `sconces_far_from_origin`: the shadow ray origin offset by a fixed 10⁻⁴ instead of
-//!   ulps of the position (self-shadowing at 10⁴).
+//! Defects each test was seen to fail on (injected once through
+//! `LANTERNA_TEST_SHADER_DIR`, or in the Rust code, and reverted):
+//! - `sconces_direct_light_every_method`: the shadow ray aimed from an offset origin along
+//!   the unmoved direction with `tmax = dist·(1 − 10⁻⁴)` (the code before
+//!   `visible_between`): `pt --strategy nee`, block at (8, 8) 0.262 vs 0.368, p = 1e-7;
+//!   the MIS weight of emission hits computed with half the light pdf: `pt`, p = 1e-14.
+//!   Not caught at this power: a light pdf off by 2 for two-sided emitters in the MIS
+//!   weights alone (one small fin: smallest block p 5e-6 for `guided`).
+//! - `punctual_lights_near_surfaces`: the spot falloff squared once more: p = 1e-16.
+//! - `lamp_behind_alpha_masked_screen`: shadow rays that treat alpha-masked geometry as
+//!   opaque: block (8, 0) 0.00001 vs 0.029, p = 2e-16.
+//! - `sconces_far_from_origin`: no rebasing of the scene toward the origin (256-ulp ray
+//!   offsets are 0.24 m at 10⁴): block (8, 8) 0.147 vs 0.368, p = 7e-32.
 
 use lanterna::lights::LightTable;
 use lanterna::render::{Method, RenderSettings, Strategy};
