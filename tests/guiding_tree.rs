@@ -193,7 +193,7 @@ fn load_refuses_bad_files() {
     assert!(matches!(err, GuidingError::Corrupt { .. }), "{err}");
 
     let err = SdTree::load(&dir.path().join("missing.sdt"), scene_hash()).unwrap_err();
-    assert!(matches!(err, GuidingError::Io { .. }), "{err}");
+    assert!(matches!(err, GuidingError::File(_)), "{err}");
 }
 
 #[test]
