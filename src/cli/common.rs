@@ -4,7 +4,7 @@
 use anyhow::{Context, Result};
 use lanterna::render::session::{self, DeviceOptions, LoadedScene};
 use lanterna::render::{GuidedOutput, LightSource, Method, RenderSettings, Strategy};
-use lanterna::scene::{Camera, CameraOverride};
+use lanterna::scene::{Camera, CameraOverride, LoadOptions};
 use lanterna::shaders::ShaderSource;
 use lanterna::vk::DeviceSelector;
 use std::path::PathBuf;
@@ -30,6 +30,18 @@ pub struct SceneArgs {
     /// Image height (default: from the width and the camera's aspect ratio).
     #[arg(long)]
     pub height: Option<u32>,
+    /// Follow buffer and image URIs that lead outside the scene's folder (absolute
+    /// paths, `..`, `file:` URIs, symlinks out); by default they are refused.
+    #[arg(long)]
+    pub allow_outside_uris: bool,
+}
+
+impl SceneArgs {
+    pub fn load_options(&self) -> LoadOptions {
+        LoadOptions {
+            allow_outside_uris: self.allow_outside_uris,
+        }
+    }
 }
 
 fn parse_look_at(s: &str) -> Result<[f32; 6], String> {
@@ -207,7 +219,7 @@ impl EstimatorArgs {
 
 /// Load the scene and choose the view.
 pub fn load(args: &SceneArgs) -> Result<(LoadedScene, Camera, u32, u32)> {
-    let loaded = session::load_scene(&args.scene)?;
+    let loaded = session::load_scene_with(&args.scene, &args.load_options())?;
     let o = CameraOverride {
         look_at: args.look_at.map(|v| {
             (
