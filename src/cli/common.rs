@@ -3,7 +3,9 @@
 
 use anyhow::{Context, Result};
 use lanterna::render::session::{self, DeviceOptions, LoadedScene};
-use lanterna::render::{GuidedOutput, LightSource, Method, RenderSettings, Strategy};
+use lanterna::render::{
+    GuidedOutput, GuidingSettings, LightSource, Method, RenderSettings, Strategy,
+};
 use lanterna::scene::{Camera, CameraOverride, LoadOptions};
 use lanterna::shaders::ShaderSource;
 use lanterna::vk::DeviceSelector;
@@ -105,8 +107,9 @@ pub struct MethodArgs {
 }
 
 impl MethodArgs {
-    pub fn settings(&self, width: u32, height: u32) -> RenderSettings {
-        self.estimator.settings(self.method, width, height)
+    /// The settings of these options, the image size still to be set (see `prepare`).
+    pub fn settings(&self) -> RenderSettings {
+        self.estimator.settings(self.method, 0, 0)
     }
 }
 
@@ -189,7 +192,10 @@ pub enum DirectionalFilterArg {
 }
 
 impl EstimatorArgs {
+    /// The settings these options ask for (not validated yet: `common::prepare` and
+    /// the renderer do that).
     pub fn settings(&self, method: Method, width: u32, height: u32) -> RenderSettings {
+        use lanterna::guiding::{DirectionalFilter, SpatialFilter};
         RenderSettings {
             method,
             width,
@@ -199,25 +205,31 @@ impl EstimatorArgs {
             seed: self.seed,
             source: self.source,
             ris_candidates: self.ris_candidates,
-            bsdf_fraction: self.bsdf_fraction,
-            train_fraction: self.train_fraction,
-            record_nee: !self.no_record_nee,
             strategy: self.strategy,
-            guided_output: self.guided_output,
-            spatial_jitter: self.spatial_filter == SpatialFilterArg::Jitter,
-            directional_box: self.directional_filter == DirectionalFilterArg::Box,
-            guiding: lanterna::render::GuidingSettings {
+            guiding: GuidingSettings {
+                bsdf_fraction: self.bsdf_fraction,
+                train_fraction: self.train_fraction,
+                record_nee: !self.no_record_nee,
+                spatial_filter: match self.spatial_filter {
+                    SpatialFilterArg::Jitter => SpatialFilter::StochasticBox,
+                    SpatialFilterArg::Nearest => SpatialFilter::Nearest,
+                },
+                directional_filter: match self.directional_filter {
+                    DirectionalFilterArg::Box => DirectionalFilter::Box,
+                    DirectionalFilterArg::Nearest => DirectionalFilter::Nearest,
+                },
                 spatial_threshold: self.guiding_threshold,
                 memory_cap_bytes: self.guiding_memory.saturating_mul(1 << 20),
                 learn_lights: self.learn_lights,
                 light_mix: self.light_mix,
+                output: self.guided_output,
             },
             ..RenderSettings::default()
         }
     }
 }
 
-/// Load the scene and choose the view.
+/// Load the scene and choose the view: the camera and the image size.
 pub fn load(args: &SceneArgs) -> Result<(LoadedScene, Camera, u32, u32)> {
     let loaded = session::load_scene_with(&args.scene, &args.load_options())?;
     let o = CameraOverride {
@@ -232,10 +244,22 @@ pub fn load(args: &SceneArgs) -> Result<(LoadedScene, Camera, u32, u32)> {
     };
     let camera = session::choose_camera(&loaded.scene, args.camera.as_deref(), &o)?;
     let (w, h) = session::resolution(&camera, args.width, args.height);
-    if w == 0 || h == 0 || w as u64 * h as u64 > 1 << 28 {
-        anyhow::bail!("image size {w}×{h} is out of range");
-    }
     Ok((loaded, camera, w, h))
+}
+
+/// What a rendering command starts from: the scene, the view, and the settings completed
+/// with the view's size and fov and validated (the one check every command goes through;
+/// the renderer repeats it).
+pub fn prepare(
+    args: &SceneArgs,
+    mut settings: RenderSettings,
+) -> Result<(LoadedScene, Camera, RenderSettings)> {
+    settings.fov_degrees = args.fov;
+    let (loaded, camera, width, height) = load(args)?;
+    settings.width = width;
+    settings.height = height;
+    settings.validate()?;
+    Ok((loaded, camera, settings))
 }
 
 static CANCELLED: AtomicBool = AtomicBool::new(false);
@@ -281,24 +305,11 @@ pub fn render_meta(
     meta.device = Some(device.info.name.clone());
     meta.scene_path = Some(scene.scene.display().to_string());
     meta.scene_hash = Some(scene_hash.to_string());
-    for (k, v) in [
-        ("source", format!("{:?}", settings.source).to_lowercase()),
-        ("ris_candidates", settings.ris_candidates.to_string()),
-        ("rr_depth", settings.rr_depth.to_string()),
-        (
-            "strategy",
-            format!("{:?}", settings.strategy).to_lowercase(),
-        ),
-    ] {
-        meta.extra.insert(k.to_string(), v);
-    }
-    if settings.method.uses_guiding() {
-        meta.extra
-            .insert("bsdf_fraction".into(), settings.bsdf_fraction.to_string());
-        meta.extra
-            .insert("train_fraction".into(), settings.train_fraction.to_string());
-        meta.extra
-            .insert("record_nee".into(), settings.record_nee.to_string());
+    // Everything else the settings hold, from their serde form; these three have fields.
+    for (k, v) in settings.metadata_pairs() {
+        if !matches!(k.as_str(), "method" | "seed" | "max_depth") {
+            meta.extra.insert(k, v);
+        }
     }
     meta
 }

@@ -13,7 +13,7 @@ use lanterna::eval::compare::{
 };
 use lanterna::eval::BoxError;
 use lanterna::image_io::{read_exr, Image};
-use lanterna::render::{run, session, Method, Renderer};
+use lanterna::render::{run, session, Method, RenderSettings, Renderer};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -97,7 +97,8 @@ pub fn load_reference(args: &Args, config: &CompareConfig) -> anyhow::Result<Ima
 /// per run.
 struct GpuRunner {
     renderer: Renderer,
-    estimator: EstimatorArgs,
+    /// The settings of every run, but for the method.
+    settings: RenderSettings,
     setup_seconds: f64,
     meta: lanterna::image_io::RenderMeta,
     cancel: &'static std::sync::atomic::AtomicBool,
@@ -107,8 +108,11 @@ impl MethodRunner for GpuRunner {
     fn render(&mut self, method: &str, budget: Budget) -> Result<MethodResult, BoxError> {
         let method: Method = method.parse()?;
         let (w, h) = (self.renderer.settings.width, self.renderer.settings.height);
-        self.renderer
-            .set_settings(self.estimator.settings(method, w, h))?;
+        let settings = RenderSettings {
+            method,
+            ..self.settings.clone()
+        };
+        self.renderer.set_settings(settings)?;
         let prep = Instant::now();
         self.renderer.prepare()?;
         log::debug!(
@@ -148,7 +152,15 @@ fn open_runner(args: &Args, reference: &Image) -> anyhow::Result<Box<dyn MethodR
     let mut view = args.view.clone();
     view.width = Some(view.width.unwrap_or(reference.width));
     view.height = Some(view.height.unwrap_or(reference.height));
-    let (loaded, camera, width, height) = common::load(&view)?;
+    let first = args
+        .methods
+        .first()
+        .map(|m| m.parse::<Method>())
+        .transpose()
+        .map_err(anyhow::Error::msg)?;
+    let mut settings = args.estimator.settings(first.unwrap_or(Method::Pt), 0, 0);
+    settings.exposure = args.exposure;
+    let (loaded, camera, settings) = common::prepare(&view, settings)?;
     if let Some(hash) = &reference.meta.scene_hash {
         if *hash != loaded.scene.hash {
             log::warn!(
@@ -160,27 +172,18 @@ fn open_runner(args: &Args, reference: &Image) -> anyhow::Result<Box<dyn MethodR
     }
     let device =
         session::open_device(&args.device.options()).context("cannot open a Vulkan device")?;
-    let first = args
-        .methods
-        .first()
-        .map(|m| m.parse::<Method>())
-        .transpose()
-        .map_err(anyhow::Error::msg)?;
-    let settings = args
-        .estimator
-        .settings(first.unwrap_or(Method::Pt), width, height);
     let renderer = Renderer::new(
         device.clone(),
         &loaded.scene,
         &loaded.lights,
         camera,
-        settings,
+        settings.clone(),
         args.device.shaders(),
     )?;
     let meta = common::render_meta(&renderer.settings, &view, &loaded.scene.hash, &device);
     Ok(Box::new(GpuRunner {
         renderer,
-        estimator: args.estimator.clone(),
+        settings,
         setup_seconds: started.elapsed().as_secs_f64(),
         meta,
         cancel: common::cancel_flag(),

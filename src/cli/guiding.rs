@@ -61,9 +61,11 @@ fn view(args: ViewArgs) -> Result<()> {
         width,
         height,
         max_depth: 1,
+        fov_degrees: args.scene.fov,
         aovs: true,
         ..RenderSettings::default()
     };
+    settings.validate()?;
     let mut r = Renderer::new(
         device,
         &loaded.scene,

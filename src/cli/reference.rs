@@ -95,10 +95,9 @@ fn open_renderer(args: &Args) -> anyhow::Result<Box<dyn SampleRenderer>> {
         "a reference is rendered with pt or ris: guided methods train on their own samples, so \
          disjoint sample ranges would not be independent"
     );
-    let (loaded, camera, width, height) = common::load(&args.scene)?;
+    let (loaded, camera, settings) = common::prepare(&args.scene, args.method.settings())?;
     let device =
         session::open_device(&args.device.options()).context("cannot open a Vulkan device")?;
-    let settings = args.method.settings(width, height);
     let mut renderer = Renderer::new(
         device.clone(),
         &loaded.scene,

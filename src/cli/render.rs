@@ -192,11 +192,13 @@ pub fn run(args: Args) -> Result<()> {
     };
 
     let started = Instant::now();
-    let (loaded, camera, width, height) = common::load(&args.scene)?;
+    let mut settings = args.method.settings();
+    settings.exposure = args.exposure;
+    let (loaded, camera, mut settings) = common::prepare(&args.scene, settings)?;
+    let (width, height) = (settings.width, settings.height);
     let mut device_options = args.device.options();
     device_options.debug_printf = args.pixel.is_some();
     let device = session::open_device(&device_options).context("cannot open a Vulkan device")?;
-    let mut settings = args.method.settings(width, height);
     settings.aovs = !args.aov.is_empty() || args.pixel.is_some() || args.report_outliers.is_some();
     let mut renderer = Renderer::new(
         device.clone(),
@@ -415,7 +417,7 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
     }
     if let Some(p) = &png {
         common::ensure_parent(p)?;
-        let _ = image_io::write_png(p, &image, args.exposure)
+        let _ = image_io::write_png(p, &image, renderer.settings.exposure)
             .with_context(|| format!("cannot write {}", p.display()))?;
     }
 

@@ -13,9 +13,7 @@
 
 use super::run::{Budget, RunOutcome};
 use super::{Film, GuideBuffers, GuidedOutput, RenderError, RenderStats, Renderer, Result};
-use crate::guiding::{
-    DirectionalFilter, GuidingConfig, SdTree, SpatialFilter, SppSchedule, TimeSchedule,
-};
+use crate::guiding::{GuidingConfig, SdTree, SppSchedule, TimeSchedule};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -63,24 +61,17 @@ const REFERENCE_PIXELS: f64 = 1280.0 * 720.0;
 pub fn guiding_config(renderer: &Renderer) -> GuidingConfig {
     let s = &renderer.settings;
     let pixels = s.width as f64 * s.height as f64;
+    let g = &s.guiding;
     GuidingConfig {
-        spatial_threshold: (s.guiding.spatial_threshold as f64 * (pixels / REFERENCE_PIXELS).sqrt())
+        spatial_threshold: (g.spatial_threshold as f64 * (pixels / REFERENCE_PIXELS).sqrt())
             .max(1.0) as f32,
-        memory_cap_bytes: s.guiding.memory_cap_bytes,
-        spatial_filter: if s.spatial_jitter {
-            SpatialFilter::StochasticBox
-        } else {
-            SpatialFilter::Nearest
-        },
-        directional_filter: if s.directional_box {
-            DirectionalFilter::Box
-        } else {
-            DirectionalFilter::Nearest
-        },
-        record_nee: s.record_nee,
-        bsdf_fraction: s.bsdf_fraction,
-        learn_lights: s.guiding.learn_lights,
-        light_mix: s.guiding.light_mix,
+        memory_cap_bytes: g.memory_cap_bytes,
+        spatial_filter: g.spatial_filter,
+        directional_filter: g.directional_filter,
+        record_nee: g.record_nee,
+        bsdf_fraction: g.bsdf_fraction,
+        learn_lights: g.learn_lights,
+        light_mix: g.light_mix,
         ..GuidingConfig::default()
     }
 }
@@ -102,7 +93,7 @@ pub fn run_guided(
     let mut stats = RenderStats::default();
     let mut iterations = Vec::new();
     let mut sample = first;
-    let combine = renderer.settings.guided_output == GuidedOutput::InverseVariance;
+    let combine = renderer.settings.guiding.output == GuidedOutput::InverseVariance;
     // (mean image, estimated mean pixel variance) of each pass, for the combination.
     let mut passes: Vec<(Vec<f32>, f64)> = Vec::new();
 
@@ -115,7 +106,7 @@ pub fn run_guided(
         None => {
             let (lo, hi) = renderer.bounds;
             let mut tree = SdTree::new(lo, hi, &config).map_err(guiding_error)?;
-            let train_fraction = renderer.settings.train_fraction as f64;
+            let train_fraction = renderer.settings.guiding.train_fraction as f64;
             match budget {
                 Budget::Spp(n) => {
                     let schedule = SppSchedule::new(n.min(u32::MAX as u64) as u32, train_fraction);

@@ -16,7 +16,9 @@ mod settings;
 pub use film::Film;
 pub use gpu_scene::GpuScene;
 pub use guided::{GuidingOutcome, IterationStats};
-pub use settings::{GuidedOutput, GuidingSettings, LightSource, Method, RenderSettings, Strategy};
+pub use settings::{
+    GuidedOutput, GuidingSettings, LightSource, Method, RenderSettings, SettingsError, Strategy,
+};
 
 use crate::gpu;
 use crate::lights::LightTable;
@@ -36,6 +38,8 @@ pub enum RenderError {
     Vulkan(#[from] vk::VkError),
     #[error(transparent)]
     Shader(#[from] crate::shaders::ShaderError),
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
     #[error("{0}")]
     Invalid(String),
 }
@@ -209,26 +213,7 @@ impl Renderer {
         settings: RenderSettings,
         shaders: ShaderSource,
     ) -> Result<Renderer> {
-        if settings.width == 0 || settings.height == 0 {
-            return Err(RenderError::Invalid(
-                "image size must be at least 1×1".into(),
-            ));
-        }
-        if settings.max_depth == 0 {
-            return Err(RenderError::Invalid(
-                "--max-depth must be at least 1".into(),
-            ));
-        }
-        if settings.ris_candidates == 0 {
-            return Err(RenderError::Invalid(
-                "--ris-candidates must be at least 1".into(),
-            ));
-        }
-        if !(0.0..=1.0).contains(&settings.bsdf_fraction) {
-            return Err(RenderError::Invalid(
-                "--bsdf-fraction must be within [0, 1]".into(),
-            ));
-        }
+        settings.validate()?;
         let gpu_scene = GpuScene::upload(&device, scene, lights)?;
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
         let pixels = settings.width as u64 * settings.height as u64;
@@ -344,6 +329,7 @@ impl Renderer {
                 "set_settings cannot change the image size or AOVs".into(),
             ));
         }
+        settings.validate()?;
         self.settings = settings;
         // Another method has another cost per sample: measure it again.
         self.seconds_per_sample = None;
