@@ -125,15 +125,14 @@ fn job(args: &Args) -> anyhow::Result<ReferenceJob> {
     if args.chunk_spp == Some(0) {
         anyhow::bail!("--chunk-spp must be at least 1");
     }
-    if args.sample_offset.checked_add(args.spp).is_none() {
-        anyhow::bail!("--sample-offset + --spp overflows");
-    }
+    lanterna::render::run::Budget::Spp(args.spp).check(args.sample_offset)?;
     Ok(ReferenceJob {
         output: args.output.clone(),
         checkpoint: checkpoint_path(&args.output),
         spp: args.spp,
         sample_offset: args.sample_offset,
-        checkpoint_every: Some(Duration::from_secs_f64(args.checkpoint_every)),
+        // Beyond what a Duration holds means never (but on interruption).
+        checkpoint_every: Duration::try_from_secs_f64(args.checkpoint_every).ok(),
         chunk: match args.chunk_spp {
             Some(n) => ChunkPolicy::Fixed(n),
             None => ChunkPolicy::Adaptive {

@@ -162,16 +162,17 @@ fn describe_sample(x: u32, y: u32, sample: u32, rgb: [f32; 3]) -> String {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if let Some(t) = args.time {
-        anyhow::ensure!(
-            t.is_finite() && t > 0.0,
-            "--time must be a positive number of seconds"
-        );
-    }
     let spp = args
         .spp
         .unwrap_or(if args.time.is_some() { u64::MAX } else { 16 });
-    anyhow::ensure!(spp > 0, "--spp must be at least 1");
+    let budget = match args.time {
+        Some(t) => run::Budget::Seconds(t),
+        None => run::Budget::Spp(spp),
+    };
+    // Before anything is loaded (run_method checks again).
+    if args.pixel.is_none() {
+        budget.check(args.sample_offset)?;
+    }
     let output = args.output.clone().unwrap_or_else(|| {
         let stem = args
             .scene
@@ -489,6 +490,7 @@ fn trace_pixel(renderer: &mut Renderer, x: u32, y: u32, args: &Args, spp: u64) -
         Some(k) => (k as u64, 1),
         None => (args.sample_offset, if args.spp.is_some() { spp } else { 1 }),
     };
+    run::Budget::Spp(count).check(begin)?;
     let lines = renderer.trace_pixel(x, y, begin, count, args.sample)?;
     if lines.is_empty() {
         log::warn!("no trace was printed: the validation layer's debug printf is unavailable");

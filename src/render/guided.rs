@@ -11,11 +11,11 @@
 //! so the combination is consistent rather than strictly unbiased (as in the reference
 //! implementation); the render phase alone is unbiased.
 
-use super::run::{Budget, RunOutcome};
+use super::run::{deadline_after, Budget, RunOutcome, SAMPLE_INDEX_END};
 use super::{Film, GuideBuffers, GuidedOutput, RenderError, RenderStats, Renderer, Result};
 use crate::guiding::{GuidingConfig, SdTree, SppSchedule, TimeSchedule};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// What one training iteration cost and produced.
 #[derive(Clone, Debug, Default, serde::Serialize)]
@@ -201,15 +201,15 @@ pub fn run_guided(
             }
         }
         Budget::Seconds(total) => {
-            let deadline = started + Duration::from_secs_f64(total);
+            let deadline = deadline_after(started, total);
             let mut a = 0;
             if combine {
                 let now = Instant::now();
-                let mid = now + deadline.saturating_duration_since(now) / 2;
+                let mid = deadline.map(|d| now + d.saturating_duration_since(now) / 2);
                 renderer.render_until(
                     sample,
-                    None,
-                    Some(mid),
+                    Some(SAMPLE_INDEX_END.saturating_sub(sample)),
+                    mid,
                     false,
                     cancel,
                     &mut |d| progress(trained + d),
@@ -222,8 +222,8 @@ pub fn run_guided(
             }
             renderer.render_until(
                 sample + a,
-                None,
-                Some(deadline),
+                Some(SAMPLE_INDEX_END.saturating_sub(sample + a)),
+                deadline,
                 false,
                 cancel,
                 &mut |d| progress(trained + a + d),
