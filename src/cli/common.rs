@@ -2,6 +2,7 @@
 //! bench), and the setup they all do from them.
 
 use anyhow::{Context, Result};
+use lanterna::files::FilePlan;
 use lanterna::render::session::{self, DeviceOptions, LoadedScene};
 use lanterna::render::{
     GuidedOutput, GuidingSettings, LightSource, Method, RenderSettings, Strategy,
@@ -9,7 +10,7 @@ use lanterna::render::{
 use lanterna::scene::{Camera, CameraOverride, LoadOptions};
 use lanterna::shaders::ShaderSource;
 use lanterna::vk::DeviceSelector;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The scene and the view.
@@ -260,6 +261,26 @@ pub fn prepare(
     settings.height = height;
     settings.validate()?;
     Ok((loaded, camera, settings))
+}
+
+/// Refuses a run whose outputs include one of its inputs (the scene, the files its
+/// URIs name, `inputs`) or the same file twice, before anything is rendered.
+pub fn check_outputs(
+    scene: &SceneArgs,
+    loaded: &LoadedScene,
+    inputs: &[(&str, &Path)],
+    outputs: &[(&str, &Path)],
+) -> Result<()> {
+    let mut plan = FilePlan::new();
+    plan.input("the scene", &scene.scene)
+        .inputs("a file the scene uses", &loaded.scene.files);
+    for (what, path) in inputs {
+        plan.input(what, path);
+    }
+    for (what, path) in outputs {
+        plan.output(what, path);
+    }
+    Ok(plan.check()?)
 }
 
 static CANCELLED: AtomicBool = AtomicBool::new(false);

@@ -161,6 +161,17 @@ fn open_runner(args: &Args, reference: &Image) -> anyhow::Result<Box<dyn MethodR
     let mut settings = args.estimator.settings(first.unwrap_or(Method::Pt), 0, 0);
     settings.exposure = args.exposure;
     let (loaded, camera, settings) = common::prepare(&view, settings)?;
+    let outputs = config(args).output_files();
+    let outputs: Vec<(&str, &std::path::Path)> = outputs
+        .iter()
+        .map(|p| ("a report file", p.as_path()))
+        .collect();
+    common::check_outputs(
+        &view,
+        &loaded,
+        &[("--reference", &args.reference)],
+        &outputs,
+    )?;
     if let Some(hash) = &reference.meta.scene_hash {
         if *hash != loaded.scene.hash {
             log::warn!(

@@ -30,8 +30,9 @@ pub struct ViewArgs {
     /// Output PNG of the (cosθ, φ) square: u = (cosθ+1)/2 to the right, v = φ/2π down.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Size of the image in pixels.
-    #[arg(long, default_value_t = 512)]
+    /// Size of the image in pixels (at most 4096: the view is a picture of one leaf, and
+    /// 4096² already takes 200 MB).
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub size: u32,
 }
 
@@ -43,6 +44,12 @@ pub fn run(command: Command) -> Result<()> {
 
 fn view(args: ViewArgs) -> Result<()> {
     let (loaded, camera, width, height) = common::load(&args.scene)?;
+    common::check_outputs(
+        &args.scene,
+        &loaded,
+        &[("--load-guiding", &args.load_guiding)],
+        &[("the PNG (-o)", &args.output)],
+    )?;
     let (x, y) = args.pixel;
     anyhow::ensure!(
         x < width && y < height,

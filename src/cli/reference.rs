@@ -96,6 +96,16 @@ fn open_renderer(args: &Args) -> anyhow::Result<Box<dyn SampleRenderer>> {
          disjoint sample ranges would not be independent"
     );
     let (loaded, camera, settings) = common::prepare(&args.scene, args.method.settings())?;
+    let checkpoint = checkpoint_path(&args.output);
+    common::check_outputs(
+        &args.scene,
+        &loaded,
+        &[],
+        &[
+            ("the reference (-o)", &args.output),
+            ("its checkpoint", &checkpoint),
+        ],
+    )?;
     let device =
         session::open_device(&args.device.options()).context("cannot open a Vulkan device")?;
     let mut renderer = Renderer::new(

@@ -197,6 +197,25 @@ pub fn run(args: Args) -> Result<()> {
     settings.exposure = args.exposure;
     let (loaded, camera, mut settings) = common::prepare(&args.scene, settings)?;
     let (width, height) = (settings.width, settings.height);
+    let selected_light_png = args
+        .aov
+        .contains(&Aov::SelectedLight)
+        .then(|| output.with_extension("selected-light.png"));
+    let mut outputs = vec![("the EXR (-o)", output.as_path())];
+    outputs.extend(png.as_deref().map(|p| ("the PNG (--png)", p)));
+    outputs.extend(args.save_guiding.as_deref().map(|p| ("--save-guiding", p)));
+    outputs.extend(
+        selected_light_png
+            .as_deref()
+            .map(|p| ("the selected-light PNG", p)),
+    );
+    let inputs: Vec<(&str, &std::path::Path)> = args
+        .load_guiding
+        .as_deref()
+        .map(|p| ("--load-guiding", p))
+        .into_iter()
+        .collect();
+    common::check_outputs(&args.scene, &loaded, &inputs, &outputs)?;
     let mut device_options = args.device.options();
     device_options.debug_printf = args.pixel.is_some();
     let device = session::open_device(&device_options).context("cannot open a Vulkan device")?;
