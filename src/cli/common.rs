@@ -285,20 +285,42 @@ pub fn check_outputs(
 
 static CANCELLED: AtomicBool = AtomicBool::new(false);
 
-/// Ctrl-C stops the render at the next chunk boundary (the image is still written); a
-/// second Ctrl-C exits at once.
+/// Exit status of a run stopped by SIGINT, SIGTERM or SIGHUP that wrote its partial
+/// result (render: the image of the samples finished; reference: its checkpoint):
+/// EX_TEMPFAIL, "try again" — `reference --resume` continues where it stopped.
+pub const EXIT_INTERRUPTED_SAVED: u8 = 75;
+/// Exit status of a run interrupted before anything could be written (or by a second
+/// signal, which exits at once): 128 + SIGINT, as shells report it.
+pub const EXIT_INTERRUPTED_NOTHING: u8 = 130;
+
+/// A run ended by a signal; `main` turns it into one of the two exit statuses above.
+#[derive(Debug, thiserror::Error)]
+pub enum Interrupted {
+    /// The partial result was written; the text says what and where.
+    #[error("interrupted: {0}")]
+    Saved(String),
+    #[error("interrupted before the first sample finished; nothing written")]
+    Nothing,
+}
+
+/// SIGINT (Ctrl-C), SIGTERM (what cluster schedulers send at the time limit) and SIGHUP
+/// stop the render at the next chunk boundary, and what is consistent is still written;
+/// a second signal exits at once without writing.
 pub fn cancel_flag() -> &'static AtomicBool {
     static INSTALLED: std::sync::Once = std::sync::Once::new();
     INSTALLED.call_once(|| {
-        let _ = ctrlc::set_handler(|| {
+        let installed = ctrlc::set_handler(|| {
             if CANCELLED.swap(true, Ordering::SeqCst) {
                 eprintln!("\ninterrupted twice: exiting without writing");
-                std::process::exit(130);
+                std::process::exit(i32::from(EXIT_INTERRUPTED_NOTHING));
             }
             eprintln!(
                 "\ninterrupted: finishing the current chunk and writing what has been rendered"
             );
         });
+        if let Err(e) = installed {
+            log::warn!("cannot handle interruption signals ({e}): they will end the run at once");
+        }
     });
     &CANCELLED
 }
@@ -345,14 +367,31 @@ pub fn outcome_image(
 ) -> anyhow::Result<lanterna::image_io::Image> {
     use lanterna::image_io::Image;
     meta.sample_offset = Some(out.film.sample_offset);
+    let interrupted_in_training = out
+        .guiding
+        .as_ref()
+        .is_some_and(|g| g.interrupted_in_training);
+    if interrupted_in_training {
+        meta.extra.insert(
+            "guiding.interrupted".into(),
+            "in training: the image is the last training pass".into(),
+        );
+    }
     match &out.combined {
         Some(rgb) => {
             let trained: u64 = out
                 .guiding
                 .as_ref()
                 .map_or(0, |g| g.iterations.iter().map(|i| i.spp).sum());
-            meta.spp = Some(out.film.spp + trained);
-            meta.sample_offset = Some(out.film.sample_offset - trained);
+            // The passes are contiguous and end where the film's samples end; the film
+            // is one of them when training was interrupted.
+            let total = if interrupted_in_training {
+                trained
+            } else {
+                out.film.spp + trained
+            };
+            meta.spp = Some(total);
+            meta.sample_offset = Some(out.film.sample_offset + out.film.spp - total);
             meta.extra
                 .insert("guided_output".into(), "inverse-variance".into());
             let pixels = rgb.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();

@@ -3,15 +3,15 @@
 //! `ref.checkpoint.exr` and resumable bit-exactly; Ctrl-C saves a checkpoint and stops.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use super::common::{self, DeviceArgs, MethodArgs, SceneArgs};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use lanterna::eval::reference::{
-    checkpoint_path, render_reference, ChunkPolicy, ProgressEvent, ReferenceJob, SampleRenderer,
+    checkpoint_path, render_reference, ChunkPolicy, ProgressEvent, ReferenceError, ReferenceJob,
+    SampleRenderer,
 };
 use lanterna::eval::BoxError;
 use lanterna::image_io::RenderMeta;
@@ -155,14 +155,10 @@ fn job(args: &Args) -> anyhow::Result<ReferenceJob> {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let job = job(&args)?;
+    // Signals from here on stop the run cleanly (the default would kill it unsaved).
+    let cancel = common::cancel_flag();
     let mut renderer = open_renderer(&args)?;
 
-    let cancel = Arc::new(AtomicBool::new(false));
-    {
-        let cancel = cancel.clone();
-        ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed))
-            .context("installing the Ctrl-C handler")?;
-    }
     let bar = ProgressBar::new(job.spp);
     bar.set_style(
         ProgressStyle::with_template(
@@ -181,9 +177,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             bar.suspend(|| log::info!("checkpoint {} (next sample {next_sample})", path.display()));
         }
     };
-    let result = render_reference(renderer.as_mut(), &job, &cancel, &mut on_progress);
+    let result = render_reference(renderer.as_mut(), &job, cancel, &mut on_progress);
     bar.finish_and_clear();
-    let outcome = result?;
+    let outcome = match result {
+        Ok(o) => o,
+        Err(ReferenceError::Interrupted {
+            checkpoint: Some(path),
+            next_sample,
+        }) => {
+            return Err(common::Interrupted::Saved(format!(
+                "progress up to sample {next_sample} is in {}; continue with --resume",
+                path.display()
+            ))
+            .into())
+        }
+        Err(ReferenceError::Interrupted {
+            checkpoint: None, ..
+        }) => return Err(common::Interrupted::Nothing.into()),
+        Err(e) => return Err(e.into()),
+    };
     log::info!(
         "{}: {} spp (samples {}..{}), {} resumed from a checkpoint, {} chunks",
         job.output.display(),

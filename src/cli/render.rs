@@ -162,6 +162,8 @@ fn describe_sample(x: u32, y: u32, sample: u32, rgb: [f32; 3]) -> String {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    // Signals from here on stop the run cleanly (the default would kill it unsaved).
+    let _ = common::cancel_flag();
     let spp = args
         .spp
         .unwrap_or(if args.time.is_some() { u64::MAX } else { 16 });
@@ -358,10 +360,13 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
     let stats = outcome.stats;
     let film = outcome.film.clone();
     let done = film.spp;
-    anyhow::ensure!(
-        done > 0,
-        "interrupted before the first sample finished; nothing written"
-    );
+    let interrupted = cancel.load(std::sync::atomic::Ordering::SeqCst);
+    if done == 0 {
+        if interrupted {
+            return Err(common::Interrupted::Nothing.into());
+        }
+        anyhow::bail!("no sample finished within the budget; nothing written");
+    }
     if let Some(g) = &outcome.guiding {
         report_guiding(g, outcome.training_seconds);
         if let Some(path) = &args.save_guiding {
@@ -482,6 +487,23 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
             .map(|p| format!(" and {}", p.display()))
             .unwrap_or_default()
     );
+    if interrupted && !args.watch {
+        let training = outcome
+            .guiding
+            .as_ref()
+            .is_some_and(|g| g.interrupted_in_training);
+        return Err(common::Interrupted::Saved(format!(
+            "wrote the {} spp finished{} to {}",
+            film.spp,
+            if training {
+                " (of the last training pass)"
+            } else {
+                ""
+            },
+            output.display()
+        ))
+        .into());
+    }
     Ok(())
 }
 

@@ -45,6 +45,10 @@ pub struct GuidingOutcome {
     pub iterations: Vec<IterationStats>,
     /// The trained (or loaded) tree, as the final render used it.
     pub tree: SdTree,
+    /// The run was interrupted while training: there was no render phase, and the film
+    /// is the last training pass (rendered with one fixed tree, so still a consistent
+    /// image of its sample range), the tree the one trained so far.
+    pub interrupted_in_training: bool,
 }
 
 /// Pixels of the 1280×720 images Müller et al. tuned the spatial threshold c for.
@@ -164,6 +168,27 @@ pub fn run_guided(
         }
     };
     let training_seconds = started.elapsed().as_secs_f64();
+    if cancel.load(Ordering::SeqCst) {
+        // Keep what is consistent: the last training pass's film (still in the film
+        // buffer) and the tree so far, rather than nothing.
+        if iterations.is_empty() {
+            renderer.clear_film()?;
+        }
+        let film = renderer.film()?;
+        let combined = (combine && !passes.is_empty()).then(|| combine_passes(&passes));
+        return Ok(RunOutcome {
+            film,
+            stats,
+            seconds: started.elapsed().as_secs_f64(),
+            training_seconds,
+            guiding: Some(GuidingOutcome {
+                iterations,
+                tree,
+                interrupted_in_training: true,
+            }),
+            combined,
+        });
+    }
     let upload = Instant::now();
     renderer.set_guide_buffers(GuideBuffers::upload(&renderer.device, &tree.gpu_arrays())?);
     log::debug!(
@@ -259,7 +284,11 @@ pub fn run_guided(
         stats,
         seconds: started.elapsed().as_secs_f64(),
         training_seconds,
-        guiding: Some(GuidingOutcome { iterations, tree }),
+        guiding: Some(GuidingOutcome {
+            iterations,
+            tree,
+            interrupted_in_training: false,
+        }),
         combined,
     };
     Ok(out)
