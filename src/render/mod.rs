@@ -9,6 +9,7 @@
 mod film;
 mod gpu_scene;
 mod guided;
+mod limits;
 pub mod run;
 pub mod session;
 mod settings;
@@ -214,6 +215,7 @@ impl Renderer {
         shaders: ShaderSource,
     ) -> Result<Renderer> {
         settings.validate()?;
+        limits::check_image_size(&device, &settings)?;
         let gpu_scene = GpuScene::upload(&device, scene, lights)?;
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
         let pixels = settings.width as u64 * settings.height as u64;
