@@ -1,7 +1,7 @@
 //! Which files are the same file: by device and inode where a file exists (hard links,
 //! symlinks, `./a` vs `a`), else by canonical path. A [`FilePlan`] lists what a run will
 //! read and write and refuses, before anything is rendered, an output that is one of its
-//! inputs or another of its outputs.
+//! inputs or another of its outputs, or that no write could replace.
 
 use super::FileError;
 use std::path::{Path, PathBuf};
@@ -110,9 +110,11 @@ impl FilePlan {
         self
     }
 
-    /// Refuses an output that is an input or an earlier output.
+    /// Refuses an output that is an input or an earlier output, or that a write would
+    /// refuse (a directory, FIFO, device: so the run fails before its work, not after).
     pub fn check(&self) -> Result<(), FileError> {
         for (i, out) in self.outputs.iter().enumerate() {
+            super::write::resolve_target(&out.path)?;
             let clash = self
                 .inputs
                 .iter()

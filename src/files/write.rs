@@ -41,7 +41,7 @@ pub fn write_all_atomically(files: &[(&Path, &[u8])]) -> Result<(), FileError> {
 
 /// The file a write to `path` replaces: `path` itself, or the regular file a symlink at
 /// `path` points to. Refuses directories, FIFOs, devices, sockets and dangling links.
-fn resolve_target(path: &Path) -> Result<PathBuf, FileError> {
+pub(super) fn resolve_target(path: &Path) -> Result<PathBuf, FileError> {
     if path.file_name().is_none() {
         return Err(FileError::IsDirectory {
             path: path.to_path_buf(),
