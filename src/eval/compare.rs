@@ -211,8 +211,11 @@ impl CompareConfig {
         if !self.spp.windows(2).all(|w| w[0] < w[1]) {
             return bad("spp budgets must be strictly increasing".into());
         }
-        if self.seconds.iter().any(|s| !s.is_finite() || *s <= 0.0) {
-            return bad("time budgets must be positive numbers of seconds".into());
+        let max = crate::render::run::MAX_SECONDS;
+        if self.seconds.iter().any(|s| !(*s > 0.0 && *s <= max)) {
+            return bad(format!(
+                "time budgets must be positive numbers of seconds, at most {max:e}"
+            ));
         }
         if !self.seconds.windows(2).all(|w| w[0] < w[1]) {
             return bad("time budgets must be strictly increasing".into());

@@ -129,6 +129,8 @@ pub fn run_guided(
                             &mut stats,
                             combine.then_some(&mut passes),
                         )?;
+                        // None: interrupted before it rendered anything.
+                        let Some(it) = it else { break };
                         sample += it.spp;
                         progress(sample - first);
                         iterations.push(it);
@@ -156,6 +158,8 @@ pub fn run_guided(
                             &mut stats,
                             combine.then_some(&mut passes),
                         )?;
+                        // None: interrupted before it rendered anything.
+                        let Some(it) = it else { break };
                         sample += it.spp;
                         progress(sample - first);
                         iterations.push(it);
@@ -307,11 +311,15 @@ fn train_iteration(
     cancel: &AtomicBool,
     stats: &mut RenderStats,
     passes: Option<&mut Vec<(Vec<f32>, f64)>>,
-) -> Result<IterationStats> {
+) -> Result<Option<IterationStats>> {
     let t = Instant::now();
     renderer.set_guide_buffers(GuideBuffers::upload(&renderer.device, &tree.gpu_arrays())?);
     let mut upload_seconds = t.elapsed().as_secs_f64();
 
+    // Interrupted already: keep the film of the previous pass (clearing would lose it).
+    if cancel.load(Ordering::SeqCst) {
+        return Ok(None);
+    }
     renderer.clear_film()?;
     let gpu_before = stats.gpu_seconds;
     let t = Instant::now();
@@ -322,6 +330,10 @@ fn train_iteration(
         spp
     };
     let mut done = renderer.render_samples(sample, split, true, cancel, &mut |_| {}, stats)?;
+    if done == 0 {
+        // Interrupted before the first sample: no data to refit from.
+        return Ok(None);
+    }
     let mut half = None;
     if split < spp {
         half = Some(renderer.film()?);
@@ -389,7 +401,7 @@ fn train_iteration(
         it.training_nodes,
         it.gpu_bytes as f64 / 1024.0
     );
-    Ok(it)
+    Ok(Some(it))
 }
 
 /// Mean pixel variance of the image of `total`, estimated from its first part `first`:

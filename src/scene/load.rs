@@ -437,6 +437,18 @@ fn load_primitive(
         gltf_check::check_accessor(root, accessor.index(), Role::Indices, max_bytes)
             .map_err(|e| format!("{name}: {e}"))?;
     }
+    // Reading holds every attribute and the index list as temporary arrays, about
+    // twice the final vertices and indices: refuse before, not after, allocating them.
+    let vertex_count = prim
+        .get(&gltf::Semantic::Positions)
+        .map_or(0, |a| a.count() as u64);
+    let index_count = prim.indices().map_or(vertex_count, |a| a.count() as u64);
+    let reading = 2 * (vertex_count * std::mem::size_of::<gpu::Vertex>() as u64 + index_count * 4);
+    if reading > out.budget.left() {
+        return Err(format!(
+            "{name}: {vertex_count} vertices and {index_count} indices would take the scene past the input limit"
+        ));
+    }
     let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
     let positions: Vec<[f32; 3]> = reader
         .read_positions()
