@@ -19,7 +19,7 @@
 //! place, so a crash never leaves a half-written image under the final name.
 
 use std::collections::BTreeMap;
-use std::io::{Cursor, Write};
+use std::io::Cursor;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -45,11 +45,9 @@ pub const SAMPLE_RANGES_KEY: &str = "sample_ranges";
 pub enum ImageError {
     #[error("{}: file not found", path.display())]
     NotFound { path: PathBuf },
-    #[error("{}: {source}", path.display())]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    /// Reading or writing the file failed (it names the file and says why).
+    #[error(transparent)]
+    File(#[from] crate::files::FileError),
     #[error("{}: not an OpenEXR file ({reason})", path.display())]
     NotExr { path: PathBuf, reason: String },
     #[error("{}: missing channel(s) {missing} (channels present: {present})", path.display())]
@@ -403,35 +401,10 @@ fn summarize(image: &Image, path: &Path) -> WriteSummary {
     }
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
+/// Writes `bytes` to `path` through a temporary file in the same directory and a rename
+/// (the rules are [`crate::files::write_atomically`]'s).
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), ImageError> {
-    let io = |source| ImageError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = path
-        .file_name()
-        .ok_or_else(|| ImageError::Invalid {
-            path: path.to_path_buf(),
-            problem: "not a file name".into(),
-        })?
-        .to_string_lossy();
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = (|| {
-        let mut file = std::fs::File::create(&tmp)?;
-        file.write_all(bytes)?;
-        file.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(io(e));
-    }
-    Ok(())
+    Ok(crate::files::write_atomically(path, bytes)?)
 }
 
 fn text(s: &str) -> x::Text {
@@ -569,21 +542,19 @@ pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
         path: pathbuf.clone(),
         problem,
     };
-    let bytes = std::fs::read(path).map_err(|source| match source.kind() {
-        std::io::ErrorKind::NotFound => ImageError::NotFound {
-            path: pathbuf.clone(),
-        },
-        _ => ImageError::Io {
-            path: pathbuf.clone(),
-            source,
-        },
+    use crate::files::{max_input_bytes, read_input, FileError, Start};
+    let bytes = read_input(path, max_input_bytes(), &|start| {
+        if start.len() < 4 || start[..4] != [0x76, 0x2f, 0x31, 0x01] {
+            Err("no OpenEXR magic number".into())
+        } else {
+            Ok(Start::Continue)
+        }
+    })
+    .map_err(|e| match e {
+        FileError::NotFound { path } => ImageError::NotFound { path },
+        FileError::Format { path, reason } => ImageError::NotExr { path, reason },
+        e => ImageError::File(e),
     })?;
-    if bytes.len() < 4 || bytes[..4] != [0x76, 0x2f, 0x31, 0x01] {
-        return Err(ImageError::NotExr {
-            path: pathbuf.clone(),
-            reason: "no OpenEXR magic number".into(),
-        });
-    }
     let file = x::read()
         .no_deep_data()
         .largest_resolution_level()

@@ -10,6 +10,7 @@
 
 pub mod bench;
 pub mod eval;
+pub mod files;
 pub mod gpu;
 pub mod guiding;
 pub mod image_io;

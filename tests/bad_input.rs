@@ -265,7 +265,10 @@ fn guided_methods_refuse_paths_longer_than_their_records() {
     };
     let (ok, stderr) = run("guided");
     assert!(!ok, "guided at depth 18 rendered");
-    assert!(stderr.contains("--max-depth 18") && stderr.contains("17"), "{stderr}");
+    assert!(
+        stderr.contains("--max-depth 18") && stderr.contains("17"),
+        "{stderr}"
+    );
     assert!(!out.exists());
     let (ok, stderr) = run("pt");
     assert!(ok, "{stderr}");

@@ -411,3 +411,53 @@ fn zero_spp_and_bad_sums_are_errors() {
         "{e}"
     );
 }
+
+/// `--resume` with a finished reference and no checkpoint continues from the file's exact
+/// sums (bit-identical to rendering the larger count at once), does nothing to a complete
+/// one, and refuses, untouched, one of another render. Guards the defect of issue 14: the
+/// resume started over and overwrote a 4096-spp reference with 64 spp (injected once:
+/// with the finished output skipped when there is no checkpoint, the first resume
+/// renders samples 0..4 again and the test fails).
+#[test]
+fn resume_continues_a_finished_reference_or_leaves_it_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut j = job(dir.path(), "ref.exr", 4, ChunkPolicy::Fixed(4));
+    render_reference(
+        &mut Fake::new(3),
+        &j,
+        &AtomicBool::new(false),
+        &mut no_progress(),
+    )
+    .unwrap();
+    let four = std::fs::read(&j.output).unwrap();
+
+    // Same count: complete already, the file is not rewritten.
+    j.resume = true;
+    let mut r = Fake::new(3);
+    let out = render_reference(&mut r, &j, &AtomicBool::new(false), &mut no_progress()).unwrap();
+    assert!(r.calls.is_empty(), "rendered {:?}", r.calls);
+    assert_eq!(out.resumed_samples, 4);
+    assert_eq!(std::fs::read(&j.output).unwrap(), four);
+
+    // Another seed: refused, the file untouched.
+    let e = render_reference(
+        &mut Fake::new(9),
+        &j,
+        &AtomicBool::new(false),
+        &mut no_progress(),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(e, ReferenceError::BadCheckpoint { .. }) && e.to_string().contains("seed"),
+        "{e}"
+    );
+    assert_eq!(std::fs::read(&j.output).unwrap(), four);
+
+    // More samples: only the new ones are rendered, and the result is the one-shot's.
+    j.spp = 10;
+    let mut r = Fake::new(3);
+    let out = render_reference(&mut r, &j, &AtomicBool::new(false), &mut no_progress()).unwrap();
+    assert_eq!(out.resumed_samples, 4);
+    assert_eq!(r.calls, vec![4..8, 8..10]);
+    assert_eq!(bits(&out.image), bits(&one_shot(dir.path(), 10)));
+}

@@ -29,10 +29,14 @@ fn fraction_toward_lamp(record_nee: bool) -> f64 {
             ..Options::default()
         },
     );
+    let base = testing::settings(Method::GuidedRis, 48, 48);
     let settings = RenderSettings {
         max_depth: 2,
-        record_nee,
-        ..testing::settings(Method::GuidedRis, 48, 48)
+        guiding: lanterna::render::GuidingSettings {
+            record_nee,
+            ..base.guiding.clone()
+        },
+        ..base
     };
     let lights = LightTable::build(&ts.scene).unwrap();
     let mut r = Renderer::new(

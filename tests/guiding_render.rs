@@ -146,7 +146,7 @@ fn inverse_variance_combination_agrees_with_pt() {
     let a = render_batches(&t.scene, &t.camera, pt, 12, 64);
     let mut s = testing::settings(Method::GuidedRis, 16, 16);
     s.seed = 42;
-    s.guided_output = lanterna::render::GuidedOutput::InverseVariance;
+    s.guiding.output = lanterna::render::GuidedOutput::InverseVariance;
     let b = run_batches(&t.scene, &t.camera, s, 12, 64);
     testing::assert_same_expectation(&a, &b, 4, ALPHA);
     testing::assert_no_validation_errors();

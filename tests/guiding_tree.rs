@@ -194,7 +194,7 @@ fn load_refuses_bad_files() {
     assert!(matches!(err, GuidingError::Corrupt { .. }), "{err}");
 
     let err = SdTree::load(&dir.path().join("missing.sdt"), scene_hash()).unwrap_err();
-    assert!(matches!(err, GuidingError::Io { .. }), "{err}");
+    assert!(matches!(err, GuidingError::File(_)), "{err}");
 }
 
 #[test]
@@ -277,4 +277,74 @@ fn light_tables_normalise_and_follow_splits() {
         tree.load_light_readback(&slots).is_err(),
         "wrong slot count is refused"
     );
+}
+
+/// A crafted tree file whose checksum is recomputed after the edit: the checksum cannot
+/// catch it, so the loader must check the sums themselves. Guards issue 14's "overflowing
+/// sums lose all indirect light" (injected once each: without the overflow check in
+/// `QuadTree::from_nodes` the first load succeeds and the test fails; without
+/// `check_sums_consistent` the second does).
+#[test]
+fn load_refuses_crafted_sums_behind_a_valid_checksum() {
+    use lanterna::gpu::{GuideHeader, GuideLeaf, GuideQuadNode, GuideSpatialNode};
+    use std::mem::size_of;
+    let dir = tempfile::tempdir().unwrap();
+    let tree = grown_tree();
+    let path = dir.path().join("tree.sdt");
+    tree.save(&path, scene_hash(), BBOX).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    // The fixed part of the format (io.rs): magic, version, hash, iterations, box, the
+    // options, then the five counts; then the header, spatial nodes, leaves, sampling.
+    let counts_at = 16 + 4 + 8 + 4 + 24 + 48;
+    let count = |i: usize| {
+        let at = counts_at + 4 * i;
+        u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize
+    };
+    let sampling_at = counts_at
+        + 20
+        + size_of::<GuideHeader>()
+        + count(0) * size_of::<GuideSpatialNode>()
+        + count(1) * size_of::<GuideLeaf>();
+    let node = size_of::<GuideQuadNode>();
+    let with_checksum = |mut body: Vec<u8>| {
+        body.truncate(body.len() - 8);
+        let sum = SceneHasher::default().update(&body).finish();
+        body.extend_from_slice(&sum.to_le_bytes());
+        body
+    };
+    let training_at = sampling_at + count(2) * node;
+    let edit = |name: &str, array_at: usize, f: &dyn Fn(&mut [u8])| {
+        let mut b = bytes.clone();
+        f(&mut b[array_at..]);
+        let p = dir.path().join(name);
+        std::fs::write(&p, with_checksum(b)).unwrap();
+        match SdTree::load(&p, scene_hash()) {
+            Ok(_) => panic!("{name} loaded"),
+            Err(e) => e,
+        }
+    };
+
+    // Every sum of the root of leaf 0's training tree (node 1: node 0 is its header),
+    // whose sums are not otherwise related, near f32::MAX: each finite, the total not.
+    let err = edit("huge.sdt", training_at + node, &|s| {
+        for q in 0..4 {
+            s[4 * q..4 * q + 4].copy_from_slice(&3.0e38f32.to_le_bytes());
+        }
+    });
+    assert!(matches!(err, GuidingError::Corrupt { .. }), "{err}");
+    assert!(err.to_string().contains("sums overflow"), "{err}");
+
+    // One interior quadrant's sum no longer its subtree's total.
+    let err = edit("inconsistent.sdt", sampling_at, &|s| {
+        let nodes: Vec<GuideQuadNode> = bytemuck::pod_collect_to_vec(&s[..count(2) * node]);
+        let (n, q) = nodes
+            .iter()
+            .enumerate()
+            .find_map(|(n, g)| g.child.iter().position(|&c| c != 0).map(|q| (n, q)))
+            .expect("an interior quadrant");
+        let at = n * node + 4 * q;
+        let v = f32::from_le_bytes(s[at..at + 4].try_into().unwrap());
+        s[at..at + 4].copy_from_slice(&(v * 3.0 + 1.0).to_le_bytes());
+    });
+    assert!(err.to_string().contains("sums to"), "{err}");
 }

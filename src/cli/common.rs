@@ -2,12 +2,15 @@
 //! bench), and the setup they all do from them.
 
 use anyhow::{Context, Result};
+use lanterna::files::FilePlan;
 use lanterna::render::session::{self, DeviceOptions, LoadedScene};
-use lanterna::render::{GuidedOutput, LightSource, Method, RenderSettings, Strategy};
-use lanterna::scene::Camera;
+use lanterna::render::{
+    GuidedOutput, GuidingSettings, LightSource, Method, RenderSettings, Strategy,
+};
+use lanterna::scene::{Camera, CameraOverride, LoadOptions};
 use lanterna::shaders::ShaderSource;
 use lanterna::vk::DeviceSelector;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The scene and the view.
@@ -30,6 +33,18 @@ pub struct SceneArgs {
     /// Image height (default: from the width and the camera's aspect ratio).
     #[arg(long)]
     pub height: Option<u32>,
+    /// Follow buffer and image URIs that lead outside the scene's folder (absolute
+    /// paths, `..`, `file:` URIs, symlinks out); by default they are refused.
+    #[arg(long)]
+    pub allow_outside_uris: bool,
+}
+
+impl SceneArgs {
+    pub fn load_options(&self) -> LoadOptions {
+        LoadOptions {
+            allow_outside_uris: self.allow_outside_uris,
+        }
+    }
 }
 
 fn parse_look_at(s: &str) -> Result<[f32; 6], String> {
@@ -93,8 +108,9 @@ pub struct MethodArgs {
 }
 
 impl MethodArgs {
-    pub fn settings(&self, width: u32, height: u32) -> RenderSettings {
-        self.estimator.settings(self.method, width, height)
+    /// The settings of these options, the image size still to be set (see `prepare`).
+    pub fn settings(&self) -> RenderSettings {
+        self.estimator.settings(self.method, 0, 0)
     }
 }
 
@@ -181,7 +197,10 @@ pub enum DirectionalFilterArg {
 }
 
 impl EstimatorArgs {
+    /// The settings these options ask for (not validated yet: `common::prepare` and
+    /// the renderer do that).
     pub fn settings(&self, method: Method, width: u32, height: u32) -> RenderSettings {
+        use lanterna::guiding::{DirectionalFilter, SpatialFilter};
         RenderSettings {
             method,
             width,
@@ -191,55 +210,122 @@ impl EstimatorArgs {
             seed: self.seed,
             source: self.source,
             ris_candidates: self.ris_candidates,
-            bsdf_fraction: self.bsdf_fraction,
-            train_fraction: self.train_fraction,
-            record_nee: !self.no_record_nee,
             strategy: self.strategy,
             hide_emitters: self.hide_emitters,
-            guided_output: self.guided_output,
-            spatial_jitter: self.spatial_filter == SpatialFilterArg::Jitter,
-            directional_box: self.directional_filter == DirectionalFilterArg::Box,
-            guiding: lanterna::render::GuidingSettings {
+            guiding: GuidingSettings {
+                bsdf_fraction: self.bsdf_fraction,
+                train_fraction: self.train_fraction,
+                record_nee: !self.no_record_nee,
+                spatial_filter: match self.spatial_filter {
+                    SpatialFilterArg::Jitter => SpatialFilter::StochasticBox,
+                    SpatialFilterArg::Nearest => SpatialFilter::Nearest,
+                },
+                directional_filter: match self.directional_filter {
+                    DirectionalFilterArg::Box => DirectionalFilter::Box,
+                    DirectionalFilterArg::Nearest => DirectionalFilter::Nearest,
+                },
                 spatial_threshold: self.guiding_threshold,
                 memory_cap_bytes: self.guiding_memory.saturating_mul(1 << 20),
                 learn_lights: self.learn_lights,
                 light_mix: self.light_mix,
+                output: self.guided_output,
             },
             ..RenderSettings::default()
         }
     }
 }
 
-/// Load the scene and choose the view.
+/// Load the scene and choose the view: the camera and the image size.
 pub fn load(args: &SceneArgs) -> Result<(LoadedScene, Camera, u32, u32)> {
-    let loaded = session::load_scene(&args.scene)?;
-    let view = session::ViewOptions {
-        camera: args.camera.clone(),
-        look_at: args.look_at,
-        fov: args.fov,
-        width: args.width,
-        height: args.height,
+    let loaded = session::load_scene_with(&args.scene, &args.load_options())?;
+    let o = CameraOverride {
+        look_at: args.look_at.map(|v| {
+            (
+                glam::Vec3::new(v[0], v[1], v[2]),
+                glam::Vec3::new(v[3], v[4], v[5]),
+            )
+        }),
+        up: None,
+        fov_degrees: args.fov,
     };
-    let (camera, w, h) = session::choose_view(&loaded.scene, &view)?;
+    let camera = session::choose_camera(&loaded.scene, args.camera.as_deref(), &o)?;
+    let (w, h) = session::resolution(&camera, args.width, args.height);
     Ok((loaded, camera, w, h))
+}
+
+/// What a rendering command starts from: the scene, the view, and the settings completed
+/// with the view's size and fov and validated (the one check every command goes through;
+/// the renderer repeats it).
+pub fn prepare(
+    args: &SceneArgs,
+    mut settings: RenderSettings,
+) -> Result<(LoadedScene, Camera, RenderSettings)> {
+    settings.fov_degrees = args.fov;
+    let (loaded, camera, width, height) = load(args)?;
+    settings.width = width;
+    settings.height = height;
+    settings.validate()?;
+    Ok((loaded, camera, settings))
+}
+
+/// Refuses a run whose outputs include one of its inputs (the scene, the files its
+/// URIs name, `inputs`) or the same file twice, before anything is rendered.
+pub fn check_outputs(
+    scene: &SceneArgs,
+    loaded: &LoadedScene,
+    inputs: &[(&str, &Path)],
+    outputs: &[(&str, &Path)],
+) -> Result<()> {
+    let mut plan = FilePlan::new();
+    plan.input("the scene", &scene.scene)
+        .inputs("a file the scene uses", &loaded.scene.files);
+    for (what, path) in inputs {
+        plan.input(what, path);
+    }
+    for (what, path) in outputs {
+        plan.output(what, path);
+    }
+    Ok(plan.check()?)
 }
 
 static CANCELLED: AtomicBool = AtomicBool::new(false);
 
-/// Ctrl-C stops the render at the next chunk boundary (the image is still written); a
-/// second Ctrl-C exits at once.
+/// Exit status of a run stopped by SIGINT, SIGTERM or SIGHUP that wrote its partial
+/// result (render: the image of the samples finished; reference: its checkpoint):
+/// EX_TEMPFAIL, "try again" — `reference --resume` continues where it stopped.
+pub const EXIT_INTERRUPTED_SAVED: u8 = 75;
+/// Exit status of a run interrupted before anything could be written (or by a second
+/// signal, which exits at once): 128 + SIGINT, as shells report it.
+pub const EXIT_INTERRUPTED_NOTHING: u8 = 130;
+
+/// A run ended by a signal; `main` turns it into one of the two exit statuses above.
+#[derive(Debug, thiserror::Error)]
+pub enum Interrupted {
+    /// The partial result was written; the text says what and where.
+    #[error("interrupted: {0}")]
+    Saved(String),
+    #[error("interrupted before the first sample finished; nothing written")]
+    Nothing,
+}
+
+/// SIGINT (Ctrl-C), SIGTERM (what cluster schedulers send at the time limit) and SIGHUP
+/// stop the render at the next chunk boundary, and what is consistent is still written;
+/// a second signal exits at once without writing.
 pub fn cancel_flag() -> &'static AtomicBool {
     static INSTALLED: std::sync::Once = std::sync::Once::new();
     INSTALLED.call_once(|| {
-        let _ = ctrlc::set_handler(|| {
+        let installed = ctrlc::set_handler(|| {
             if CANCELLED.swap(true, Ordering::SeqCst) {
                 eprintln!("\ninterrupted twice: exiting without writing");
-                std::process::exit(130);
+                std::process::exit(i32::from(EXIT_INTERRUPTED_NOTHING));
             }
             eprintln!(
                 "\ninterrupted: finishing the current chunk and writing what has been rendered"
             );
         });
+        if let Err(e) = installed {
+            log::warn!("cannot handle interruption signals ({e}): they will end the run at once");
+        }
     });
     &CANCELLED
 }
@@ -268,8 +354,7 @@ pub fn render_meta(
     )
 }
 
-/// The image a run outputs: the film's exact sums, or the inverse-variance combination
-/// of a guided run.
+/// The image a run outputs (see `lanterna::render::output::outcome_image`).
 pub fn outcome_image(
     out: &lanterna::render::run::RunOutcome,
     width: u32,

@@ -8,10 +8,12 @@ use std::time::Instant;
 
 use super::common::{self, DeviceArgs, EstimatorArgs, SceneArgs};
 use anyhow::Context;
-use lanterna::eval::compare::{run_compare, CompareConfig, Crop, METHODS};
+use lanterna::eval::compare::{
+    run_compare, Budget, CompareConfig, Crop, MethodResult, MethodRunner, METHODS,
+};
+use lanterna::eval::BoxError;
 use lanterna::image_io::{read_exr, Image};
-use lanterna::render::runner::CompareRunner;
-use lanterna::render::{session, Method, Renderer};
+use lanterna::render::{run, session, Method, RenderSettings, Renderer};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -77,21 +79,99 @@ pub fn config(args: &Args) -> CompareConfig {
 /// Reads and checks the reference against the arguments.
 pub fn load_reference(args: &Args, config: &CompareConfig) -> anyhow::Result<Image> {
     let reference = read_exr(&args.reference).context("reading the reference")?;
-    config.check_reference(&reference, args.estimator.max_depth)?;
+    config.validate(&reference)?;
+    reference.check_finite(&args.reference.display().to_string())?;
+    if let Some(depth) = reference.meta.max_depth {
+        if depth != args.estimator.max_depth {
+            anyhow::bail!(
+                "{} was rendered with max depth {depth}, but --max-depth is {}",
+                args.reference.display(),
+                args.estimator.max_depth
+            );
+        }
+    }
     Ok(reference)
 }
 
-pub fn run(args: Args) -> anyhow::Result<()> {
-    let config = config(&args);
-    let reference = load_reference(&args, &config)?;
-    if !args.view.scene.exists() {
-        anyhow::bail!("scene {} not found", args.view.scene.display());
+/// The GPU renderer behind the comparison: one scene on the device, the method switched
+/// per run.
+struct GpuRunner {
+    renderer: Renderer,
+    /// The settings of every run, but for the method.
+    settings: RenderSettings,
+    setup_seconds: f64,
+    meta: lanterna::image_io::RenderMeta,
+    cancel: &'static std::sync::atomic::AtomicBool,
+}
+
+impl MethodRunner for GpuRunner {
+    fn render(&mut self, method: &str, budget: Budget) -> Result<MethodResult, BoxError> {
+        let method: Method = method.parse()?;
+        let (w, h) = (self.renderer.settings.width, self.renderer.settings.height);
+        let settings = RenderSettings {
+            method,
+            ..self.settings.clone()
+        };
+        self.renderer.set_settings(settings)?;
+        let prep = Instant::now();
+        self.renderer.prepare()?;
+        log::debug!(
+            "{method}: pipelines ready in {:.1} s",
+            prep.elapsed().as_secs_f64()
+        );
+        let budget = match budget {
+            Budget::Spp(n) => run::Budget::Spp(n),
+            Budget::Seconds(s) => run::Budget::Seconds(s),
+        };
+        let out = run::run_method(&mut self.renderer, budget, 0, self.cancel, &mut |_| {})?;
+        if self.cancel.load(std::sync::atomic::Ordering::SeqCst) {
+            return Err("interrupted".into());
+        }
+        let mut meta = self.meta.clone();
+        meta.method = Some(method.name().to_string());
+        meta.render_seconds = Some(out.seconds);
+        let image = common::outcome_image(&out, w, h, meta)?;
+        log::info!(
+            "{method} {budget:?}: {} spp in {:.2} s",
+            out.film.spp,
+            out.seconds
+        );
+        Ok(MethodResult {
+            spp: out.film.spp,
+            render_seconds: out.seconds,
+            setup_seconds: self.setup_seconds,
+            gpu_seconds: Some(out.stats.gpu_seconds),
+            training_seconds: method.uses_guiding().then_some(out.training_seconds),
+            image,
+        })
     }
+}
+
+fn open_runner(args: &Args, reference: &Image) -> anyhow::Result<Box<dyn MethodRunner>> {
     let started = Instant::now();
     let mut view = args.view.clone();
     view.width = Some(view.width.unwrap_or(reference.width));
     view.height = Some(view.height.unwrap_or(reference.height));
-    let (loaded, camera, width, height) = common::load(&view)?;
+    let first = args
+        .methods
+        .first()
+        .map(|m| m.parse::<Method>())
+        .transpose()
+        .map_err(anyhow::Error::msg)?;
+    let mut settings = args.estimator.settings(first.unwrap_or(Method::Pt), 0, 0);
+    settings.exposure = args.exposure;
+    let (loaded, camera, settings) = common::prepare(&view, settings)?;
+    let outputs = config(args).output_files();
+    let outputs: Vec<(&str, &std::path::Path)> = outputs
+        .iter()
+        .map(|p| ("a report file", p.as_path()))
+        .collect();
+    common::check_outputs(
+        &view,
+        &loaded,
+        &[("--reference", &args.reference)],
+        &outputs,
+    )?;
     if let Some(hash) = &reference.meta.scene_hash {
         if *hash != loaded.scene.hash {
             log::warn!(
@@ -103,33 +183,32 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let device =
         session::open_device(&args.device.options()).context("cannot open a Vulkan device")?;
-    let first = args
-        .methods
-        .first()
-        .map(|m| m.parse::<Method>())
-        .transpose()
-        .map_err(anyhow::Error::msg)?;
-    let base = args
-        .estimator
-        .settings(first.unwrap_or(Method::Pt), width, height);
-    let mut renderer = Renderer::new(
+    let renderer = Renderer::new(
         device.clone(),
         &loaded.scene,
         &loaded.lights,
         camera,
-        base.clone(),
+        settings.clone(),
         args.device.shaders(),
     )?;
     let meta = common::render_meta(&renderer.settings, &view, &loaded.scene.hash, &device);
-    let mut runner = CompareRunner {
-        renderer: &mut renderer,
-        base,
+    Ok(Box::new(GpuRunner {
+        renderer,
+        settings,
         setup_seconds: started.elapsed().as_secs_f64(),
         meta,
         cancel: common::cancel_flag(),
-        progress: &mut |_| {},
-    };
-    let report = run_compare(&mut runner, &reference, &config)?;
+    }))
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let config = config(&args);
+    let reference = load_reference(&args, &config)?;
+    if !args.view.scene.exists() {
+        anyhow::bail!("scene {} not found", args.view.scene.display());
+    }
+    let mut runner = open_runner(&args, &reference)?;
+    let report = run_compare(runner.as_mut(), &reference, &config)?;
     log::info!(
         "{} renders compared; report in {}",
         report.records.len(),

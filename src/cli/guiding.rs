@@ -5,8 +5,9 @@
 use super::common::{self, DeviceArgs, SceneArgs};
 use anyhow::{Context, Result};
 use lanterna::guiding::SdTree;
-use lanterna::render::session;
+use lanterna::render::{session, Method, RenderSettings, RenderStats, Renderer};
 use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
 
 #[derive(clap::Subcommand)]
 pub enum Command {
@@ -29,8 +30,9 @@ pub struct ViewArgs {
     /// Output PNG of the (cosθ, φ) square: u = (cosθ+1)/2 to the right, v = φ/2π down.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Size of the image in pixels.
-    #[arg(long, default_value_t = 512)]
+    /// Size of the image in pixels (at most 4096: the view is a picture of one leaf, and
+    /// 4096² already takes 200 MB).
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub size: u32,
 }
 
@@ -42,6 +44,12 @@ pub fn run(command: Command) -> Result<()> {
 
 fn view(args: ViewArgs) -> Result<()> {
     let (loaded, camera, width, height) = common::load(&args.scene)?;
+    common::check_outputs(
+        &args.scene,
+        &loaded,
+        &[("--load-guiding", &args.load_guiding)],
+        &[("the PNG (-o)", &args.output)],
+    )?;
     let (x, y) = args.pixel;
     anyhow::ensure!(
         x < width && y < height,
@@ -49,20 +57,46 @@ fn view(args: ViewArgs) -> Result<()> {
     );
     let tree = SdTree::load(
         &args.load_guiding,
-        lanterna::guiding::scene_hash_number(&loaded.scene.hash),
+        u64::from_str_radix(&loaded.scene.hash, 16).unwrap_or(0),
     )?;
+
+    // The first hit: the position AOV of a few samples of the pixel.
     let device =
         session::open_device(&args.device.options()).context("cannot open a Vulkan device")?;
-    let pos = session::first_hit(
-        &device,
-        &loaded,
-        camera,
+    let settings = RenderSettings {
+        method: Method::Pt,
         width,
         height,
-        (x, y),
+        max_depth: 1,
+        fov_degrees: args.scene.fov,
+        aovs: true,
+        ..RenderSettings::default()
+    };
+    settings.validate()?;
+    let mut r = Renderer::new(
+        device,
+        &loaded.scene,
+        &loaded.lights,
+        camera,
+        settings,
         args.device.shaders(),
-    )?
-    .with_context(|| format!("pixel ({x}, {y}) sees no surface"))?;
+    )?;
+    let mut stats = RenderStats::default();
+    r.render_samples(
+        0,
+        4,
+        false,
+        &AtomicBool::new(false),
+        &mut |_| {},
+        &mut stats,
+    )?;
+    let aov = r.aovs()?;
+    let n = lanterna::gpu::AOV_CHANNELS as usize;
+    let px = &aov[(y * width + x) as usize * n..][..n];
+    let depth = px[lanterna::gpu::AOV_DEPTH as usize];
+    anyhow::ensure!(depth > 0.0, "pixel ({x}, {y}) sees no surface");
+    let p = lanterna::gpu::AOV_POSITION as usize;
+    let pos = glam::Vec3::new(px[p], px[p + 1], px[p + 2]);
 
     let v = tree.leaf_view(pos, args.size);
     let rgb8: Vec<u8> = v

@@ -14,17 +14,21 @@ pub struct Args {
     /// Print as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Follow buffer and image URIs that lead outside the scene's folder.
+    #[arg(long)]
+    pub allow_outside_uris: bool,
 }
 
 pub fn run(args: Args) -> Result<()> {
     match &args.scene {
-        Some(path) => scene_info(path, args.json),
+        Some(path) => scene_info(path, args.json, args.allow_outside_uris),
         None => device_info(args.json),
     }
 }
 
-fn scene_info(path: &std::path::Path, json: bool) -> Result<()> {
-    let loaded = session::load_scene(path)?;
+fn scene_info(path: &std::path::Path, json: bool, allow_outside_uris: bool) -> Result<()> {
+    let options = lanterna::scene::LoadOptions { allow_outside_uris };
+    let loaded = session::load_scene_with(path, &options)?;
     let stats = SceneStats::new(&loaded.scene, &loaded.lights);
     if json {
         println!("{}", serde_json::to_string_pretty(&stats)?);

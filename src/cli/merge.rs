@@ -18,6 +18,10 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
+    let mut plan = lanterna::files::FilePlan::new();
+    plan.inputs("an input", &args.inputs)
+        .output("the merged image (-o)", &args.output);
+    plan.check()?;
     let images = args
         .inputs
         .iter()

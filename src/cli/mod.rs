@@ -1,6 +1,10 @@
 //! Command-line front end: argument parsing, logging, and error reporting. Each
 //! subcommand is one file with an `Args` struct and a `run` function; errors travel as
 //! `anyhow::Error` with context and are printed once, here, with a non-zero exit.
+//!
+//! Exit statuses: 0 done; 1 error; 2 bad command line (clap); 75 interrupted by a
+//! signal with the partial result written ([`common::EXIT_INTERRUPTED_SAVED`]); 130
+//! interrupted before anything was written, or by a second signal.
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -79,9 +83,19 @@ pub fn main() -> ExitCode {
     });
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
+        Err(e) => match e.downcast_ref::<common::Interrupted>() {
+            Some(i @ common::Interrupted::Saved(_)) => {
+                eprintln!("{i}");
+                ExitCode::from(common::EXIT_INTERRUPTED_SAVED)
+            }
+            Some(i @ common::Interrupted::Nothing) => {
+                eprintln!("{i}");
+                ExitCode::from(common::EXIT_INTERRUPTED_NOTHING)
+            }
+            None => {
+                eprintln!("error: {e:#}");
+                ExitCode::FAILURE
+            }
+        },
     }
 }

@@ -3,15 +3,15 @@
 //! `ref.checkpoint.exr` and resumable bit-exactly; Ctrl-C saves a checkpoint and stops.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use super::common::{self, DeviceArgs, MethodArgs, SceneArgs};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use lanterna::eval::reference::{
-    checkpoint_path, render_reference, ChunkPolicy, ProgressEvent, ReferenceJob, SampleRenderer,
+    checkpoint_path, render_reference, ChunkPolicy, ProgressEvent, ReferenceError, ReferenceJob,
+    SampleRenderer,
 };
 use lanterna::eval::BoxError;
 use lanterna::image_io::RenderMeta;
@@ -102,10 +102,19 @@ fn open_renderer(args: &Args) -> anyhow::Result<Box<dyn SampleRenderer>> {
         "a reference is rendered with pt or ris: guided methods train on their own samples, so \
          disjoint sample ranges would not be independent"
     );
-    let (loaded, camera, width, height) = common::load(&args.scene)?;
+    let (loaded, camera, settings) = common::prepare(&args.scene, args.method.settings())?;
+    let checkpoint = checkpoint_path(&args.output);
+    common::check_outputs(
+        &args.scene,
+        &loaded,
+        &[],
+        &[
+            ("the reference (-o)", &args.output),
+            ("its checkpoint", &checkpoint),
+        ],
+    )?;
     let device =
         session::open_device(&args.device.options()).context("cannot open a Vulkan device")?;
-    let settings = args.method.settings(width, height);
     let mut renderer = Renderer::new(
         device.clone(),
         &loaded.scene,
@@ -133,15 +142,14 @@ fn job(args: &Args) -> anyhow::Result<ReferenceJob> {
     if args.chunk_spp == Some(0) {
         anyhow::bail!("--chunk-spp must be at least 1");
     }
-    if args.sample_offset.checked_add(args.spp).is_none() {
-        anyhow::bail!("--sample-offset + --spp overflows");
-    }
+    lanterna::render::run::Budget::Spp(args.spp).check(args.sample_offset)?;
     Ok(ReferenceJob {
         output: args.output.clone(),
         checkpoint: checkpoint_path(&args.output),
         spp: args.spp,
         sample_offset: args.sample_offset,
-        checkpoint_every: Some(Duration::from_secs_f64(args.checkpoint_every)),
+        // Beyond what a Duration holds means never (but on interruption).
+        checkpoint_every: Duration::try_from_secs_f64(args.checkpoint_every).ok(),
         chunk: match args.chunk_spp {
             Some(n) => ChunkPolicy::Fixed(n),
             None => ChunkPolicy::Adaptive {
@@ -154,14 +162,10 @@ fn job(args: &Args) -> anyhow::Result<ReferenceJob> {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let job = job(&args)?;
+    // Signals from here on stop the run cleanly (the default would kill it unsaved).
+    let cancel = common::cancel_flag();
     let mut renderer = open_renderer(&args)?;
 
-    let cancel = Arc::new(AtomicBool::new(false));
-    {
-        let cancel = cancel.clone();
-        ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed))
-            .context("installing the Ctrl-C handler")?;
-    }
     let bar = ProgressBar::new(job.spp);
     bar.set_style(
         ProgressStyle::with_template(
@@ -180,9 +184,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             bar.suspend(|| log::info!("checkpoint {} (next sample {next_sample})", path.display()));
         }
     };
-    let result = render_reference(renderer.as_mut(), &job, &cancel, &mut on_progress);
+    let result = render_reference(renderer.as_mut(), &job, cancel, &mut on_progress);
     bar.finish_and_clear();
-    let outcome = result?;
+    let outcome = match result {
+        Ok(o) => o,
+        Err(ReferenceError::Interrupted {
+            checkpoint: Some(path),
+            next_sample,
+        }) => {
+            return Err(common::Interrupted::Saved(format!(
+                "progress up to sample {next_sample} is in {}; continue with --resume",
+                path.display()
+            ))
+            .into())
+        }
+        Err(ReferenceError::Interrupted {
+            checkpoint: None, ..
+        }) => return Err(common::Interrupted::Nothing.into()),
+        Err(e) => return Err(e.into()),
+    };
     log::info!(
         "{}: {} spp (samples {}..{}), {} resumed from a checkpoint, {} chunks",
         job.output.display(),

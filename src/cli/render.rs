@@ -4,7 +4,6 @@ use super::common::{self, DeviceArgs, MethodArgs, SceneArgs};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use lanterna::image_io;
-use lanterna::render::output::{aov_layers, Aov};
 use lanterna::render::{run, session, Renderer};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -75,6 +74,11 @@ pub struct Args {
     pub watch: bool,
 }
 
+/// Saved SD-trees carry the scene's content hash (hex) as a number.
+fn scene_hash_u64(hash: &str) -> u64 {
+    u64::from_str_radix(hash, 16).unwrap_or(0)
+}
+
 fn report_guiding(g: &lanterna::render::GuidingOutcome, training_seconds: f64) {
     for it in &g.iterations {
         log::info!(
@@ -91,6 +95,52 @@ fn report_guiding(g: &lanterna::render::GuidingOutcome, training_seconds: f64) {
     }
     if !g.iterations.is_empty() {
         log::info!("training took {training_seconds:.2} s");
+    }
+}
+
+/// AOV layers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Aov {
+    Albedo,
+    Normal,
+    Depth,
+    Position,
+    LightCount,
+    RisWeight,
+    SelectedLight,
+    GuideFraction,
+    SampleCount,
+}
+
+impl Aov {
+    fn name(self) -> &'static str {
+        match self {
+            Aov::Albedo => "albedo",
+            Aov::Normal => "normal",
+            Aov::Depth => "depth",
+            Aov::Position => "position",
+            Aov::LightCount => "light-count",
+            Aov::RisWeight => "ris-weight",
+            Aov::SelectedLight => "selected-light",
+            Aov::GuideFraction => "guide-fraction",
+            Aov::SampleCount => "sample-count",
+        }
+    }
+
+    /// (first channel in the kernel's AOV buffer, channel names); None: computed on the host.
+    fn layout(self) -> Option<(u32, &'static [&'static str])> {
+        use lanterna::gpu::*;
+        Some(match self {
+            Aov::Albedo => (AOV_ALBEDO, &["R", "G", "B"]),
+            Aov::Normal => (AOV_NORMAL, &["X", "Y", "Z"]),
+            Aov::Depth => (AOV_DEPTH, &["Z"]),
+            Aov::Position => (AOV_POSITION, &["X", "Y", "Z"]),
+            Aov::LightCount => (AOV_LIGHT_COUNT, &["Y"]),
+            Aov::RisWeight => (AOV_RIS_WEIGHT, &["Y"]),
+            Aov::SelectedLight => (AOV_SELECTED_LIGHT, &["Y"]),
+            Aov::GuideFraction => (AOV_GUIDE_FRACTION, &["Y"]),
+            Aov::SampleCount => return None,
+        })
     }
 }
 
@@ -112,10 +162,19 @@ fn describe_sample(x: u32, y: u32, sample: u32, rgb: [f32; 3]) -> String {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let spp = match run::Budget::from_request(args.spp, args.time)? {
-        run::Budget::Spp(n) => n,
-        run::Budget::Seconds(_) => u64::MAX,
+    // Signals from here on stop the run cleanly (the default would kill it unsaved).
+    let _ = common::cancel_flag();
+    let spp = args
+        .spp
+        .unwrap_or(if args.time.is_some() { u64::MAX } else { 16 });
+    let budget = match args.time {
+        Some(t) => run::Budget::Seconds(t),
+        None => run::Budget::Spp(spp),
     };
+    // Before anything is loaded (run_method checks again).
+    if args.pixel.is_none() {
+        budget.check(args.sample_offset)?;
+    }
     let output = args.output.clone().unwrap_or_else(|| {
         let stem = args
             .scene
@@ -136,11 +195,32 @@ pub fn run(args: Args) -> Result<()> {
     };
 
     let started = Instant::now();
-    let (loaded, camera, width, height) = common::load(&args.scene)?;
+    let mut settings = args.method.settings();
+    settings.exposure = args.exposure;
+    let (loaded, camera, mut settings) = common::prepare(&args.scene, settings)?;
+    let (width, height) = (settings.width, settings.height);
+    let selected_light_png = args
+        .aov
+        .contains(&Aov::SelectedLight)
+        .then(|| output.with_extension("selected-light.png"));
+    let mut outputs = vec![("the EXR (-o)", output.as_path())];
+    outputs.extend(png.as_deref().map(|p| ("the PNG (--png)", p)));
+    outputs.extend(args.save_guiding.as_deref().map(|p| ("--save-guiding", p)));
+    outputs.extend(
+        selected_light_png
+            .as_deref()
+            .map(|p| ("the selected-light PNG", p)),
+    );
+    let inputs: Vec<(&str, &std::path::Path)> = args
+        .load_guiding
+        .as_deref()
+        .map(|p| ("--load-guiding", p))
+        .into_iter()
+        .collect();
+    common::check_outputs(&args.scene, &loaded, &inputs, &outputs)?;
     let mut device_options = args.device.options();
     device_options.debug_printf = args.pixel.is_some();
     let device = session::open_device(&device_options).context("cannot open a Vulkan device")?;
-    let mut settings = args.method.settings(width, height);
     settings.aovs = !args.aov.is_empty() || args.pixel.is_some() || args.report_outliers.is_some();
     let mut renderer = Renderer::new(
         device.clone(),
@@ -155,10 +235,7 @@ pub fn run(args: Args) -> Result<()> {
             renderer.settings.method.uses_guiding(),
             "--load-guiding needs --method guided or guided-ris"
         );
-        let tree = lanterna::guiding::SdTree::load(
-            path,
-            lanterna::guiding::scene_hash_number(&loaded.scene.hash),
-        )?;
+        let tree = lanterna::guiding::SdTree::load(path, scene_hash_u64(&loaded.scene.hash))?;
         renderer.preloaded_tree = Some(tree);
     }
     if let Some((x, y)) = args.pixel {
@@ -283,10 +360,13 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
     let stats = outcome.stats;
     let film = outcome.film.clone();
     let done = film.spp;
-    anyhow::ensure!(
-        done > 0,
-        "interrupted before the first sample finished; nothing written"
-    );
+    let interrupted = cancel.load(std::sync::atomic::Ordering::SeqCst);
+    if done == 0 {
+        if interrupted {
+            return Err(common::Interrupted::Nothing.into());
+        }
+        anyhow::bail!("no sample finished within the budget; nothing written");
+    }
     if let Some(g) = &outcome.guiding {
         report_guiding(g, outcome.training_seconds);
         if let Some(path) = &args.save_guiding {
@@ -295,7 +375,7 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
             g.tree
                 .save(
                     path,
-                    lanterna::guiding::scene_hash_number(&loaded.scene.hash),
+                    scene_hash_u64(&loaded.scene.hash),
                     (lo.into(), hi.into()),
                 )
                 .with_context(|| format!("cannot save the SD-tree to {}", path.display()))?;
@@ -314,15 +394,38 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
     }
     let mut image = common::outcome_image(&outcome, width, height, meta)?;
     if !args.aov.is_empty() {
-        image.aovs = aov_layers(renderer, &args.aov)?;
-        if let Some(layer) = image
-            .aovs
-            .iter()
-            .find(|a| a.name == Aov::SelectedLight.name())
-        {
+        let data = renderer.aovs()?;
+        for aov in &args.aov {
+            let layer = match aov.layout() {
+                Some((first, channels)) => {
+                    let n = lanterna::gpu::AOV_CHANNELS as usize;
+                    let values: Vec<f32> = data
+                        .chunks_exact(n)
+                        .flat_map(|px| {
+                            px[first as usize..first as usize + channels.len()]
+                                .iter()
+                                .copied()
+                        })
+                        .collect();
+                    image_io::Aov::new(aov.name(), channels, values)?
+                }
+                None => image_io::Aov::new(
+                    aov.name(),
+                    &["Y"],
+                    vec![film.spp as f32; (width * height) as usize],
+                )?,
+            };
+            image.aovs.push(layer);
+        }
+        if args.aov.contains(&Aov::SelectedLight) {
+            let n = lanterna::gpu::AOV_CHANNELS as usize;
+            let ids: Vec<f32> = data
+                .chunks_exact(n)
+                .map(|px| px[lanterna::gpu::AOV_SELECTED_LIGHT as usize])
+                .collect();
             let path = output.with_extension("selected-light.png");
             common::ensure_parent(&path)?;
-            image_io::write_png_rgb8(&path, width, height, &false_colour(&layer.data))
+            image_io::write_png_rgb8(&path, width, height, &false_colour(&ids))
                 .with_context(|| format!("cannot write {}", path.display()))?;
             log::info!(
                 "wrote {} (light model NEE picked at the first hit, false-coloured)",
@@ -343,7 +446,7 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
     }
     if let Some(p) = &png {
         common::ensure_parent(p)?;
-        let _ = image_io::write_png(p, &image, args.exposure)
+        let _ = image_io::write_png(p, &image, renderer.settings.exposure)
             .with_context(|| format!("cannot write {}", p.display()))?;
     }
 
@@ -396,6 +499,23 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
             .map(|p| format!(" and {}", p.display()))
             .unwrap_or_default()
     );
+    if interrupted && !args.watch {
+        let training = outcome
+            .guiding
+            .as_ref()
+            .is_some_and(|g| g.interrupted_in_training);
+        return Err(common::Interrupted::Saved(format!(
+            "wrote the {} spp finished{} to {}",
+            film.spp,
+            if training {
+                " (of the last training pass)"
+            } else {
+                ""
+            },
+            output.display()
+        ))
+        .into());
+    }
     Ok(())
 }
 
@@ -423,6 +543,7 @@ fn trace_pixel(renderer: &mut Renderer, x: u32, y: u32, args: &Args, spp: u64) -
         Some(k) => (k as u64, 1),
         None => (args.sample_offset, if args.spp.is_some() { spp } else { 1 }),
     };
+    run::Budget::Spp(count).check(begin)?;
     let lines = renderer.trace_pixel(x, y, begin, count, args.sample)?;
     if lines.is_empty() {
         log::warn!("no trace was printed: the validation layer's debug printf is unavailable");

@@ -36,12 +36,18 @@ pub struct ExportArgs {
     /// Emitters seen directly by the camera contribute nothing (`hide_emitters`).
     #[arg(long)]
     pub hide_emitters: bool,
+    /// Follow buffer and image URIs that lead outside the scene's folder.
+    #[arg(long)]
+    pub allow_outside_uris: bool,
 }
 
 pub fn run(args: ExportArgs) -> Result<()> {
     anyhow::ensure!(args.max_depth >= 1, "--max-depth must be at least 1");
     anyhow::ensure!(args.spp >= 1, "--spp must be at least 1");
-    let loaded = session::load_scene(&args.scene)?;
+    let options = lanterna::scene::LoadOptions {
+        allow_outside_uris: args.allow_outside_uris,
+    };
+    let loaded = session::load_scene_with(&args.scene, &options)?;
     let camera = session::choose_camera(
         &loaded.scene,
         args.camera.as_deref(),

@@ -174,10 +174,11 @@ pub enum CompareError {
     Metric(#[from] metrics::MetricError),
     #[error(transparent)]
     Image(#[from] ImageError),
-    #[error("{}: {source}", path.display())]
+    // `error` is not a `source`: the message already includes it, once.
+    #[error("{}: {error}", path.display())]
     Io {
         path: PathBuf,
-        source: std::io::Error,
+        error: std::io::Error,
     },
     #[error("{}: {problem}", path.display())]
     Figure { path: PathBuf, problem: String },
@@ -212,8 +213,11 @@ impl CompareConfig {
         if !self.spp.windows(2).all(|w| w[0] < w[1]) {
             return bad("spp budgets must be strictly increasing".into());
         }
-        if self.seconds.iter().any(|s| !s.is_finite() || *s <= 0.0) {
-            return bad("time budgets must be positive numbers of seconds".into());
+        let max = crate::render::run::MAX_SECONDS;
+        if self.seconds.iter().any(|s| !(*s > 0.0 && *s <= max)) {
+            return bad(format!(
+                "time budgets must be positive numbers of seconds, at most {max:e}"
+            ));
         }
         if !self.seconds.windows(2).all(|w| w[0] < w[1]) {
             return bad("time budgets must be strictly increasing".into());
@@ -270,6 +274,24 @@ pub const REPORT_FILES: [&str; 6] = [
     "index.html",
 ];
 
+impl CompareConfig {
+    /// Every file the comparison writes (so that none of them is one of its inputs).
+    pub fn output_files(&self) -> Vec<PathBuf> {
+        let mut files: Vec<PathBuf> = REPORT_FILES.iter().map(|f| self.out_dir.join(f)).collect();
+        if self.save_images {
+            for budget in self.budgets() {
+                for method in &self.methods {
+                    files.push(
+                        self.out_dir
+                            .join(format!("images/{method}_{}.exr", budget.tag())),
+                    );
+                }
+            }
+        }
+        files
+    }
+}
+
 /// Runs every method at every budget, scores them and writes the report. The reference
 /// must be finite; its name in errors is `config.reference`.
 pub fn run_compare(
@@ -282,7 +304,7 @@ pub fn run_compare(
     ref_view.check_finite()?;
     let io = |path: &Path| {
         let path = path.to_path_buf();
-        move |source| CompareError::Io { path, source }
+        move |error| CompareError::Io { path, error }
     };
     std::fs::create_dir_all(&config.out_dir).map_err(io(&config.out_dir))?;
     if config.save_images {

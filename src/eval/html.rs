@@ -113,9 +113,9 @@ pub fn write_index(path: &Path, report: &Report, dir: &Path) -> Result<(), Compa
         ("grid.png", "Images at the grid budget"),
     ] {
         let png = dir.join(file);
-        let bytes = std::fs::read(&png).map_err(|source| CompareError::Io {
+        let bytes = std::fs::read(&png).map_err(|error| CompareError::Io {
             path: png.clone(),
-            source,
+            error,
         })?;
         let extra = if file == "grid.png" {
             format!(" ({})", escape(&report.grid_budget))

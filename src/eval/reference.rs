@@ -166,25 +166,59 @@ impl State {
     }
 }
 
-/// Fields that must agree between a checkpoint and the renderer.
-fn identity(meta: &RenderMeta) -> [(&'static str, String); 4] {
+/// Fields that must agree between a checkpoint and the renderer: the scene, method,
+/// seed and depth, and every setting the renderer records among the extra keys (RIS
+/// candidates, light source, …) but the exposure, which only the PNG sees.
+fn identity(meta: &RenderMeta, keys: &[String]) -> Vec<(String, String)> {
     let show = |v: Option<String>| v.unwrap_or_else(|| "none".into());
-    [
-        ("scene hash", show(meta.scene_hash.clone())),
-        ("method", show(meta.method.clone())),
-        ("seed", show(meta.seed.map(|s| s.to_string()))),
-        ("max_depth", show(meta.max_depth.map(|d| d.to_string()))),
-    ]
+    let mut fields = vec![
+        ("scene hash".to_string(), show(meta.scene_hash.clone())),
+        ("method".to_string(), show(meta.method.clone())),
+        ("seed".to_string(), show(meta.seed.map(|s| s.to_string()))),
+        (
+            "max_depth".to_string(),
+            show(meta.max_depth.map(|d| d.to_string())),
+        ),
+    ];
+    for k in keys {
+        fields.push((k.clone(), show(meta.extra.get(k).cloned())));
+    }
+    fields
 }
 
-fn load_checkpoint(
+/// Extra keys that describe the render rather than one run of it.
+fn identity_keys(meta: &RenderMeta) -> Vec<String> {
+    meta.extra
+        .keys()
+        .filter(|k| {
+            !matches!(
+                k.as_str(),
+                "exposure" | "gpu_seconds" | NEXT_SAMPLE_KEY | TARGET_SPP_KEY
+            )
+        })
+        .cloned()
+        .collect()
+}
+
+/// Where a resumed reference continues from.
+#[derive(Clone, Copy, PartialEq)]
+enum Origin {
+    /// The checkpoint next to the output.
+    Checkpoint,
+    /// The finished output of an earlier run (resumed to more samples).
+    Finished,
+}
+
+/// The state saved in `path` (a checkpoint or a finished reference), after checking it
+/// belongs to this render; `None` when there is no such file.
+fn load_saved(
+    path: &Path,
     job: &ReferenceJob,
     meta: &RenderMeta,
     (width, height): (u32, u32),
 ) -> Result<Option<State>, ReferenceError> {
-    let path = &job.checkpoint;
     let bad = |problem: String| ReferenceError::BadCheckpoint {
-        path: path.clone(),
+        path: path.to_path_buf(),
         problem,
     };
     let image = match read_exr(path) {
@@ -198,7 +232,11 @@ fn load_checkpoint(
             image.width, image.height
         )));
     }
-    for ((field, theirs), (_, ours)) in identity(&image.meta).into_iter().zip(identity(meta)) {
+    let keys = identity_keys(meta);
+    for ((field, theirs), (_, ours)) in identity(&image.meta, &keys)
+        .into_iter()
+        .zip(identity(meta, &keys))
+    {
         if theirs != ours {
             return Err(bad(format!(
                 "its {field} is {theirs} but this render's is {ours}"
@@ -208,6 +246,16 @@ fn load_checkpoint(
     let Some(sums) = image.sums else {
         return Err(bad("it has no exact film sums".into()));
     };
+    if image
+        .meta
+        .extra
+        .contains_key(crate::image_io::SAMPLE_RANGES_KEY)
+    {
+        return Err(bad(
+            "it holds non-contiguous sample ranges (a merge), not samples from the offset on"
+                .into(),
+        ));
+    }
     if image.meta.sample_offset.unwrap_or(0) != job.sample_offset {
         return Err(bad(format!(
             "it starts at sample {} but this render starts at {}",
@@ -249,14 +297,48 @@ pub fn render_reference(
     let n = width as usize * height as usize;
 
     let resumed = if job.resume {
-        let state = load_checkpoint(job, &meta, (width, height))?;
+        // The checkpoint, else a finished reference to extend; never start over on top
+        // of a finished one.
+        let mut state = load_saved(&job.checkpoint, job, &meta, (width, height))?
+            .map(|s| (s, Origin::Checkpoint));
         if state.is_none() {
-            log::info!(
-                "no checkpoint at {}: starting from the beginning",
-                job.checkpoint.display()
-            );
+            state = load_saved(&job.output, job, &meta, (width, height))?
+                .map(|s| (s, Origin::Finished));
         }
-        state
+        match state {
+            None => {
+                log::info!(
+                    "no checkpoint at {} and no reference at {}: starting from the beginning",
+                    job.checkpoint.display(),
+                    job.output.display()
+                );
+                None
+            }
+            Some((s, Origin::Finished)) if s.done == job.spp => {
+                // Complete already: nothing to render, and the file stays as it is.
+                log::info!(
+                    "{} already holds the {} spp asked: nothing to do",
+                    job.output.display(),
+                    job.spp
+                );
+                let image = read_exr(&job.output)?;
+                return Ok(ReferenceOutcome {
+                    image,
+                    resumed_samples: s.done,
+                    chunks: 0,
+                });
+            }
+            Some((s, origin)) => {
+                if origin == Origin::Finished {
+                    log::info!(
+                        "continuing the finished reference {} from {} spp",
+                        job.output.display(),
+                        s.done
+                    );
+                }
+                Some(s)
+            }
+        }
     } else if job.checkpoint.exists() {
         return Err(ReferenceError::CheckpointExists {
             path: job.checkpoint.clone(),

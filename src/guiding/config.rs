@@ -8,7 +8,8 @@
 use super::GuidingError;
 
 /// How a training record is placed in space.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum SpatialFilter {
     /// Into the leaf holding the vertex.
     Nearest,
@@ -19,7 +20,8 @@ pub enum SpatialFilter {
 }
 
 /// How a training record is placed on the directional square.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum DirectionalFilter {
     /// Into the quadtree cell holding the direction.
     Nearest,

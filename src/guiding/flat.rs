@@ -360,7 +360,10 @@ impl SdTree {
             let sampling = match shared.get(&g.sampling_root) {
                 Some(t) => t.clone(),
                 None => {
-                    let t = Arc::new(unflatten(&arrays.sampling, g.sampling_root, &what)?.0);
+                    let t = unflatten(&arrays.sampling, g.sampling_root, &what)?.0;
+                    t.check_sums_consistent()
+                        .map_err(|m| GuidingError::BadArrays(format!("{what}: {m}")))?;
+                    let t = Arc::new(t);
                     shared.insert(g.sampling_root, t.clone());
                     t
                 }
@@ -377,8 +380,12 @@ impl SdTree {
                 }
             }
             let training_weight = arrays.training[g.training_root as usize - 1].sum[0];
-            if !(g.sampling_weight.is_finite() && training_weight.is_finite()) {
-                return bad(format!("{what}: non-finite weight"));
+            if !(g.sampling_weight.is_finite()
+                && g.sampling_weight >= 0.0
+                && training_weight.is_finite()
+                && training_weight >= 0.0)
+            {
+                return bad(format!("{what}: negative or non-finite weight"));
             }
             let lights: Vec<(u32, f32)> = arrays
                 .lights

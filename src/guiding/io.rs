@@ -19,7 +19,6 @@
 use super::flat::GuideArrays;
 use super::{DirectionalFilter, GuidingConfig, GuidingError, SdTree, SpatialFilter};
 use crate::gpu::{GuideHeader, GuideLeaf, GuideLightSlot, GuideQuadNode, GuideSpatialNode};
-use std::io::Write;
 use std::path::Path;
 
 const MAGIC: &[u8; 16] = b"lanterna-sdtree\0";
@@ -168,30 +167,14 @@ impl SdTree {
         let sum = SceneHasher::default().update(&w.0).finish();
         w.u64(sum);
 
-        let io = |source| GuidingError::Io {
-            path: path.to_path_buf(),
-            source,
-        };
-        let mut tmp_name = path.as_os_str().to_owned();
-        tmp_name.push(".tmp");
-        let tmp = std::path::PathBuf::from(tmp_name);
-        let result = std::fs::File::create(&tmp)
-            .and_then(|mut f| f.write_all(&w.0).and_then(|_| f.sync_all()))
-            .and_then(|_| std::fs::rename(&tmp, path));
-        if let Err(e) = result {
-            let _ = std::fs::remove_file(&tmp);
-            return Err(io(e));
-        }
+        crate::files::write_atomically(path, &w.0)?;
         Ok(())
     }
 
     /// Read a tree saved by `save`, refusing one trained on another scene. The file's
     /// options become the tree's (replace the render-time ones with `set_config`).
     pub fn load(path: &Path, expected_scene_hash: u64) -> Result<SdTree, GuidingError> {
-        let data = std::fs::read(path).map_err(|source| GuidingError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let data = read_tree_file(path)?;
         let (tree, info) = parse(path, &data)?;
         if info.scene_hash != expected_scene_hash {
             return Err(GuidingError::SceneMismatch {
@@ -205,12 +188,26 @@ impl SdTree {
 
     /// Read a tree and what it says about itself, without checking the scene.
     pub fn load_unchecked(path: &Path) -> Result<(SdTree, SavedTreeInfo), GuidingError> {
-        let data = std::fs::read(path).map_err(|source| GuidingError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let data = read_tree_file(path)?;
         parse(path, &data)
     }
+}
+
+/// The file's bytes, refusing early what does not start like an SD-tree file (and, like
+/// every input, anything larger than the input limit).
+fn read_tree_file(path: &Path) -> Result<Vec<u8>, GuidingError> {
+    use crate::files::{max_input_bytes, read_input, FileError, Start};
+    read_input(path, max_input_bytes(), &|start| {
+        if start.len() >= MAGIC.len() && &start[..MAGIC.len()] != MAGIC {
+            Err("not a lanterna SD-tree file".into())
+        } else {
+            Ok(Start::Continue)
+        }
+    })
+    .map_err(|e| match e {
+        FileError::Format { path, .. } => GuidingError::NotAnSdTree { path },
+        e => GuidingError::File(e),
+    })
 }
 
 fn parse(path: &Path, data: &[u8]) -> Result<(SdTree, SavedTreeInfo), GuidingError> {

@@ -52,11 +52,8 @@ pub enum GuidingError {
     TrainingMismatch(String),
     #[error("invalid SD-tree arrays: {0}")]
     BadArrays(String),
-    #[error("{}: {source}", path.display())]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    File(#[from] crate::files::FileError),
     #[error("{}: not a lanterna SD-tree file", path.display())]
     NotAnSdTree { path: PathBuf },
     #[error("{}: SD-tree file format version {found}; this build reads version {supported}", path.display())]

@@ -99,7 +99,7 @@ impl QuadTree {
 
     /// A tree from raw nodes, checked to be a tree (every node but the root reachable
     /// exactly once, in range, no deeper than the kernels walk) with finite,
-    /// non-negative sums.
+    /// non-negative sums whose totals are finite.
     pub fn from_nodes(nodes: Vec<QuadNode>) -> Result<Self, String> {
         if nodes.is_empty() {
             return Err("quadtree without a root".into());
@@ -132,7 +132,35 @@ impl QuadTree {
         if let Some(orphan) = seen.iter().position(|s| !s) {
             return Err(format!("quadtree node {orphan} is unreachable"));
         }
+        // Bounded sums: four finite sums near f32::MAX overflow a node's total, and
+        // sampling would then lose every direction below it.
+        for (n, node) in nodes.iter().enumerate() {
+            if !node_total(&node.sum).is_finite() {
+                return Err(format!("quadtree node {n}: its sums overflow"));
+            }
+        }
         Ok(Self { nodes })
+    }
+
+    /// Checks that every interior quadrant holds its subtree's total, as `build` leaves
+    /// a sampling tree: sampling walks the ratios and the pdf multiplies them, so
+    /// inconsistent sums would bias the estimator silently. (Training trees are not
+    /// built: records sit where they landed.)
+    pub fn check_sums_consistent(&self) -> Result<(), String> {
+        for (n, node) in self.nodes.iter().enumerate() {
+            for (q, &c) in node.child.iter().enumerate() {
+                if c == 0 {
+                    continue;
+                }
+                let (parent, child) = (node.sum[q], node_total(&self.nodes[c as usize].sum));
+                if (parent - child).abs() > 1e-3 * parent.max(child) {
+                    return Err(format!(
+                        "quadtree node {n}: quadrant {q} holds {parent} but its child {c} sums to {child}"
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     pub fn nodes(&self) -> &[QuadNode] {

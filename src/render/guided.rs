@@ -11,13 +11,11 @@
 //! so the combination is consistent rather than strictly unbiased (as in the reference
 //! implementation); the render phase alone is unbiased.
 
-use super::run::{Budget, RunOutcome};
+use super::run::{deadline_after, Budget, RunOutcome, SAMPLE_INDEX_END};
 use super::{Film, GuideBuffers, GuidedOutput, RenderError, RenderStats, Renderer, Result};
-use crate::guiding::{
-    DirectionalFilter, GuidingConfig, SdTree, SpatialFilter, SppSchedule, TimeSchedule,
-};
+use crate::guiding::{GuidingConfig, SdTree, SppSchedule, TimeSchedule};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// What one training iteration cost and produced.
 #[derive(Clone, Debug, Default, serde::Serialize)]
@@ -47,6 +45,10 @@ pub struct GuidingOutcome {
     pub iterations: Vec<IterationStats>,
     /// The trained (or loaded) tree, as the final render used it.
     pub tree: SdTree,
+    /// The run was interrupted while training: there was no render phase, and the film
+    /// is the last training pass (rendered with one fixed tree, so still a consistent
+    /// image of its sample range), the tree the one trained so far.
+    pub interrupted_in_training: bool,
 }
 
 /// Pixels of the 1280×720 images Müller et al. tuned the spatial threshold c for.
@@ -63,24 +65,17 @@ const REFERENCE_PIXELS: f64 = 1280.0 * 720.0;
 pub fn guiding_config(renderer: &Renderer) -> GuidingConfig {
     let s = &renderer.settings;
     let pixels = s.width as f64 * s.height as f64;
+    let g = &s.guiding;
     GuidingConfig {
-        spatial_threshold: (s.guiding.spatial_threshold as f64 * (pixels / REFERENCE_PIXELS).sqrt())
+        spatial_threshold: (g.spatial_threshold as f64 * (pixels / REFERENCE_PIXELS).sqrt())
             .max(1.0) as f32,
-        memory_cap_bytes: s.guiding.memory_cap_bytes,
-        spatial_filter: if s.spatial_jitter {
-            SpatialFilter::StochasticBox
-        } else {
-            SpatialFilter::Nearest
-        },
-        directional_filter: if s.directional_box {
-            DirectionalFilter::Box
-        } else {
-            DirectionalFilter::Nearest
-        },
-        record_nee: s.record_nee,
-        bsdf_fraction: s.bsdf_fraction,
-        learn_lights: s.guiding.learn_lights,
-        light_mix: s.guiding.light_mix,
+        memory_cap_bytes: g.memory_cap_bytes,
+        spatial_filter: g.spatial_filter,
+        directional_filter: g.directional_filter,
+        record_nee: g.record_nee,
+        bsdf_fraction: g.bsdf_fraction,
+        learn_lights: g.learn_lights,
+        light_mix: g.light_mix,
         ..GuidingConfig::default()
     }
 }
@@ -167,6 +162,8 @@ pub fn train(
                     stats,
                     passes.as_deref_mut(),
                 )?;
+                // None: interrupted before it rendered anything.
+                let Some(it) = it else { break };
                 sample += it.spp;
                 progress(sample - first);
                 iterations.push(it);
@@ -194,6 +191,8 @@ pub fn train(
                     stats,
                     passes.as_deref_mut(),
                 )?;
+                // None: interrupted before it rendered anything.
+                let Some(it) = it else { break };
                 sample += it.spp;
                 progress(sample - first);
                 iterations.push(it);
@@ -222,7 +221,7 @@ pub fn run_guided(
     let mut stats = RenderStats::default();
     let mut iterations = Vec::new();
     let mut sample = first;
-    let combine = renderer.settings.guided_output == GuidedOutput::InverseVariance;
+    let combine = renderer.settings.guiding.output == GuidedOutput::InverseVariance;
     // (mean image, estimated mean pixel variance) of each pass, for the combination.
     let mut passes: Vec<(Vec<f32>, f64)> = Vec::new();
 
@@ -233,7 +232,8 @@ pub fn run_guided(
             t
         }
         None => {
-            let plan = TrainingPlan::for_budget(budget, renderer.settings.train_fraction as f64);
+            let plan =
+                TrainingPlan::for_budget(budget, renderer.settings.guiding.train_fraction as f64);
             let trained = train(
                 renderer,
                 plan,
@@ -249,6 +249,27 @@ pub fn run_guided(
         }
     };
     let training_seconds = started.elapsed().as_secs_f64();
+    if cancel.load(Ordering::SeqCst) {
+        // Keep what is consistent: the last training pass's film (still in the film
+        // buffer) and the tree so far, rather than nothing.
+        if iterations.is_empty() {
+            renderer.clear_film()?;
+        }
+        let film = renderer.film()?;
+        let combined = (combine && !passes.is_empty()).then(|| combine_passes(&passes));
+        return Ok(RunOutcome {
+            film,
+            stats,
+            seconds: started.elapsed().as_secs_f64(),
+            training_seconds,
+            guiding: Some(GuidingOutcome {
+                iterations,
+                tree,
+                interrupted_in_training: true,
+            }),
+            combined,
+        });
+    }
     let upload = Instant::now();
     renderer.set_guide_buffers(GuideBuffers::upload(&renderer.device, &tree.gpu_arrays())?);
     log::debug!(
@@ -286,15 +307,15 @@ pub fn run_guided(
             }
         }
         Budget::Seconds(total) => {
-            let deadline = started + Duration::from_secs_f64(total);
+            let deadline = deadline_after(started, total);
             let mut a = 0;
             if combine {
                 let now = Instant::now();
-                let mid = now + deadline.saturating_duration_since(now) / 2;
+                let mid = deadline.map(|d| now + d.saturating_duration_since(now) / 2);
                 renderer.render_until(
                     sample,
-                    None,
-                    Some(mid),
+                    Some(SAMPLE_INDEX_END.saturating_sub(sample)),
+                    mid,
                     false,
                     cancel,
                     &mut |d| progress(trained + d),
@@ -307,8 +328,8 @@ pub fn run_guided(
             }
             renderer.render_until(
                 sample + a,
-                None,
-                Some(deadline),
+                Some(SAMPLE_INDEX_END.saturating_sub(sample + a)),
+                deadline,
                 false,
                 cancel,
                 &mut |d| progress(trained + a + d),
@@ -344,7 +365,11 @@ pub fn run_guided(
         stats,
         seconds: started.elapsed().as_secs_f64(),
         training_seconds,
-        guiding: Some(GuidingOutcome { iterations, tree }),
+        guiding: Some(GuidingOutcome {
+            iterations,
+            tree,
+            interrupted_in_training: false,
+        }),
         combined,
     };
     Ok(out)
@@ -364,11 +389,15 @@ fn train_iteration(
     progress: &mut dyn FnMut(u64),
     stats: &mut RenderStats,
     passes: Option<&mut Vec<(Vec<f32>, f64)>>,
-) -> Result<IterationStats> {
+) -> Result<Option<IterationStats>> {
     let t = Instant::now();
     renderer.set_guide_buffers(GuideBuffers::upload(&renderer.device, &tree.gpu_arrays())?);
     let mut upload_seconds = t.elapsed().as_secs_f64();
 
+    // Interrupted already: keep the film of the previous pass (clearing would lose it).
+    if cancel.load(Ordering::SeqCst) {
+        return Ok(None);
+    }
     renderer.clear_film()?;
     let gpu_before = stats.gpu_seconds;
     let t = Instant::now();
@@ -379,6 +408,10 @@ fn train_iteration(
         spp
     };
     let mut done = renderer.render_samples(sample, split, true, cancel, progress, stats)?;
+    if done == 0 {
+        // Interrupted before the first sample: no data to refit from.
+        return Ok(None);
+    }
     let mut half = None;
     if split < spp {
         half = Some(renderer.film()?);
@@ -446,7 +479,7 @@ fn train_iteration(
         it.training_nodes,
         it.gpu_bytes as f64 / 1024.0
     );
-    Ok(it)
+    Ok(Some(it))
 }
 
 /// Mean pixel variance of the image of `total`, estimated from its first part `first`:

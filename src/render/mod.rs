@@ -9,6 +9,7 @@
 mod film;
 mod gpu_scene;
 mod guided;
+mod limits;
 pub mod output;
 pub mod run;
 pub mod runner;
@@ -18,7 +19,9 @@ mod settings;
 pub use film::Film;
 pub use gpu_scene::GpuScene;
 pub use guided::{train, GuidingOutcome, IterationStats, Training, TrainingPlan};
-pub use settings::{GuidedOutput, GuidingSettings, LightSource, Method, RenderSettings, Strategy};
+pub use settings::{
+    GuidedOutput, GuidingSettings, LightSource, Method, RenderSettings, SettingsError, Strategy,
+};
 
 use crate::gpu;
 use crate::lights::LightTable;
@@ -38,6 +41,8 @@ pub enum RenderError {
     Vulkan(#[from] vk::VkError),
     #[error(transparent)]
     Shader(#[from] crate::shaders::ShaderError),
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
     #[error("{0}")]
     Invalid(String),
 }
@@ -213,36 +218,8 @@ impl Renderer {
         settings: RenderSettings,
         shaders: ShaderSource,
     ) -> Result<Renderer> {
-        if settings.width == 0 || settings.height == 0 {
-            return Err(RenderError::Invalid(
-                "image size must be at least 1×1".into(),
-            ));
-        }
-        if settings.max_depth == 0 {
-            return Err(RenderError::Invalid(
-                "--max-depth must be at least 1".into(),
-            ));
-        }
-        // A training path keeps a record per vertex in registers until it ends; guided
-        // methods refuse longer paths rather than silently dropping their far vertices.
-        let max_guided_depth = gpu::GUIDE_MAX_RECORDED_VERTICES + 1;
-        if settings.method.uses_guiding() && settings.max_depth > max_guided_depth {
-            return Err(RenderError::Invalid(format!(
-                "--max-depth {} is too long for the guided methods: their training records \
-                 follow at most {max_guided_depth} path segments (use pt or ris for longer paths)",
-                settings.max_depth
-            )));
-        }
-        if settings.ris_candidates == 0 {
-            return Err(RenderError::Invalid(
-                "--ris-candidates must be at least 1".into(),
-            ));
-        }
-        if !(0.0..=1.0).contains(&settings.bsdf_fraction) {
-            return Err(RenderError::Invalid(
-                "--bsdf-fraction must be within [0, 1]".into(),
-            ));
-        }
+        settings.validate()?;
+        limits::check_image_size(&device, &settings)?;
         let gpu_scene = GpuScene::upload(&device, scene, lights)?;
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
         let pixels = settings.width as u64 * settings.height as u64;
@@ -359,6 +336,7 @@ impl Renderer {
                 "set_settings cannot change the image size or AOVs".into(),
             ));
         }
+        settings.validate()?;
         self.settings = settings;
         // Another method has another cost per sample: measure it again.
         self.seconds_per_sample = None;

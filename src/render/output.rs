@@ -10,7 +10,8 @@ use crate::image_io::{self, Image, ImageError, RenderMeta};
 use std::fmt;
 use std::str::FromStr;
 
-/// Metadata every render's EXR carries, from what was rendered and how.
+/// Metadata every render's EXR carries, from what was rendered and how: every setting
+/// from the settings' serde form.
 pub fn render_meta(
     settings: &RenderSettings,
     scene_path: &str,
@@ -24,25 +25,11 @@ pub fn render_meta(
     meta.device = Some(device_name.to_string());
     meta.scene_path = Some(scene_path.to_string());
     meta.scene_hash = Some(scene_hash.to_string());
-    for (k, v) in [
-        ("source", format!("{:?}", settings.source).to_lowercase()),
-        ("ris_candidates", settings.ris_candidates.to_string()),
-        ("rr_depth", settings.rr_depth.to_string()),
-        (
-            "strategy",
-            format!("{:?}", settings.strategy).to_lowercase(),
-        ),
-        ("hide_emitters", settings.hide_emitters.to_string()),
-    ] {
-        meta.extra.insert(k.to_string(), v);
-    }
-    if settings.method.uses_guiding() {
-        meta.extra
-            .insert("bsdf_fraction".into(), settings.bsdf_fraction.to_string());
-        meta.extra
-            .insert("train_fraction".into(), settings.train_fraction.to_string());
-        meta.extra
-            .insert("record_nee".into(), settings.record_nee.to_string());
+    // Everything else the settings hold; these three have fields of their own.
+    for (k, v) in settings.metadata_pairs() {
+        if !matches!(k.as_str(), "method" | "seed" | "max_depth") {
+            meta.extra.insert(k, v);
+        }
     }
     meta
 }
@@ -56,14 +43,31 @@ pub fn outcome_image(
     mut meta: RenderMeta,
 ) -> std::result::Result<Image, ImageError> {
     meta.sample_offset = Some(out.film.sample_offset);
+    let interrupted_in_training = out
+        .guiding
+        .as_ref()
+        .is_some_and(|g| g.interrupted_in_training);
+    if interrupted_in_training {
+        meta.extra.insert(
+            "guiding.interrupted".into(),
+            "in training: the image is the last training pass".into(),
+        );
+    }
     match &out.combined {
         Some(rgb) => {
             let trained: u64 = out
                 .guiding
                 .as_ref()
                 .map_or(0, |g| g.iterations.iter().map(|i| i.spp).sum());
-            meta.spp = Some(out.film.spp + trained);
-            meta.sample_offset = Some(out.film.sample_offset - trained);
+            // The passes are contiguous and end where the film's samples end; the film
+            // is one of them when training was interrupted.
+            let total = if interrupted_in_training {
+                trained
+            } else {
+                out.film.spp + trained
+            };
+            meta.spp = Some(total);
+            meta.sample_offset = Some(out.film.sample_offset + out.film.spp - total);
             meta.extra
                 .insert("guided_output".into(), "inverse-variance".into());
             let pixels = rgb.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();

@@ -49,6 +49,45 @@ pub struct RunOutcome {
     pub combined: Option<Vec<f32>>,
 }
 
+/// The longest time budget: about 31 years (a larger one is a typo, not a plan, and
+/// would overflow `Instant` arithmetic on some platforms).
+pub const MAX_SECONDS: f64 = 1e9;
+
+/// One past the last sample index the kernel can render (indices are 32-bit).
+pub const SAMPLE_INDEX_END: u64 = u32::MAX as u64;
+
+impl Budget {
+    /// Refuses a budget the renderer cannot honour starting at sample index `first`:
+    /// zero spp, a time that is not a positive finite number of seconds up to
+    /// [`MAX_SECONDS`], or sample indices past 2^32 (they would wrap around).
+    pub fn check(&self, first: u64) -> Result<()> {
+        let bad = |m: String| Err(super::RenderError::Invalid(m));
+        match *self {
+            Budget::Spp(0) => bad("--spp must be at least 1".into()),
+            Budget::Spp(n) if first.checked_add(n).is_none_or(|end| end > SAMPLE_INDEX_END) => {
+                bad(format!(
+                    "--sample-offset {first} + --spp {n} is past {SAMPLE_INDEX_END}: sample indices are 32-bit"
+                ))
+            }
+            Budget::Seconds(s) if !(s > 0.0 && s <= MAX_SECONDS) => bad(format!(
+                "--time {s}: must be a positive number of seconds, at most {MAX_SECONDS:e}"
+            )),
+            _ if first >= SAMPLE_INDEX_END => bad(format!(
+                "--sample-offset {first}: sample indices are 32-bit (below {SAMPLE_INDEX_END})"
+            )),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// `seconds` after `start`; `None` (no deadline) when that is beyond what `Instant`
+/// represents.
+pub fn deadline_after(start: Instant, seconds: f64) -> Option<Instant> {
+    Duration::try_from_secs_f64(seconds)
+        .ok()
+        .and_then(|d| start.checked_add(d))
+}
+
 impl RunOutcome {
     /// Mean RGB per pixel of what the run outputs.
     pub fn image(&self) -> Vec<f32> {
@@ -64,6 +103,7 @@ pub fn run_method(
     cancel: &AtomicBool,
     progress: &mut dyn FnMut(u64),
 ) -> Result<RunOutcome> {
+    budget.check(first)?;
     if renderer.settings.method.uses_guiding() {
         return super::guided::run_guided(renderer, budget, first, cancel, progress);
     }
@@ -75,11 +115,11 @@ pub fn run_method(
             renderer.render_samples(first, n, false, cancel, progress, &mut stats)?;
         }
         Budget::Seconds(s) => {
-            let deadline = started + Duration::from_secs_f64(s);
+            // Rendering stops at the deadline, or where sample indices end.
             renderer.render_until(
                 first,
-                None,
-                Some(deadline),
+                Some(SAMPLE_INDEX_END - first),
+                deadline_after(started, s),
                 false,
                 cancel,
                 progress,

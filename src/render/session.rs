@@ -40,8 +40,13 @@ pub struct LoadedScene {
 }
 
 pub fn load_scene(path: &Path) -> Result<LoadedScene, SceneError> {
+    load_scene_with(path, &LoadOptions::default())
+}
+
+/// [`load_scene`] with loader options (`--allow-outside-uris`).
+pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneError> {
     let started = std::time::Instant::now();
-    let scene = Scene::load(path, &LoadOptions::default())?;
+    let scene = Scene::load(path, options)?;
     let lights = LightTable::build(&scene)?;
     Ok(LoadedScene {
         scene,

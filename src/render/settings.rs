@@ -1,6 +1,12 @@
-//! What to render and how: method, sample budget, resolution and the knobs of NEE, RIS
-//! and guiding.
+//! What to render and how: one [`RenderSettings`] value (method, resolution, the knobs of
+//! NEE and RIS, the view and output overrides, and the guiding options nested in
+//! [`GuidingSettings`]) that every entry point (the CLI's render, reference, compare and
+//! guiding view, the bench, the tests) builds and that [`RenderSettings::validate`]
+//! checks in one place, with the flag names in its errors. Its serde form is what the
+//! EXR metadata records ([`RenderSettings::metadata_pairs`]), so no list of keys is kept
+//! by hand.
 
+use crate::guiding::{DirectionalFilter, SpatialFilter};
 use std::fmt;
 use std::str::FromStr;
 
@@ -82,31 +88,6 @@ pub enum Strategy {
     Bsdf,
 }
 
-/// SD-tree options beyond the kernel's.
-#[derive(Clone, Debug)]
-pub struct GuidingSettings {
-    /// c in the spatial split threshold c·√(spp of the coming iteration / 4), for a
-    /// 1280×720 image (scaled by √(pixels / 921 600) for others).
-    pub spatial_threshold: f32,
-    /// Stop splitting before the SD-tree's buffers exceed this.
-    pub memory_cap_bytes: u64,
-    /// Learn per SD-tree leaf which lights deliver NEE contributions and choose light
-    /// models from (1 − light_mix)·source + light_mix·learned table.
-    pub learn_lights: bool,
-    pub light_mix: f32,
-}
-
-impl Default for GuidingSettings {
-    fn default() -> Self {
-        GuidingSettings {
-            spatial_threshold: 12000.0,
-            memory_cap_bytes: crate::guiding::DEFAULT_MEMORY_CAP_BYTES,
-            learn_lights: false,
-            light_mix: 0.5,
-        }
-    }
-}
-
 /// What a guided render outputs.
 #[derive(
     Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum,
@@ -120,11 +101,56 @@ pub enum GuidedOutput {
     InverseVariance,
 }
 
-/// Parameters of one render that the kernel sees.
-#[derive(Clone, Debug)]
+/// The options of the guided methods.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct GuidingSettings {
+    /// Probability of sampling the BSDF in the one-sample mixture (`--bsdf-fraction`).
+    pub bsdf_fraction: f32,
+    /// Share of the budget spent training the SD-tree (`--train-fraction`).
+    pub train_fraction: f32,
+    /// Record NEE contributions into the SD-tree.
+    pub record_nee: bool,
+    /// How a training record is placed in space and on the directional square.
+    pub spatial_filter: SpatialFilter,
+    pub directional_filter: DirectionalFilter,
+    /// c in the spatial split threshold c·√(spp of the coming iteration / 4), for a
+    /// 1280×720 image (scaled by √(pixels / 921 600) for others).
+    pub spatial_threshold: f32,
+    /// Stop splitting before the SD-tree's buffers exceed this.
+    pub memory_cap_bytes: u64,
+    /// Learn per SD-tree leaf which lights deliver NEE contributions and choose light
+    /// models from (1 − light_mix)·source + light_mix·learned table.
+    pub learn_lights: bool,
+    pub light_mix: f32,
+    /// The render phase alone, or all passes weighted by inverse variance.
+    pub output: GuidedOutput,
+}
+
+impl Default for GuidingSettings {
+    fn default() -> Self {
+        GuidingSettings {
+            bsdf_fraction: 0.5,
+            train_fraction: 0.3,
+            record_nee: true,
+            spatial_filter: SpatialFilter::StochasticBox,
+            directional_filter: DirectionalFilter::Box,
+            spatial_threshold: 12000.0,
+            memory_cap_bytes: crate::guiding::DEFAULT_MEMORY_CAP_BYTES,
+            learn_lights: false,
+            light_mix: 0.5,
+            output: GuidedOutput::RenderPhase,
+        }
+    }
+}
+
+/// Parameters of one render.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RenderSettings {
     pub method: Method,
+    /// Image size (recorded in the EXR as its resolution, not among the settings).
+    #[serde(skip)]
     pub width: u32,
+    #[serde(skip)]
     pub height: u32,
     /// Path segments (Mitsuba's max_depth): 1 = emitters seen directly, 2 = direct light.
     pub max_depth: u32,
@@ -134,24 +160,20 @@ pub struct RenderSettings {
     pub source: LightSource,
     /// RIS candidates per NEE (M).
     pub ris_candidates: u32,
-    /// Guiding: probability of sampling the BSDF in the one-sample mixture.
-    pub bsdf_fraction: f32,
-    /// Guiding: share of the budget spent training the SD-tree.
-    pub train_fraction: f32,
-    /// Guiding: record NEE contributions into the SD-tree.
-    pub record_nee: bool,
-    /// Guiding: stochastic spatial filter (else nearest).
-    pub spatial_jitter: bool,
-    /// Guiding: box directional filter (else nearest).
-    pub directional_box: bool,
     pub strategy: Strategy,
     /// Emitters seen directly by the camera contribute nothing (Mitsuba's
     /// `hide_emitters`); light they send into the scene still counts.
     pub hide_emitters: bool,
-    /// Accumulate first-hit AOVs and per-pixel outliers (costs memory and a little time).
+    /// Vertical field of view in degrees replacing the camera's (`--fov`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fov_degrees: Option<f32>,
+    /// Exposure in stops of the tonemapped outputs (`--exposure`; the EXR is linear).
+    pub exposure: f32,
+    /// Accumulate first-hit AOVs and per-pixel outliers (costs memory and a little time;
+    /// no influence on the image).
+    #[serde(skip)]
     pub aovs: bool,
     pub guiding: GuidingSettings,
-    pub guided_output: GuidedOutput,
 }
 
 impl Default for RenderSettings {
@@ -165,16 +187,238 @@ impl Default for RenderSettings {
             seed: 0,
             source: LightSource::Uniform,
             ris_candidates: 32,
-            bsdf_fraction: 0.5,
-            train_fraction: 0.3,
-            record_nee: true,
-            spatial_jitter: true,
-            directional_box: true,
             strategy: Strategy::Mis,
             hide_emitters: false,
+            fov_degrees: None,
+            exposure: 0.0,
             aovs: false,
             guiding: GuidingSettings::default(),
-            guided_output: GuidedOutput::RenderPhase,
         }
+    }
+}
+
+/// Pixels of the largest image (the film, AOVs and outliers are per-pixel buffers).
+pub const MAX_PIXELS: u64 = 1 << 28;
+/// The most RIS candidates per NEE (each costs a light sample per path vertex).
+pub const MAX_RIS_CANDIDATES: u32 = 1024;
+/// The largest |--exposure| in stops (2^±64 spans every f32 radiance).
+pub const MAX_EXPOSURE: f32 = 64.0;
+
+/// A setting out of range: which one (by its command-line flag), its value, and what
+/// it must be.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{setting} {value}: {expected}")]
+pub struct SettingsError {
+    pub setting: &'static str,
+    pub value: String,
+    pub expected: String,
+}
+
+impl RenderSettings {
+    /// Checks every setting (see the module comment); the first problem is returned.
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        let bad = |setting: &'static str, value: String, expected: String| {
+            Err(SettingsError {
+                setting,
+                value,
+                expected,
+            })
+        };
+        let pixels = u64::from(self.width) * u64::from(self.height);
+        if pixels == 0 || pixels > MAX_PIXELS {
+            return bad(
+                "--width/--height",
+                format!("{}×{}", self.width, self.height),
+                format!("the image must have 1 to {MAX_PIXELS} pixels"),
+            );
+        }
+        if self.max_depth == 0 {
+            return bad("--max-depth", "0".into(), "must be at least 1".into());
+        }
+        // A training path keeps a record per vertex in registers until it ends; guided
+        // methods refuse longer paths rather than silently dropping their far vertices.
+        let max_guided_depth = crate::gpu::GUIDE_MAX_RECORDED_VERTICES + 1;
+        if self.method.uses_guiding() && self.max_depth > max_guided_depth {
+            return bad(
+                "--max-depth",
+                self.max_depth.to_string(),
+                format!(
+                    "at most {max_guided_depth} for the guided methods: their training records \
+                     follow at most {max_guided_depth} path segments (use pt or ris for longer paths)"
+                ),
+            );
+        }
+        if !(1..=MAX_RIS_CANDIDATES).contains(&self.ris_candidates) {
+            return bad(
+                "--ris-candidates",
+                self.ris_candidates.to_string(),
+                format!("must be in 1..={MAX_RIS_CANDIDATES}"),
+            );
+        }
+        if let Some(fov) = self.fov_degrees {
+            if !(fov > 0.0 && fov < 180.0) {
+                return bad(
+                    "--fov",
+                    fov.to_string(),
+                    "must be a vertical field of view in degrees, above 0 and below 180".into(),
+                );
+            }
+        }
+        if !(self.exposure.is_finite() && self.exposure.abs() <= MAX_EXPOSURE) {
+            return bad(
+                "--exposure",
+                self.exposure.to_string(),
+                format!("must be a number of stops in [-{MAX_EXPOSURE}, {MAX_EXPOSURE}]"),
+            );
+        }
+        self.guiding.validate()
+    }
+
+    /// The settings as flat `(key, text)` pairs from their serde form, nested values
+    /// as `outer.inner`: what an EXR's metadata records. The guiding options appear only
+    /// for guided methods, where they mean something.
+    pub fn metadata_pairs(&self) -> Vec<(String, String)> {
+        // Through JSON text: f32s print as their shortest form (0.3, not 0.30000001…).
+        let text = serde_json::to_string(self).expect("settings are plain data");
+        let value: serde_json::Value = serde_json::from_str(&text).expect("valid JSON");
+        let mut out = Vec::new();
+        flatten("", &value, &mut out);
+        if !self.method.uses_guiding() {
+            out.retain(|(k, _)| !k.starts_with("guiding."));
+        }
+        out
+    }
+}
+
+fn flatten(prefix: &str, value: &serde_json::Value, out: &mut Vec<(String, String)>) {
+    match value {
+        serde_json::Value::Object(map) => {
+            for (k, v) in map {
+                let key = if prefix.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{prefix}.{k}")
+                };
+                flatten(&key, v, out);
+            }
+        }
+        serde_json::Value::String(s) => out.push((prefix.to_string(), s.clone())),
+        other => out.push((prefix.to_string(), other.to_string())),
+    }
+}
+
+impl GuidingSettings {
+    /// Checks the guiding options (part of [`RenderSettings::validate`]).
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        let fraction = |setting: &'static str, v: f32, hi: f32| {
+            if (0.0..=hi).contains(&v) {
+                Ok(())
+            } else {
+                Err(SettingsError {
+                    setting,
+                    value: v.to_string(),
+                    expected: format!("must be in [0, {hi}]"),
+                })
+            }
+        };
+        fraction("--bsdf-fraction", self.bsdf_fraction, 1.0)?;
+        fraction("--train-fraction", self.train_fraction, 1.0)?;
+        fraction("--light-mix", self.light_mix, 0.95)?;
+        if !(self.spatial_threshold.is_finite() && self.spatial_threshold > 0.0) {
+            return Err(SettingsError {
+                setting: "--guiding-threshold",
+                value: self.spatial_threshold.to_string(),
+                expected: "must be a positive number of records".into(),
+            });
+        }
+        if self.memory_cap_bytes == 0 {
+            return Err(SettingsError {
+                setting: "--guiding-memory",
+                value: "0".into(),
+                expected: "must be at least 1 MiB".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid() {
+        RenderSettings::default().validate().unwrap();
+    }
+
+    #[test]
+    fn each_bad_value_names_its_flag() {
+        type Change = Box<dyn Fn(&mut RenderSettings)>;
+        let cases: Vec<(&str, Change)> = vec![
+            ("--fov", Box::new(|s| s.fov_degrees = Some(180.0))),
+            ("--fov", Box::new(|s| s.fov_degrees = Some(f32::NAN))),
+            ("--fov", Box::new(|s| s.fov_degrees = Some(0.0))),
+            ("--exposure", Box::new(|s| s.exposure = f32::INFINITY)),
+            ("--exposure", Box::new(|s| s.exposure = 1e6)),
+            (
+                "--train-fraction",
+                Box::new(|s| s.guiding.train_fraction = 1.5),
+            ),
+            (
+                "--train-fraction",
+                Box::new(|s| s.guiding.train_fraction = f32::NAN),
+            ),
+            (
+                "--guiding-threshold",
+                Box::new(|s| s.guiding.spatial_threshold = 0.0),
+            ),
+            (
+                "--guiding-threshold",
+                Box::new(|s| s.guiding.spatial_threshold = f32::NAN),
+            ),
+            (
+                "--bsdf-fraction",
+                Box::new(|s| s.guiding.bsdf_fraction = -0.1),
+            ),
+            ("--light-mix", Box::new(|s| s.guiding.light_mix = 1.0)),
+            (
+                "--guiding-memory",
+                Box::new(|s| s.guiding.memory_cap_bytes = 0),
+            ),
+            ("--max-depth", Box::new(|s| s.max_depth = 0)),
+            ("--ris-candidates", Box::new(|s| s.ris_candidates = 0)),
+            ("--width/--height", Box::new(|s| s.width = 0)),
+            (
+                "--width/--height",
+                Box::new(|s| (s.width, s.height) = (1 << 15, 1 << 15)),
+            ),
+        ];
+        for (flag, change) in cases {
+            let mut s = RenderSettings::default();
+            change(&mut s);
+            let e = s.validate().unwrap_err();
+            assert_eq!(e.setting, flag, "{e}");
+        }
+    }
+
+    #[test]
+    fn metadata_comes_from_the_serde_form() {
+        let mut s = RenderSettings {
+            method: Method::GuidedRis,
+            ..RenderSettings::default()
+        };
+        let pairs: std::collections::BTreeMap<String, String> =
+            s.metadata_pairs().into_iter().collect();
+        assert_eq!(pairs["source"], "uniform");
+        assert_eq!(pairs["ris_candidates"], "32");
+        assert_eq!(pairs["guiding.train_fraction"], "0.3");
+        assert_eq!(pairs["guiding.output"], "render-phase");
+        assert!(!pairs.contains_key("width") && !pairs.contains_key("fov_degrees"));
+        s.method = Method::Pt;
+        s.fov_degrees = Some(40.0);
+        let pairs: std::collections::BTreeMap<String, String> =
+            s.metadata_pairs().into_iter().collect();
+        assert!(pairs.keys().all(|k| !k.starts_with("guiding.")));
+        assert_eq!(pairs["fov_degrees"], "40.0");
     }
 }

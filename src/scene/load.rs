@@ -4,7 +4,9 @@
 //! placed in world space.
 
 use super::camera::{Camera, Projection};
+use super::gltf_check::{self, Role};
 use super::material::{self, TextureRegistry};
+use super::sources;
 use super::{Instance, MeshPrimitive, Scene, SceneError};
 use crate::gpu;
 use glam::{Mat4, Vec3};
@@ -13,39 +15,57 @@ use std::path::Path;
 
 /// Loader options.
 #[derive(Clone, Debug, Default)]
-pub struct LoadOptions {}
+pub struct LoadOptions {
+    /// Follow buffer and image URIs that resolve outside the scene's folder (absolute
+    /// paths, `..`, `file:` URIs, symlinks out). Off by default: see `sources.rs`.
+    pub allow_outside_uris: bool,
+}
 
-pub fn load(path: &Path, _options: &LoadOptions) -> Result<Scene, SceneError> {
+pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let started = std::time::Instant::now();
     let invalid = |message: String| SceneError::Invalid {
         path: path.to_path_buf(),
         message,
     };
-    let bytes = std::fs::read(path).map_err(|error| SceneError::Io {
+    let limit = crate::files::max_input_bytes();
+    let bytes = sources::read_scene_file(path, limit).map_err(|error| SceneError::File {
         path: path.to_path_buf(),
         error,
     })?;
+    let gltf_error = |e: gltf::Error| SceneError::Gltf {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
     let gltf::Gltf { document, mut blob } =
-        gltf::Gltf::from_slice(&bytes).map_err(|e| SceneError::Gltf {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })?;
-    let base = path.parent().unwrap_or(Path::new("."));
+        gltf::Gltf::from_slice_without_validation(&bytes).map_err(gltf_error)?;
+    drop(bytes);
+    let root = document.into_json();
+    gltf_check::precheck(&root).map_err(&invalid)?;
+    let document = gltf::Document::from_json(root).map_err(gltf_error)?;
+    gltf_check::check_views(document.as_json()).map_err(&invalid)?;
+    let mut uris = sources::UriReader::new(path, options.allow_outside_uris, limit);
+    let mut budget = sources::Budget::new(limit);
 
     // Buffers, one at a time so a failure names the buffer.
     let mut buffers = Vec::new();
     for b in document.buffers() {
-        let what = match b.source() {
-            gltf::buffer::Source::Bin => "the GLB binary chunk".to_string(),
-            gltf::buffer::Source::Uri(u) if u.starts_with("data:") => {
-                format!("buffer {} (data URI)", b.index())
-            }
+        let (what, data) = match b.source() {
+            gltf::buffer::Source::Bin => ("the GLB binary chunk".to_string(), blob.take()),
             gltf::buffer::Source::Uri(u) => {
-                format!("buffer {} (`{}`)", b.index(), base.join(u).display())
+                let what = if u.starts_with("data:") {
+                    format!("buffer {} (data URI)", b.index())
+                } else {
+                    format!("buffer {} (`{u}`)", b.index())
+                };
+                let data = uris
+                    .read(u, Some(b.length() as u64))
+                    .map_err(|e| invalid(format!("cannot load {what}: {e}")))?;
+                (what, Some(data))
             }
         };
-        let data = gltf::buffer::Data::from_source_and_blob(b.source(), Some(base), &mut blob)
-            .map_err(|e| invalid(format!("cannot load {what}: {e}")))?;
+        let Some(mut data) = data else {
+            return Err(invalid(format!("{what} is missing")));
+        };
         if data.len() < b.length() {
             return Err(invalid(format!(
                 "{what} has {} bytes but declares {}",
@@ -53,7 +73,10 @@ pub fn load(path: &Path, _options: &LoadOptions) -> Result<Scene, SceneError> {
                 b.length()
             )));
         }
-        buffers.push(data);
+        while data.len() % 4 != 0 {
+            data.push(0);
+        }
+        buffers.push(gltf::buffer::Data(data));
     }
 
     // Images that materials use (decoded lazily: unused images are skipped).
@@ -79,17 +102,33 @@ pub fn load(path: &Path, _options: &LoadOptions) -> Result<Scene, SceneError> {
             images.push(None);
             continue;
         }
-        let what = match img.source() {
-            gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
-                format!("image {} (data URI)", img.index())
-            }
+        let (what, encoded) = match img.source() {
             gltf::image::Source::Uri { uri, .. } => {
-                format!("image {} (`{}`)", img.index(), base.join(uri).display())
+                let what = if uri.starts_with("data:") {
+                    format!("image {} (data URI)", img.index())
+                } else {
+                    format!("image {} (`{uri}`)", img.index())
+                };
+                let data = uris
+                    .read(uri, None)
+                    .map_err(|e| invalid(format!("cannot load {what}: {e}")))?;
+                (what, std::borrow::Cow::Owned(data))
             }
-            gltf::image::Source::View { .. } => format!("image {} (buffer view)", img.index()),
+            gltf::image::Source::View { view, .. } => {
+                // check_views put the view inside its buffer's data.
+                let data = &buffers[view.buffer().index()].0;
+                let range = view.offset()..view.offset() + view.length();
+                (
+                    format!("image {} (buffer view {})", img.index(), view.index()),
+                    std::borrow::Cow::Borrowed(&data[range]),
+                )
+            }
         };
-        let data = gltf::image::Data::from_source(img.source(), Some(base), &buffers)
+        let data = sources::decode_image(&encoded, budget.left())
             .map_err(|e| invalid(format!("cannot load {what}: {e}")))?;
+        budget
+            .take(data.pixels.len() as u64, &what)
+            .map_err(&invalid)?;
         images.push(Some(data));
     }
 
@@ -142,12 +181,21 @@ pub fn load(path: &Path, _options: &LoadOptions) -> Result<Scene, SceneError> {
     let mut punctual = Vec::new();
     let mut warnings = std::mem::take(&mut registry.warnings);
     let textures = std::mem::take(&mut registry.textures);
+    let mut visited = vec![false; document.nodes().len()];
 
     while let Some((node, parent, depth)) = stack.pop() {
         if depth > 256 {
             return Err(invalid(
                 "node hierarchy deeper than 256 levels (a cycle?)".into(),
             ));
+        }
+        // Spec: the hierarchy is a set of disjoint strict trees. A node reached twice
+        // would be a cycle, or a DAG multiplying instances without bound.
+        if std::mem::replace(&mut visited[node.index()], true) {
+            return Err(invalid(format!(
+                "node {} is reached twice: a glTF node hierarchy must be a set of disjoint trees",
+                node_name(&node)
+            )));
         }
         let local = Mat4::from_cols_array_2d(&node.transform().matrix());
         let world = parent * local;
@@ -162,14 +210,29 @@ pub fn load(path: &Path, _options: &LoadOptions) -> Result<Scene, SceneError> {
         }
         if let Some(cam) = node.camera() {
             let projection = match cam.projection() {
-                gltf::camera::Projection::Perspective(p) => Projection::Perspective {
-                    yfov: p.yfov(),
-                    aspect: p.aspect_ratio(),
-                },
-                gltf::camera::Projection::Orthographic(o) => Projection::Orthographic {
-                    xmag: o.xmag().abs(),
-                    ymag: o.ymag().abs(),
-                },
+                gltf::camera::Projection::Perspective(p) => {
+                    let yfov = p.yfov();
+                    if !(yfov > 0.0 && yfov < std::f32::consts::PI) {
+                        return Err(invalid(format!(
+                            "camera {} has yfov {yfov}, outside (0, π)",
+                            cam.index()
+                        )));
+                    }
+                    Projection::Perspective {
+                        yfov,
+                        aspect: p.aspect_ratio(),
+                    }
+                }
+                gltf::camera::Projection::Orthographic(o) => {
+                    let (xmag, ymag) = (o.xmag().abs(), o.ymag().abs());
+                    if !(xmag > 0.0 && ymag > 0.0 && xmag.is_finite() && ymag.is_finite()) {
+                        return Err(invalid(format!(
+                            "orthographic camera {} has magnification {xmag} × {ymag}",
+                            cam.index()
+                        )));
+                    }
+                    Projection::Orthographic { xmag, ymag }
+                }
             };
             cameras.push((
                 node.index(),
@@ -207,8 +270,12 @@ pub fn load(path: &Path, _options: &LoadOptions) -> Result<Scene, SceneError> {
                         &buffers,
                         default_material,
                         &materials,
-                        &mut vertices,
-                        &mut indices,
+                        &mut Geometry {
+                            root: document.as_json(),
+                            vertices: &mut vertices,
+                            indices: &mut indices,
+                            budget: &mut budget,
+                        },
                         &mut warnings,
                     )
                     .map_err(&invalid)?
@@ -221,6 +288,10 @@ pub fn load(path: &Path, _options: &LoadOptions) -> Result<Scene, SceneError> {
                 }
             };
             if let Some(id) = id {
+                let bytes = std::mem::size_of::<Instance>() + node_name(&node).len();
+                budget
+                    .take(bytes as u64, "the instances")
+                    .map_err(&invalid)?;
                 instances.push(Instance {
                     primitive: id,
                     transform: world,
@@ -276,6 +347,7 @@ pub fn load(path: &Path, _options: &LoadOptions) -> Result<Scene, SceneError> {
         hash: String::new(),
         extras,
         origin: Vec3::ZERO,
+        files: uris.files,
     };
     scene.hash = content_hash(&scene);
     rebase(&mut scene);
@@ -361,15 +433,22 @@ fn node_name(node: &gltf::Node<'_>) -> String {
     }
 }
 
-#[allow(clippy::too_many_arguments)]
+/// Where primitives' vertices and indices go, and what they may still take.
+struct Geometry<'a> {
+    /// The document's JSON, for the checks of `gltf_check`.
+    root: &'a gltf::json::Root,
+    vertices: &'a mut Vec<gpu::Vertex>,
+    indices: &'a mut Vec<u32>,
+    budget: &'a mut sources::Budget,
+}
+
 fn load_primitive(
     mesh: &gltf::Mesh<'_>,
     prim: &gltf::Primitive<'_>,
     buffers: &[gltf::buffer::Data],
     default_material: u32,
     materials: &[gpu::Material],
-    vertices: &mut Vec<gpu::Vertex>,
-    indices: &mut Vec<u32>,
+    out: &mut Geometry<'_>,
     warnings: &mut Vec<String>,
 ) -> Result<Option<MeshPrimitive>, String> {
     use gltf::mesh::Mode;
@@ -387,10 +466,43 @@ fn load_primitive(
             return Ok(None);
         }
     }
+    // Types and ranges first: the crate's readers reinterpret any type as the one asked
+    // for, stop silently at a view's end, and panic on some component types.
+    let root = out.root;
+    let max_bytes = out.budget.left();
+    for (semantic, accessor) in prim.attributes() {
+        use gltf::Semantic as S;
+        let role = match semantic {
+            S::Positions => Role::Position,
+            S::Normals => Role::Normal,
+            S::Tangents => Role::Tangent,
+            S::TexCoords(_) => Role::TexCoord,
+            S::Colors(_) => Role::Color,
+            _ => continue,
+        };
+        gltf_check::check_accessor(root, accessor.index(), role, max_bytes)
+            .map_err(|e| format!("{name}: {e}"))?;
+    }
+    if let Some(accessor) = prim.indices() {
+        gltf_check::check_accessor(root, accessor.index(), Role::Indices, max_bytes)
+            .map_err(|e| format!("{name}: {e}"))?;
+    }
+    // Reading holds every attribute and the index list as temporary arrays, about
+    // twice the final vertices and indices: refuse before, not after, allocating them.
+    let vertex_count = prim
+        .get(&gltf::Semantic::Positions)
+        .map_or(0, |a| a.count() as u64);
+    let index_count = prim.indices().map_or(vertex_count, |a| a.count() as u64);
+    let reading = 2 * (vertex_count * std::mem::size_of::<gpu::Vertex>() as u64 + index_count * 4);
+    if reading > out.budget.left() {
+        return Err(format!(
+            "{name}: {vertex_count} vertices and {index_count} indices would take the scene past the input limit"
+        ));
+    }
     let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
     let positions: Vec<[f32; 3]> = reader
         .read_positions()
-        .ok_or_else(|| format!("{name} has no POSITION attribute"))?
+        .ok_or_else(|| format!("{name} has no POSITION data"))?
         .collect();
     if positions.iter().flatten().any(|v| !v.is_finite()) {
         return Err(format!("{name} has non-finite vertex positions"));
@@ -417,7 +529,7 @@ fn load_primitive(
     {
         return Err(format!("{name} has attributes of different lengths"));
     }
-    if reader.read_colors(0).is_some() {
+    if prim.get(&gltf::Semantic::Colors(0)).is_some() {
         warnings.push(format!("{name}: COLOR_0 vertex colours are ignored"));
     }
     let raw_indices: Vec<u32> = match reader.read_indices() {
@@ -454,6 +566,16 @@ fn load_primitive(
         .map_or(default_material, |i| i as u32);
     let opaque = materials[material as usize].alpha_mode == gpu::ALPHA_MODE_OPAQUE;
 
+    let bytes = n * std::mem::size_of::<gpu::Vertex>() + tri_count * 3 * 4;
+    out.budget.take(bytes as u64, &name)?;
+    if out.vertices.len() + n > u32::MAX as usize
+        || out.indices.len() + 3 * tri_count > u32::MAX as usize
+    {
+        return Err(format!(
+            "{name}: the scene has more than 2^32 vertices or indices"
+        ));
+    }
+    let (vertices, indices) = (&mut *out.vertices, &mut *out.indices);
     let vertex_offset = vertices.len() as u32;
     let index_offset = indices.len() as u32;
     vertices.extend((0..n).map(|i| {

@@ -8,8 +8,10 @@
 mod camera;
 pub mod export_mitsuba;
 pub mod generate;
+mod gltf_check;
 mod load;
 mod material;
+mod sources;
 pub mod spatial_order;
 mod stats;
 mod texture;
@@ -26,10 +28,10 @@ use std::path::{Path, PathBuf};
 /// Errors loading a scene. Every variant names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    #[error("{path}: cannot read the scene: {error}")]
-    Io {
+    #[error("cannot read the scene: {error}")]
+    File {
         path: PathBuf,
-        error: std::io::Error,
+        error: crate::files::FileError,
     },
     #[error("{path}: not a valid glTF file: {message}")]
     Gltf { path: PathBuf, message: String },
@@ -97,6 +99,9 @@ pub struct Scene {
     /// Where the file's world origin moved (see `load::rebase_origin`): every position
     /// here (instances, cameras, lights, bounds) is the file's minus this.
     pub origin: Vec3,
+    /// The external files the scene's URIs named (buffers, images), canonical: with
+    /// `path`, every file loading read (outputs must not overwrite them).
+    pub files: Vec<PathBuf>,
 }
 
 impl Scene {

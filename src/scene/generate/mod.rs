@@ -202,11 +202,8 @@ pub enum GenerateError {
     },
     #[error("cannot write {}: {reason}", path.display())]
     BadOutput { path: PathBuf, reason: String },
-    #[error("cannot write {}: {source}", path.display())]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    #[error("cannot write the scene: {0}")]
+    File(#[from] crate::files::FileError),
     #[error("cannot encode a texture: {0}")]
     Texture(String),
 }

@@ -628,7 +628,13 @@ impl Gltf {
             files.push((dir.join(name), png));
         }
         files.push((out.to_path_buf(), &text));
-        write_all_atomically(&files)?;
+        let mut plan = crate::files::FilePlan::new();
+        for (path, _) in &files {
+            plan.output("a generated file", path);
+        }
+        plan.check()?;
+        let refs: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (p.as_path(), *b)).collect();
+        crate::files::write_all_atomically(&refs)?;
         Ok(files.into_iter().map(|(p, _)| p).collect())
     }
 }
@@ -690,37 +696,4 @@ fn render_json(root: &Map<String, Value>) -> Vec<u8> {
     }
     out.push_str("}\n");
     out.into_bytes()
-}
-
-fn tmp_path(path: &Path) -> PathBuf {
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(format!(".{}.tmp", std::process::id()));
-    path.with_file_name(name)
-}
-
-fn write_all_atomically(files: &[(PathBuf, &[u8])]) -> Result<(), GenerateError> {
-    let mut written = Vec::new();
-    let result = (|| {
-        for (path, bytes) in files {
-            let tmp = tmp_path(path);
-            written.push(tmp.clone());
-            std::fs::write(&tmp, bytes).map_err(|source| GenerateError::Io {
-                path: path.clone(),
-                source,
-            })?;
-        }
-        for (path, _) in files {
-            std::fs::rename(tmp_path(path), path).map_err(|source| GenerateError::Io {
-                path: path.clone(),
-                source,
-            })?;
-        }
-        Ok(())
-    })();
-    if result.is_err() {
-        for tmp in written {
-            let _ = std::fs::remove_file(tmp);
-        }
-    }
-    result
 }
