@@ -770,8 +770,9 @@ impl Running {
 /// reference exits 1; Ctrl-C during guided training discards everything": SIGTERM and
 /// SIGINT both stop at a chunk boundary, write what is consistent and exit 75; a second
 /// signal exits 130 at once. Mutation-checked: without ctrlc's `termination` feature
-/// SIGTERM kills the render (no exit status) and the test fails; with the guided
-/// training's early return removed, the interrupted guided run exits 130.
+/// SIGTERM kills the render (no exit status) and the test fails; before a training pass
+/// kept at least one sample (and kept the previous pass when interrupted before its
+/// start), the guided run exited 130 with nothing written in 2 of 8 runs.
 #[test]
 fn interruption_writes_the_partial_result_and_exits_75() {
     let s = scene();

@@ -407,10 +407,20 @@ fn train_iteration(
     } else {
         spp
     };
-    let mut done = renderer.render_samples(sample, split, true, cancel, progress, stats)?;
-    if done == 0 {
-        // Interrupted before the first sample: no data to refit from.
-        return Ok(None);
+    // The first sample is rendered even if an interruption arrives meanwhile, so a pass
+    // that cleared the previous pass's film always leaves one of its own (ranges of
+    // samples add up exactly, so the split changes nothing in the film).
+    let never = AtomicBool::new(false);
+    let mut done = renderer.render_samples(sample, 1, true, &never, progress, stats)?;
+    if split > 1 {
+        done += renderer.render_samples(
+            sample + 1,
+            split - 1,
+            true,
+            cancel,
+            &mut |d| progress(1 + d),
+            stats,
+        )?;
     }
     let mut half = None;
     if split < spp {
