@@ -24,9 +24,26 @@ fn io_kind(kind: std::io::ErrorKind, message: String) -> PyErr {
     }
 }
 
+/// The exception class for a file error: `FileNotFoundError` for a missing file,
+/// `OSError` for other I/O, `ValueError` for a file lanterna refuses.
+fn file_kind(f: &crate::files::FileError) -> fn(String) -> PyErr {
+    use crate::files::FileError;
+    match f {
+        FileError::NotFound { .. } => |m| PyFileNotFoundError::new_err(m),
+        FileError::Io { error, .. } if error.kind() == std::io::ErrorKind::NotFound => {
+            |m| PyFileNotFoundError::new_err(m)
+        }
+        FileError::Io { .. } => |m| PyOSError::new_err(m),
+        _ => |m| PyValueError::new_err(m),
+    }
+}
+
 pub fn scene(e: SceneError) -> PyErr {
     match &e {
-        SceneError::Io { error, .. } => io_kind(error.kind(), message(e)),
+        SceneError::File { error, .. } => {
+            let make = file_kind(error);
+            make(message(e))
+        }
         _ => PyValueError::new_err(message(e)),
     }
 }
@@ -67,14 +84,20 @@ pub fn render(e: RenderError) -> PyErr {
 pub fn image(e: ImageError) -> PyErr {
     match &e {
         ImageError::NotFound { .. } => PyFileNotFoundError::new_err(message(e)),
-        ImageError::Io { source, .. } => io_kind(source.kind(), message(e)),
+        ImageError::File(f) => {
+            let make = file_kind(f);
+            make(message(e))
+        }
         _ => PyValueError::new_err(message(e)),
     }
 }
 
 pub fn guiding(e: GuidingError) -> PyErr {
     match &e {
-        GuidingError::Io { source, .. } => io_kind(source.kind(), message(e)),
+        GuidingError::File(f) => {
+            let make = file_kind(f);
+            make(message(e))
+        }
         _ => PyValueError::new_err(message(e)),
     }
 }
@@ -82,9 +105,9 @@ pub fn guiding(e: GuidingError) -> PyErr {
 pub fn compare(e: CompareError) -> PyErr {
     match e {
         CompareError::Image(e) => image(e),
-        CompareError::Io { source, path } => {
-            let text = format!("{}: {source}", path.display());
-            io_kind(source.kind(), text)
+        CompareError::Io { error, path } => {
+            let text = format!("{}: {error}", path.display());
+            io_kind(error.kind(), text)
         }
         e @ CompareError::Runner { .. } => PyRuntimeError::new_err(message(e)),
         e => PyValueError::new_err(message(e)),

@@ -81,9 +81,9 @@ pub fn apply(
                 settings.source = value_enum::<LightSource>(&flag, &v.extract::<String>()?)?
             }
             "ris_candidates" => settings.ris_candidates = v.extract()?,
-            "bsdf_fraction" => settings.bsdf_fraction = v.extract()?,
-            "train_fraction" => settings.train_fraction = v.extract()?,
-            "record_nee" => settings.record_nee = v.extract()?,
+            "bsdf_fraction" => settings.guiding.bsdf_fraction = v.extract()?,
+            "train_fraction" => settings.guiding.train_fraction = v.extract()?,
+            "record_nee" => settings.guiding.record_nee = v.extract()?,
             "strategy" => {
                 settings.strategy = value_enum::<Strategy>(&flag, &v.extract::<String>()?)?
             }
@@ -94,15 +94,24 @@ pub fn apply(
                 settings.guiding.memory_cap_bytes = mib.saturating_mul(1 << 20);
             }
             "spatial_filter" => {
-                settings.spatial_jitter =
-                    choice(&flag, &v.extract::<String>()?, ["jitter", "nearest"])?
+                settings.guiding.spatial_filter =
+                    if choice(&flag, &v.extract::<String>()?, ["jitter", "nearest"])? {
+                        crate::guiding::SpatialFilter::StochasticBox
+                    } else {
+                        crate::guiding::SpatialFilter::Nearest
+                    }
             }
             "directional_filter" => {
-                settings.directional_box =
-                    choice(&flag, &v.extract::<String>()?, ["box", "nearest"])?
+                settings.guiding.directional_filter =
+                    if choice(&flag, &v.extract::<String>()?, ["box", "nearest"])? {
+                        crate::guiding::DirectionalFilter::Box
+                    } else {
+                        crate::guiding::DirectionalFilter::Nearest
+                    }
             }
             "guided_output" => {
-                settings.guided_output = value_enum::<GuidedOutput>(&flag, &v.extract::<String>()?)?
+                settings.guiding.output =
+                    value_enum::<GuidedOutput>(&flag, &v.extract::<String>()?)?
             }
             "learn_lights" => settings.guiding.learn_lights = v.extract()?,
             "light_mix" => settings.guiding.light_mix = v.extract()?,

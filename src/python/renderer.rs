@@ -420,7 +420,7 @@ impl PyRenderer {
         let (lo, hi) = inner.renderer.bounds;
         let hash = scene_hash_number(&inner.loaded.scene.hash);
         tree.save(&path, hash, (lo.into(), hi.into())).map_err(|e| {
-            let io = matches!(e, crate::guiding::GuidingError::Io { .. });
+            let io = matches!(e, crate::guiding::GuidingError::File(_));
             let text = format!(
                 "cannot save the SD-tree to {}: {}",
                 path.display(),
