@@ -76,6 +76,7 @@ pub fn device(e: VkError) -> PyErr {
 pub fn render(e: RenderError) -> PyErr {
     match e {
         RenderError::Invalid(m) => PyValueError::new_err(m),
+        e @ RenderError::Settings(_) => PyValueError::new_err(message(e)),
         RenderError::Vulkan(v) => vulkan(v),
         e => PyRuntimeError::new_err(message(e)),
     }

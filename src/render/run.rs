@@ -20,16 +20,15 @@ impl Budget {
     /// command line's `--spp` and `--time`; 16 spp when neither is given), checked.
     pub fn from_request(spp: Option<u64>, seconds: Option<f64>) -> Result<Budget> {
         let invalid = |m: &str| Err(RenderError::Invalid(m.into()));
-        match (spp, seconds) {
-            (Some(_), Some(_)) => invalid("give --spp or --time, not both"),
-            (Some(0), None) => invalid("--spp must be at least 1"),
-            (Some(n), None) => Ok(Budget::Spp(n)),
-            (None, Some(t)) if !(t.is_finite() && t > 0.0) => {
-                invalid("--time must be a positive number of seconds")
-            }
-            (None, Some(t)) => Ok(Budget::Seconds(t)),
-            (None, None) => Ok(Budget::Spp(16)),
-        }
+        let budget = match (spp, seconds) {
+            (Some(_), Some(_)) => return invalid("give --spp or --time, not both"),
+            (Some(n), None) => Budget::Spp(n),
+            (None, Some(t)) => Budget::Seconds(t),
+            (None, None) => Budget::Spp(16),
+        };
+        // The command line's checks and messages (from sample index 0).
+        budget.check(0)?;
+        Ok(budget)
     }
 }
 

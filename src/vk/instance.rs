@@ -99,7 +99,9 @@ impl Instance {
             ext_names.push(ash::ext::debug_utils::NAME.as_ptr());
         }
         // Debug printf (for --pixel traces) and synchronization validation exclude each
-        // other in the layer; every other validating run checks synchronization.
+        // other in the layer; every other validating run checks synchronization, unless
+        // LANTERNA_SYNC_VALIDATION=0 (its access history grows the heap by ~30 KiB per
+        // render, which a leak test must not see).
         let printf_features = [vk::ValidationFeatureEnableEXT::DEBUG_PRINTF];
         let sync_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
         let debug_printf = validation && options.debug_printf;
@@ -113,7 +115,8 @@ impl Instance {
             .application_info(&app_info)
             .enabled_layer_names(&layer_names)
             .enabled_extension_names(&ext_names);
-        if validation {
+        let sync_validation = std::env::var("LANTERNA_SYNC_VALIDATION").map_or(true, |v| v != "0");
+        if validation && (debug_printf || sync_validation) {
             info = info.push_next(&mut validation_features);
         }
         if debug_printf {
