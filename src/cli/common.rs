@@ -342,19 +342,34 @@ pub fn render_meta(
     device: &lanterna::vk::Device,
 ) -> lanterna::image_io::RenderMeta {
     let mut meta = lanterna::image_io::RenderMeta::new();
-    meta.method = Some(settings.method.name().to_string());
-    meta.seed = Some(settings.seed as u64);
-    meta.max_depth = Some(settings.max_depth);
     meta.device = Some(device.info.name.clone());
     meta.scene_path = Some(scene.scene.display().to_string());
     meta.scene_hash = Some(scene_hash.to_string());
-    // Everything else the settings hold, from their serde form; these three have fields.
+    set_settings_meta(&mut meta, settings, None);
+    meta
+}
+
+/// Records `settings` in `meta`: method, seed and depth in their fields, everything else
+/// from the settings' serde form among the extra keys, replacing those `previous` wrote
+/// (compare renders several methods with one metadata template).
+pub fn set_settings_meta(
+    meta: &mut lanterna::image_io::RenderMeta,
+    settings: &RenderSettings,
+    previous: Option<&RenderSettings>,
+) {
+    if let Some(p) = previous {
+        for (k, _) in p.metadata_pairs() {
+            meta.extra.remove(&k);
+        }
+    }
+    meta.method = Some(settings.method.name().to_string());
+    meta.seed = Some(settings.seed as u64);
+    meta.max_depth = Some(settings.max_depth);
     for (k, v) in settings.metadata_pairs() {
         if !matches!(k.as_str(), "method" | "seed" | "max_depth") {
             meta.extra.insert(k, v);
         }
     }
-    meta
 }
 
 /// The image a run outputs: the film's exact sums, or the inverse-variance combination
