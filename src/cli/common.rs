@@ -346,12 +346,35 @@ pub fn render_meta(
     scene_hash: &str,
     device: &lanterna::vk::Device,
 ) -> lanterna::image_io::RenderMeta {
-    lanterna::render::output::render_meta(
-        settings,
-        &scene.scene.display().to_string(),
-        scene_hash,
-        &device.info.name,
-    )
+    let mut meta = lanterna::image_io::RenderMeta::new();
+    meta.device = Some(device.info.name.clone());
+    meta.scene_path = Some(scene.scene.display().to_string());
+    meta.scene_hash = Some(scene_hash.to_string());
+    set_settings_meta(&mut meta, settings, None);
+    meta
+}
+
+/// Records `settings` in `meta`: method, seed and depth in their fields, everything else
+/// from the settings' serde form among the extra keys, replacing those `previous` wrote
+/// (compare renders several methods with one metadata template).
+pub fn set_settings_meta(
+    meta: &mut lanterna::image_io::RenderMeta,
+    settings: &RenderSettings,
+    previous: Option<&RenderSettings>,
+) {
+    if let Some(p) = previous {
+        for (k, _) in p.metadata_pairs() {
+            meta.extra.remove(&k);
+        }
+    }
+    meta.method = Some(settings.method.name().to_string());
+    meta.seed = Some(settings.seed as u64);
+    meta.max_depth = Some(settings.max_depth);
+    for (k, v) in settings.metadata_pairs() {
+        if !matches!(k.as_str(), "method" | "seed" | "max_depth") {
+            meta.extra.insert(k, v);
+        }
+    }
 }
 
 /// The image a run outputs (see `lanterna::render::output::outcome_image`).

@@ -112,7 +112,7 @@ impl MethodRunner for GpuRunner {
             method,
             ..self.settings.clone()
         };
-        self.renderer.set_settings(settings)?;
+        self.renderer.set_settings(settings.clone())?;
         let prep = Instant::now();
         self.renderer.prepare()?;
         log::debug!(
@@ -128,7 +128,7 @@ impl MethodRunner for GpuRunner {
             return Err("interrupted".into());
         }
         let mut meta = self.meta.clone();
-        meta.method = Some(method.name().to_string());
+        common::set_settings_meta(&mut meta, &settings, Some(&self.settings));
         meta.render_seconds = Some(out.seconds);
         let image = common::outcome_image(&out, w, h, meta)?;
         log::info!(
