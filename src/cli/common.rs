@@ -317,7 +317,10 @@ pub fn cancel_flag() -> &'static AtomicBool {
         let installed = ctrlc::set_handler(|| {
             if CANCELLED.swap(true, Ordering::SeqCst) {
                 eprintln!("\ninterrupted twice: exiting without writing");
-                std::process::exit(i32::from(EXIT_INTERRUPTED_NOTHING));
+                // _exit, not exit: exit runs the Vulkan driver's teardown, which can crash
+                // while a dispatch is in flight on its worker threads (the run then died
+                // by a signal instead of exiting with the documented status).
+                unsafe { libc::_exit(i32::from(EXIT_INTERRUPTED_NOTHING)) }
             }
             eprintln!(
                 "\ninterrupted: finishing the current chunk and writing what has been rendered"
