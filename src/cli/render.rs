@@ -98,51 +98,8 @@ fn report_guiding(g: &lanterna::render::GuidingOutcome, training_seconds: f64) {
     }
 }
 
-/// AOV layers.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Aov {
-    Albedo,
-    Normal,
-    Depth,
-    Position,
-    LightCount,
-    RisWeight,
-    SelectedLight,
-    GuideFraction,
-    SampleCount,
-}
-
-impl Aov {
-    fn name(self) -> &'static str {
-        match self {
-            Aov::Albedo => "albedo",
-            Aov::Normal => "normal",
-            Aov::Depth => "depth",
-            Aov::Position => "position",
-            Aov::LightCount => "light-count",
-            Aov::RisWeight => "ris-weight",
-            Aov::SelectedLight => "selected-light",
-            Aov::GuideFraction => "guide-fraction",
-            Aov::SampleCount => "sample-count",
-        }
-    }
-
-    /// (first channel in the kernel's AOV buffer, channel names); None: computed on the host.
-    fn layout(self) -> Option<(u32, &'static [&'static str])> {
-        use lanterna::gpu::*;
-        Some(match self {
-            Aov::Albedo => (AOV_ALBEDO, &["R", "G", "B"]),
-            Aov::Normal => (AOV_NORMAL, &["X", "Y", "Z"]),
-            Aov::Depth => (AOV_DEPTH, &["Z"]),
-            Aov::Position => (AOV_POSITION, &["X", "Y", "Z"]),
-            Aov::LightCount => (AOV_LIGHT_COUNT, &["Y"]),
-            Aov::RisWeight => (AOV_RIS_WEIGHT, &["Y"]),
-            Aov::SelectedLight => (AOV_SELECTED_LIGHT, &["Y"]),
-            Aov::GuideFraction => (AOV_GUIDE_FRACTION, &["Y"]),
-            Aov::SampleCount => return None,
-        })
-    }
-}
+/// AOV layers (the library's list, shared with the Python module).
+pub use lanterna::render::output::Aov;
 
 pub fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
     let (x, y) = s.split_once(',').ok_or("expected X,Y")?;

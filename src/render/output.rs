@@ -130,7 +130,7 @@ impl Aov {
     }
 
     /// (first channel in the kernel's AOV buffer, channel names); None: computed on the host.
-    fn layout(self) -> Option<(u32, &'static [&'static str])> {
+    pub fn layout(self) -> Option<(u32, &'static [&'static str])> {
         use gpu::*;
         Some(match self {
             Aov::Albedo => (AOV_ALBEDO, &["R", "G", "B"]),
