@@ -33,6 +33,7 @@ bench: $(SETUP_STAMP)
 
 lint:
 	$(CARGO) fmt --all -- --check
+	scripts/module-cycles
 	$(CARGO) clippy --all-targets -- -D warnings
 	$(CARGO) clippy --all-targets --features python -- -D warnings
 

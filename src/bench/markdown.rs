@@ -2,33 +2,10 @@
 //! every timing as "median (min–max)" over the repetitions, the sizes stated with each
 //! table, and a paragraph on where the time goes written from the profile's numbers.
 
+pub use super::number::num;
 use super::report::BenchReport;
 use super::spread::Spread;
 use std::fmt::Write as _;
-
-/// A number with about four significant digits, without exponent notation for the
-/// ranges the bench produces.
-pub fn num(x: f64) -> String {
-    if !x.is_finite() {
-        return "–".into();
-    }
-    let a = x.abs();
-    if a == 0.0 {
-        "0".into()
-    } else if a >= 1000.0 {
-        format!("{x:.0}")
-    } else if a >= 100.0 {
-        format!("{x:.1}")
-    } else if a >= 10.0 {
-        format!("{x:.2}")
-    } else if a >= 1.0 {
-        format!("{x:.3}")
-    } else if a >= 0.01 {
-        format!("{x:.4}")
-    } else {
-        format!("{x:.2e}")
-    }
-}
 
 /// `median (min–max)` of a spread times `k`.
 fn spread(s: &Spread, k: f64) -> String {

@@ -12,6 +12,7 @@ pub mod harness;
 pub mod machine;
 pub mod markdown;
 pub mod mitsuba;
+pub mod number;
 pub mod profile;
 pub mod quality;
 pub mod report;

@@ -236,7 +236,7 @@ pub fn parts(entries: &[ProfileEntry], depth: u32) -> Vec<Part> {
                         &of,
                         &format!(
                             "RIS candidates ({m_hi} per vertex, {} ns each)",
-                            super::markdown::num(per_candidate)
+                            super::number::num(per_candidate)
                         ),
                         candidates,
                         t_hi,
@@ -245,7 +245,7 @@ pub fn parts(entries: &[ProfileEntry], depth: u32) -> Vec<Part> {
                         &of,
                         &format!(
                             "shadow rays beyond pt's ({} ns each)",
-                            super::markdown::num(per_shadow)
+                            super::number::num(per_shadow)
                         ),
                         shadow,
                         t_hi,

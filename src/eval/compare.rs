@@ -4,61 +4,17 @@
 //! `mae_vs_time.png`, `grid.png`, `index.html`) into the output directory. Rendering is
 //! behind the trait so the whole pipeline runs with a fake runner in tests.
 
-use std::fmt;
 use std::path::{Path, PathBuf};
-use std::str::FromStr;
 
+pub use super::compare_types::{Budget, CompareError, Crop};
 use super::metrics::{self, Named};
 use super::report::{self, Record, Report};
 use super::BoxError;
-use crate::image_io::{write_exr, Image, ImageError};
+use super::{grid, html, plot};
+use crate::image_io::{write_atomically, write_exr, Image};
 
 /// The methods lanterna implements, in their canonical order.
 pub const METHODS: [&str; 4] = ["pt", "ris", "guided", "guided-ris"];
-
-/// How much work one render may do.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Budget {
-    /// Exactly this many samples per pixel.
-    Spp(u64),
-    /// Render (after setup) until this many wall-clock seconds have passed; the runner
-    /// reports the spp it reached.
-    Seconds(f64),
-}
-
-impl Budget {
-    /// `spp` or `time`, as in the report's `budget_kind`.
-    pub fn kind(&self) -> &'static str {
-        match self {
-            Budget::Spp(_) => "spp",
-            Budget::Seconds(_) => "time",
-        }
-    }
-
-    pub fn value(&self) -> f64 {
-        match *self {
-            Budget::Spp(n) => n as f64,
-            Budget::Seconds(s) => s,
-        }
-    }
-
-    /// A file-name-safe tag: `spp16`, `t2.5s`.
-    pub fn tag(&self) -> String {
-        match *self {
-            Budget::Spp(n) => format!("spp{n}"),
-            Budget::Seconds(s) => format!("t{s}s"),
-        }
-    }
-}
-
-impl fmt::Display for Budget {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match *self {
-            Budget::Spp(n) => write!(f, "{n} spp"),
-            Budget::Seconds(s) => write!(f, "{s} s"),
-        }
-    }
-}
 
 /// What a runner returns for one render.
 #[derive(Clone, Debug)]
@@ -86,53 +42,6 @@ pub trait MethodRunner {
     fn render(&mut self, method: &str, budget: Budget) -> Result<MethodResult, BoxError>;
 }
 
-/// A rectangle of the reference, in pixels: `x,y,w,h` on the command line.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub struct Crop {
-    pub x: u32,
-    pub y: u32,
-    pub w: u32,
-    pub h: u32,
-}
-
-impl FromStr for Crop {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        let parts: Vec<&str> = s.split(',').map(str::trim).collect();
-        let values: Vec<u32> = parts.iter().filter_map(|p| p.parse().ok()).collect();
-        if parts.len() != 4 || values.len() != 4 {
-            return Err(format!(
-                "crop {s:?} should be four non-negative integers x,y,w,h"
-            ));
-        }
-        if values[2] == 0 || values[3] == 0 {
-            return Err(format!("crop {s:?} has zero width or height"));
-        }
-        Ok(Crop {
-            x: values[0],
-            y: values[1],
-            w: values[2],
-            h: values[3],
-        })
-    }
-}
-
-impl Crop {
-    /// An error unless the crop lies inside a `width` × `height` image.
-    pub fn check_inside(&self, width: u32, height: u32) -> Result<(), String> {
-        let fits = u64::from(self.x) + u64::from(self.w) <= u64::from(width)
-            && u64::from(self.y) + u64::from(self.h) <= u64::from(height);
-        if fits {
-            Ok(())
-        } else {
-            Err(format!(
-                "crop {},{},{},{} does not fit in the {width}x{height} reference",
-                self.x, self.y, self.w, self.h
-            ))
-        }
-    }
-}
-
 /// Everything the comparison needs besides the runner and the reference.
 #[derive(Clone, Debug)]
 pub struct CompareConfig {
@@ -152,38 +61,6 @@ pub struct CompareConfig {
     /// Scene path, reference path: shown in the report.
     pub scene: String,
     pub reference: String,
-}
-
-#[derive(Debug, thiserror::Error)]
-pub enum CompareError {
-    #[error("invalid comparison settings: {0}")]
-    Config(String),
-    #[error("rendering {method} at {budget} failed")]
-    Runner {
-        method: String,
-        budget: Budget,
-        source: BoxError,
-    },
-    #[error("{method} at {budget}: {problem}")]
-    BadResult {
-        method: String,
-        budget: Budget,
-        problem: String,
-    },
-    #[error(transparent)]
-    Metric(#[from] metrics::MetricError),
-    #[error(transparent)]
-    Image(#[from] ImageError),
-    // `error` is not a `source`: the message already includes it, once.
-    #[error("{}: {error}", path.display())]
-    Io {
-        path: PathBuf,
-        error: std::io::Error,
-    },
-    #[error("{}: {problem}", path.display())]
-    Figure { path: PathBuf, problem: String },
-    #[error("{0}")]
-    Reference(String),
 }
 
 impl CompareConfig {
@@ -390,6 +267,53 @@ pub fn run_compare(
         crop: config.crop,
         records,
     };
-    report::write_all(&report, reference, &grid_images, config)?;
+    write_report_files(&report, reference, &grid_images, config)?;
     Ok(report)
+}
+
+fn write_text(path: &Path, text: &str) -> Result<(), CompareError> {
+    write_atomically(path, text.as_bytes()).map_err(CompareError::from)
+}
+
+/// Writes every file of [`REPORT_FILES`] into `config.out_dir`.
+/// `grid_images` are the renders at the grid budget, in method order.
+fn write_report_files(
+    report: &Report,
+    reference: &Image,
+    grid_images: &[(String, Image)],
+    config: &CompareConfig,
+) -> Result<(), CompareError> {
+    let dir = &config.out_dir;
+    let json = serde_json::to_string_pretty(report).expect("report serializes");
+    write_text(&dir.join("report.json"), &json)?;
+    write_text(&dir.join("report.csv"), &report::to_csv(report))?;
+    plot::write_error_plot(&dir.join("mae_vs_spp.png"), report, plot::Axis::Spp)?;
+    plot::write_error_plot(&dir.join("mae_vs_time.png"), report, plot::Axis::Seconds)?;
+    let columns: Vec<grid::Column> = grid_images
+        .iter()
+        .map(|(method, image)| {
+            let mae = report
+                .records
+                .iter()
+                .rev()
+                .find(|r| &r.method == method && report.grid_budget == report::budget_label(r))
+                .map(|r| r.mae);
+            grid::Column {
+                label: method.clone(),
+                image,
+                mae,
+            }
+        })
+        .collect();
+    let title = format!("{} — {}", report.scene, report.grid_budget);
+    grid::write_grid(
+        &dir.join("grid.png"),
+        &title,
+        reference,
+        &columns,
+        config.crop,
+        config.exposure,
+    )?;
+    html::write_index(&dir.join("index.html"), report, dir)?;
+    Ok(())
 }

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::compare::{CompareError, Crop};
+use super::compare_types::{CompareError, Crop};
 use super::fonts;
 use super::metrics::abs_error_map;
 use super::text::TextBackend;

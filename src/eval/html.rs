@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::compare::CompareError;
+use super::compare_types::CompareError;
 use super::report::{budget_label, Report};
 use crate::image_io::write_atomically;
 

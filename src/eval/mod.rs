@@ -5,6 +5,7 @@
 //! renderer implements, so everything here runs and is tested without a GPU.
 
 pub mod compare;
+pub mod compare_types;
 pub mod fonts;
 pub mod grid;
 pub mod html;

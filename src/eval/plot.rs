@@ -6,7 +6,7 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::compare::CompareError;
+use super::compare_types::CompareError;
 use super::fonts;
 use super::report::{Record, Report};
 use super::text::TextBackend;

@@ -1,13 +1,10 @@
 //! The comparison's results as data: one [`Record`] per method and budget, with each
-//! metric's ratio to `pt` at the same budget, written as `report.json` and `report.csv`;
-//! [`write_all`] also draws the figures and the HTML page that shows them.
+//! metric's ratio to `pt` at the same budget, serialised as `report.json` and
+//! `report.csv` (the comparison writes them, with the figures and the HTML page).
 
 use std::fmt::Write as _;
-use std::path::Path;
 
-use super::compare::{CompareConfig, CompareError};
-use super::{grid, html, plot};
-use crate::image_io::{write_atomically, Image};
+use super::compare_types::Crop;
 
 /// One render's measurements.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -47,7 +44,7 @@ pub struct Report {
     pub methods: Vec<String>,
     /// The budget the grid's images were rendered at (e.g. `10 s`).
     pub grid_budget: String,
-    pub crop: Option<super::compare::Crop>,
+    pub crop: Option<Crop>,
     pub records: Vec<Record>,
 }
 
@@ -105,54 +102,7 @@ pub fn to_csv(report: &Report) -> String {
     out
 }
 
-fn write_text(path: &Path, text: &str) -> Result<(), CompareError> {
-    write_atomically(path, text.as_bytes()).map_err(CompareError::from)
-}
-
-/// Writes every file of [`super::compare::REPORT_FILES`] into `config.out_dir`.
-/// `grid_images` are the renders at the grid budget, in method order.
-pub fn write_all(
-    report: &Report,
-    reference: &Image,
-    grid_images: &[(String, Image)],
-    config: &CompareConfig,
-) -> Result<(), CompareError> {
-    let dir = &config.out_dir;
-    let json = serde_json::to_string_pretty(report).expect("report serializes");
-    write_text(&dir.join("report.json"), &json)?;
-    write_text(&dir.join("report.csv"), &to_csv(report))?;
-    plot::write_error_plot(&dir.join("mae_vs_spp.png"), report, plot::Axis::Spp)?;
-    plot::write_error_plot(&dir.join("mae_vs_time.png"), report, plot::Axis::Seconds)?;
-    let columns: Vec<grid::Column> = grid_images
-        .iter()
-        .map(|(method, image)| {
-            let mae = report
-                .records
-                .iter()
-                .rev()
-                .find(|r| &r.method == method && report.grid_budget == budget_label(r))
-                .map(|r| r.mae);
-            grid::Column {
-                label: method.clone(),
-                image,
-                mae,
-            }
-        })
-        .collect();
-    let title = format!("{} — {}", report.scene, report.grid_budget);
-    grid::write_grid(
-        &dir.join("grid.png"),
-        &title,
-        reference,
-        &columns,
-        config.crop,
-        config.exposure,
-    )?;
-    html::write_index(&dir.join("index.html"), report, dir)?;
-    Ok(())
-}
-
-/// The budget of a record as [`super::compare::Budget`]'s `Display` writes it.
+/// The budget of a record as [`super::compare_types::Budget`]'s `Display` writes it.
 pub fn budget_label(r: &Record) -> String {
     match r.budget_kind.as_str() {
         "spp" => format!("{} spp", r.budget as u64),

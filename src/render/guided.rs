@@ -11,7 +11,7 @@
 //! so the combination is consistent rather than strictly unbiased (as in the reference
 //! implementation); the render phase alone is unbiased.
 
-use super::run::{deadline_after, Budget, RunOutcome, SAMPLE_INDEX_END};
+use super::budget::{deadline_after, Budget, RunOutcome, SAMPLE_INDEX_END};
 use super::{Film, GuideBuffers, GuidedOutput, RenderError, RenderStats, Renderer, Result};
 use crate::guiding::{GuidingConfig, SdTree, SppSchedule, TimeSchedule};
 use std::sync::atomic::{AtomicBool, Ordering};

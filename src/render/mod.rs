@@ -6,6 +6,7 @@
 //! exactly the same film as a one-shot render. Dispatches are sized from measured times
 //! so that no single submission runs much longer than half a second.
 
+mod budget;
 mod film;
 mod gpu_scene;
 mod guided;

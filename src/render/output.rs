@@ -3,7 +3,7 @@
 //! EXR and the Python module returns them as arrays; both build them here, so the two
 //! agree bit for bit.
 
-use super::run::RunOutcome;
+use super::budget::RunOutcome;
 use super::{RenderSettings, Renderer, Result};
 use crate::gpu;
 use crate::image_io::{self, Image, ImageError, RenderMeta};
