@@ -52,30 +52,31 @@ impl Buffer {
                     error,
                 }
             })?;
-        unsafe {
-            device
-                .raw
-                .bind_buffer_memory(raw, allocation.memory(), allocation.offset())
-        }
-        .check("vkBindBufferMemory")?;
-        let address = if usage.contains(vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS) {
-            unsafe {
-                device
-                    .raw
-                    .get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw))
-            }
-        } else {
-            0
-        };
-        device.set_name(raw, name);
-        Ok(Buffer {
+        // From here on the value owns the buffer and its memory: an error drops it, and
+        // Drop frees both.
+        let mut buffer = Buffer {
             device: device.clone(),
             raw,
             allocation: Some(allocation),
             size,
-            address,
+            address: 0,
             name: name.to_string(),
-        })
+        };
+        let (memory, offset) = {
+            let a = buffer.allocation.as_ref().expect("just allocated");
+            (unsafe { a.memory() }, a.offset())
+        };
+        unsafe { device.raw.bind_buffer_memory(raw, memory, offset) }
+            .check("vkBindBufferMemory")?;
+        if usage.contains(vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS) {
+            buffer.address = unsafe {
+                device
+                    .raw
+                    .get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw))
+            };
+        }
+        device.set_name(raw, name);
+        Ok(buffer)
     }
 
     /// A device-local storage buffer holding `data` (uploaded through a staging buffer).

@@ -509,17 +509,24 @@ impl Device {
             .command_buffer_count(1);
         let cmd = unsafe { self.raw.allocate_command_buffers(&alloc_info) }
             .check("vkAllocateCommandBuffers")?[0];
-        let query_pool = if timed {
+        // Owns the command buffer (and the query pool once made) from here on, so that
+        // every return, early or not, frees them.
+        let mut guard = SubmissionGuard {
+            device: &self.raw,
+            pool,
+            cmd,
+            query_pool: None,
+        };
+        if timed {
             let qp_info = vk::QueryPoolCreateInfo::default()
                 .query_type(vk::QueryType::TIMESTAMP)
                 .query_count(2);
             let qp =
                 unsafe { self.raw.create_query_pool(&qp_info, None) }.check("vkCreateQueryPool")?;
             unsafe { self.raw.reset_query_pool(qp, 0, 2) };
-            Some(qp)
-        } else {
-            None
-        };
+            guard.query_pool = Some(qp);
+        }
+        let query_pool = guard.query_pool;
         let begin = vk::CommandBufferBeginInfo::default()
             .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         let result = (|| {
@@ -573,12 +580,7 @@ impl Device {
             };
             Ok((r, seconds))
         })();
-        unsafe {
-            self.raw.free_command_buffers(*pool, &[cmd]);
-            if let Some(qp) = query_pool {
-                self.raw.destroy_query_pool(qp, None);
-            }
-        }
+        drop(guard);
         result
     }
 
@@ -633,6 +635,26 @@ impl Drop for Device {
                 .destroy_command_pool(*self.command_pool.lock().unwrap(), None);
             ManuallyDrop::drop(&mut self.allocator);
             self.raw.destroy_device(None);
+        }
+    }
+}
+
+/// The command buffer of one submission and its timestamp query pool, freed on drop (with
+/// the command pool's lock held until then).
+struct SubmissionGuard<'a> {
+    device: &'a ash::Device,
+    pool: std::sync::MutexGuard<'a, vk::CommandPool>,
+    cmd: vk::CommandBuffer,
+    query_pool: Option<vk::QueryPool>,
+}
+
+impl Drop for SubmissionGuard<'_> {
+    fn drop(&mut self) {
+        unsafe {
+            self.device.free_command_buffers(*self.pool, &[self.cmd]);
+            if let Some(qp) = self.query_pool.take() {
+                self.device.destroy_query_pool(qp, None);
+            }
         }
     }
 }

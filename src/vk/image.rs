@@ -110,12 +110,23 @@ impl Texture {
                     error,
                 }
             })?;
-        unsafe {
-            device
-                .raw
-                .bind_image_memory(image, allocation.memory(), allocation.offset())
-        }
-        .check("vkBindImageMemory")?;
+        // From here on the value owns the image and its memory (and the view once it
+        // exists; destroying a null view is a no-op): an error drops it, and Drop frees
+        // them.
+        let mut texture = Texture {
+            device: device.clone(),
+            image,
+            view: vk::ImageView::null(),
+            allocation: Some(allocation),
+            width,
+            height,
+        };
+        let (memory, offset) = {
+            let a = texture.allocation.as_ref().expect("just allocated");
+            (unsafe { a.memory() }, a.offset())
+        };
+        unsafe { device.raw.bind_image_memory(image, memory, offset) }
+            .check("vkBindImageMemory")?;
         device.set_name(image, name);
 
         let mut staging = Buffer::new(
@@ -191,17 +202,10 @@ impl Texture {
             .view_type(vk::ImageViewType::TYPE_2D)
             .format(vk_format)
             .subresource_range(range);
-        let view =
+        texture.view =
             unsafe { device.raw.create_image_view(&view_info, None) }.check("vkCreateImageView")?;
-        device.set_name(view, name);
-        Ok(Texture {
-            device: device.clone(),
-            image,
-            view,
-            allocation: Some(allocation),
-            width,
-            height,
-        })
+        device.set_name(texture.view, name);
+        Ok(texture)
     }
 }
 

@@ -99,24 +99,32 @@ impl ComputePipeline {
         let set_info = vk::DescriptorSetLayoutCreateInfo::default()
             .bindings(&raw_bindings)
             .push_next(&mut flags_info);
-        let set_layout = unsafe { device.raw.create_descriptor_set_layout(&set_info, None) }
+        // The value owns every handle from its first one on (destroying null handles is
+        // a no-op), so an error at any later step frees what was made before it.
+        let mut pipeline = ComputePipeline {
+            device: device.clone(),
+            raw: vk::Pipeline::null(),
+            layout: vk::PipelineLayout::null(),
+            set_layout: vk::DescriptorSetLayout::null(),
+            bindings: bindings.to_vec(),
+            push_constant_size,
+            name: name.to_string(),
+        };
+        pipeline.set_layout = unsafe { device.raw.create_descriptor_set_layout(&set_info, None) }
             .check("vkCreateDescriptorSetLayout")?;
-        device.set_name(set_layout, &format!("{name} set layout"));
+        device.set_name(pipeline.set_layout, &format!("{name} set layout"));
 
         let ranges = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::COMPUTE)
             .size(push_constant_size)];
-        let set_layouts = [set_layout];
+        let set_layouts = [pipeline.set_layout];
         let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
         if push_constant_size > 0 {
             layout_info = layout_info.push_constant_ranges(&ranges);
         }
-        let layout = unsafe { device.raw.create_pipeline_layout(&layout_info, None) }
-            .check("vkCreatePipelineLayout")
-            .inspect_err(|_| unsafe {
-                device.raw.destroy_descriptor_set_layout(set_layout, None)
-            })?;
-        device.set_name(layout, &format!("{name} layout"));
+        pipeline.layout = unsafe { device.raw.create_pipeline_layout(&layout_info, None) }
+            .check("vkCreatePipelineLayout")?;
+        device.set_name(pipeline.layout, &format!("{name} layout"));
 
         let module_info = vk::ShaderModuleCreateInfo::default().code(spirv);
         let module = unsafe { device.raw.create_shader_module(&module_info, None) }
@@ -140,7 +148,7 @@ impl ComputePipeline {
             .specialization_info(&spec_info);
         let info = [vk::ComputePipelineCreateInfo::default()
             .stage(stage)
-            .layout(layout)];
+            .layout(pipeline.layout)];
         let started = std::time::Instant::now();
         let created = unsafe {
             device
@@ -148,33 +156,21 @@ impl ComputePipeline {
                 .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
         };
         unsafe { device.raw.destroy_shader_module(module, None) };
-        let raw = match created {
+        pipeline.raw = match created {
             Ok(p) => p[0],
             Err((_, e)) => {
-                unsafe {
-                    device.raw.destroy_pipeline_layout(layout, None);
-                    device.raw.destroy_descriptor_set_layout(set_layout, None);
-                }
                 return Err(super::VkError::Call {
                     call: "vkCreateComputePipelines",
                     result: e,
-                });
+                })
             }
         };
         log::debug!(
             "pipeline {name} created in {:.2} s",
             started.elapsed().as_secs_f64()
         );
-        device.set_name(raw, name);
-        Ok(ComputePipeline {
-            device: device.clone(),
-            raw,
-            layout,
-            set_layout,
-            bindings: bindings.to_vec(),
-            push_constant_size,
-            name: name.to_string(),
-        })
+        device.set_name(pipeline.raw, name);
+        Ok(pipeline)
     }
 
     /// Record a dispatch with `set` bound and `push` as push constants.
