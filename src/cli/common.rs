@@ -7,7 +7,7 @@ use lanterna::render::session::{self, DeviceOptions, LoadedScene};
 use lanterna::render::{
     GuidedOutput, GuidingSettings, LightSource, Method, RenderSettings, Strategy,
 };
-use lanterna::scene::{Camera, CameraOverride, LoadOptions};
+use lanterna::scene::{Camera, LoadOptions};
 use lanterna::shaders::ShaderSource;
 use lanterna::vk::DeviceSelector;
 use std::path::{Path, PathBuf};
@@ -238,18 +238,15 @@ impl EstimatorArgs {
 /// Load the scene and choose the view: the camera and the image size.
 pub fn load(args: &SceneArgs) -> Result<(LoadedScene, Camera, u32, u32)> {
     let loaded = session::load_scene_with(&args.scene, &args.load_options())?;
-    let o = CameraOverride {
-        look_at: args.look_at.map(|v| {
-            (
-                glam::Vec3::new(v[0], v[1], v[2]),
-                glam::Vec3::new(v[3], v[4], v[5]),
-            )
-        }),
-        up: None,
-        fov_degrees: args.fov,
+    let view = session::ViewOptions {
+        camera: args.camera.clone(),
+        look_at: args.look_at,
+        fov: args.fov,
+        width: args.width,
+        height: args.height,
     };
-    let camera = session::choose_camera(&loaded.scene, args.camera.as_deref(), &o)?;
-    let (w, h) = session::resolution(&camera, args.width, args.height);
+    let (camera, w, h) = session::choose_view(&loaded.scene, &view)
+        .with_context(|| format!("{}: cannot set up the view", args.scene.display()))?;
     Ok((loaded, camera, w, h))
 }
 
@@ -342,42 +339,19 @@ pub fn ensure_parent(path: &std::path::Path) -> Result<()> {
     Ok(())
 }
 
-/// Metadata every render's EXR carries, from what was rendered and how.
+/// Metadata every render's EXR carries (see `lanterna::render::output::render_meta`).
 pub fn render_meta(
     settings: &RenderSettings,
     scene: &SceneArgs,
     scene_hash: &str,
     device: &lanterna::vk::Device,
 ) -> lanterna::image_io::RenderMeta {
-    let mut meta = lanterna::image_io::RenderMeta::new();
-    meta.device = Some(device.info.name.clone());
-    meta.scene_path = Some(scene.scene.display().to_string());
-    meta.scene_hash = Some(scene_hash.to_string());
-    set_settings_meta(&mut meta, settings, None);
-    meta
-}
-
-/// Records `settings` in `meta`: method, seed and depth in their fields, everything else
-/// from the settings' serde form among the extra keys, replacing those `previous` wrote
-/// (compare renders several methods with one metadata template).
-pub fn set_settings_meta(
-    meta: &mut lanterna::image_io::RenderMeta,
-    settings: &RenderSettings,
-    previous: Option<&RenderSettings>,
-) {
-    if let Some(p) = previous {
-        for (k, _) in p.metadata_pairs() {
-            meta.extra.remove(&k);
-        }
-    }
-    meta.method = Some(settings.method.name().to_string());
-    meta.seed = Some(settings.seed as u64);
-    meta.max_depth = Some(settings.max_depth);
-    for (k, v) in settings.metadata_pairs() {
-        if !matches!(k.as_str(), "method" | "seed" | "max_depth") {
-            meta.extra.insert(k, v);
-        }
-    }
+    lanterna::render::output::render_meta(
+        settings,
+        &scene.scene.display().to_string(),
+        scene_hash,
+        &device.info.name,
+    )
 }
 
 /// The image a run outputs (see `lanterna::render::output::outcome_image`).

@@ -8,12 +8,10 @@ use std::time::Instant;
 
 use super::common::{self, DeviceArgs, EstimatorArgs, SceneArgs};
 use anyhow::Context;
-use lanterna::eval::compare::{
-    run_compare, Budget, CompareConfig, Crop, MethodResult, MethodRunner, METHODS,
-};
-use lanterna::eval::BoxError;
+use lanterna::eval::compare::{run_compare, CompareConfig, Crop, METHODS};
 use lanterna::image_io::{read_exr, Image};
-use lanterna::render::{run, session, Method, RenderSettings, Renderer};
+use lanterna::render::runner::CompareRunner;
+use lanterna::render::{session, Method, RenderSettings, Renderer};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -93,61 +91,16 @@ pub fn load_reference(args: &Args, config: &CompareConfig) -> anyhow::Result<Ima
     Ok(reference)
 }
 
-/// The GPU renderer behind the comparison: one scene on the device, the method switched
-/// per run.
-struct GpuRunner {
+/// The scene on the device, ready for the comparison's runs.
+struct Prepared {
     renderer: Renderer,
     /// The settings of every run, but for the method.
     settings: RenderSettings,
     setup_seconds: f64,
     meta: lanterna::image_io::RenderMeta,
-    cancel: &'static std::sync::atomic::AtomicBool,
 }
 
-impl MethodRunner for GpuRunner {
-    fn render(&mut self, method: &str, budget: Budget) -> Result<MethodResult, BoxError> {
-        let method: Method = method.parse()?;
-        let (w, h) = (self.renderer.settings.width, self.renderer.settings.height);
-        let settings = RenderSettings {
-            method,
-            ..self.settings.clone()
-        };
-        self.renderer.set_settings(settings.clone())?;
-        let prep = Instant::now();
-        self.renderer.prepare()?;
-        log::debug!(
-            "{method}: pipelines ready in {:.1} s",
-            prep.elapsed().as_secs_f64()
-        );
-        let budget = match budget {
-            Budget::Spp(n) => run::Budget::Spp(n),
-            Budget::Seconds(s) => run::Budget::Seconds(s),
-        };
-        let out = run::run_method(&mut self.renderer, budget, 0, self.cancel, &mut |_| {})?;
-        if self.cancel.load(std::sync::atomic::Ordering::SeqCst) {
-            return Err("interrupted".into());
-        }
-        let mut meta = self.meta.clone();
-        common::set_settings_meta(&mut meta, &settings, Some(&self.settings));
-        meta.render_seconds = Some(out.seconds);
-        let image = common::outcome_image(&out, w, h, meta)?;
-        log::info!(
-            "{method} {budget:?}: {} spp in {:.2} s",
-            out.film.spp,
-            out.seconds
-        );
-        Ok(MethodResult {
-            spp: out.film.spp,
-            render_seconds: out.seconds,
-            setup_seconds: self.setup_seconds,
-            gpu_seconds: Some(out.stats.gpu_seconds),
-            training_seconds: method.uses_guiding().then_some(out.training_seconds),
-            image,
-        })
-    }
-}
-
-fn open_runner(args: &Args, reference: &Image) -> anyhow::Result<Box<dyn MethodRunner>> {
+fn prepare(args: &Args, reference: &Image) -> anyhow::Result<Prepared> {
     let started = Instant::now();
     let mut view = args.view.clone();
     view.width = Some(view.width.unwrap_or(reference.width));
@@ -192,13 +145,12 @@ fn open_runner(args: &Args, reference: &Image) -> anyhow::Result<Box<dyn MethodR
         args.device.shaders(),
     )?;
     let meta = common::render_meta(&renderer.settings, &view, &loaded.scene.hash, &device);
-    Ok(Box::new(GpuRunner {
+    Ok(Prepared {
         renderer,
         settings,
         setup_seconds: started.elapsed().as_secs_f64(),
         meta,
-        cancel: common::cancel_flag(),
-    }))
+    })
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -207,8 +159,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if !args.view.scene.exists() {
         anyhow::bail!("scene {} not found", args.view.scene.display());
     }
-    let mut runner = open_runner(&args, &reference)?;
-    let report = run_compare(runner.as_mut(), &reference, &config)?;
+    let mut prepared = prepare(&args, &reference)?;
+    let mut runner = CompareRunner {
+        renderer: &mut prepared.renderer,
+        base: prepared.settings,
+        setup_seconds: prepared.setup_seconds,
+        meta: prepared.meta,
+        cancel: common::cancel_flag(),
+        progress: &mut |_| {},
+    };
+    let report = run_compare(&mut runner, &reference, &config)?;
     log::info!(
         "{} renders compared; report in {}",
         report.records.len(),

@@ -5,9 +5,8 @@
 use super::common::{self, DeviceArgs, SceneArgs};
 use anyhow::{Context, Result};
 use lanterna::guiding::SdTree;
-use lanterna::render::{session, Method, RenderSettings, RenderStats, Renderer};
+use lanterna::render::session;
 use std::path::PathBuf;
-use std::sync::atomic::AtomicBool;
 
 #[derive(clap::Subcommand)]
 pub enum Command {
@@ -63,40 +62,16 @@ fn view(args: ViewArgs) -> Result<()> {
     // The first hit: the position AOV of a few samples of the pixel.
     let device =
         session::open_device(&args.device.options()).context("cannot open a Vulkan device")?;
-    let settings = RenderSettings {
-        method: Method::Pt,
+    let pos = session::first_hit(
+        &device,
+        &loaded,
+        camera,
         width,
         height,
-        max_depth: 1,
-        fov_degrees: args.scene.fov,
-        aovs: true,
-        ..RenderSettings::default()
-    };
-    settings.validate()?;
-    let mut r = Renderer::new(
-        device,
-        &loaded.scene,
-        &loaded.lights,
-        camera,
-        settings,
+        (x, y),
         args.device.shaders(),
-    )?;
-    let mut stats = RenderStats::default();
-    r.render_samples(
-        0,
-        4,
-        false,
-        &AtomicBool::new(false),
-        &mut |_| {},
-        &mut stats,
-    )?;
-    let aov = r.aovs()?;
-    let n = lanterna::gpu::AOV_CHANNELS as usize;
-    let px = &aov[(y * width + x) as usize * n..][..n];
-    let depth = px[lanterna::gpu::AOV_DEPTH as usize];
-    anyhow::ensure!(depth > 0.0, "pixel ({x}, {y}) sees no surface");
-    let p = lanterna::gpu::AOV_POSITION as usize;
-    let pos = glam::Vec3::new(px[p], px[p + 1], px[p + 2]);
+    )?
+    .ok_or_else(|| anyhow::anyhow!("pixel ({x}, {y}) sees no surface"))?;
 
     let v = tree.leaf_view(pos, args.size);
     let rgb8: Vec<u8> = v

@@ -19,19 +19,36 @@ pub fn render_meta(
     device_name: &str,
 ) -> RenderMeta {
     let mut meta = RenderMeta::new();
-    meta.method = Some(settings.method.name().to_string());
-    meta.seed = Some(settings.seed as u64);
-    meta.max_depth = Some(settings.max_depth);
     meta.device = Some(device_name.to_string());
     meta.scene_path = Some(scene_path.to_string());
     meta.scene_hash = Some(scene_hash.to_string());
+    set_settings_meta(&mut meta, settings, None);
+    meta
+}
+
+/// Records `settings` in `meta`: method, seed and depth in their fields, everything else
+/// from the settings' serde form among the extra keys, replacing the keys `previous`
+/// wrote (a comparison renders several methods with one metadata template, and a
+/// method's image must not carry another method's settings).
+pub fn set_settings_meta(
+    meta: &mut RenderMeta,
+    settings: &RenderSettings,
+    previous: Option<&RenderSettings>,
+) {
+    if let Some(p) = previous {
+        for (k, _) in p.metadata_pairs() {
+            meta.extra.remove(&k);
+        }
+    }
+    meta.method = Some(settings.method.name().to_string());
+    meta.seed = Some(settings.seed as u64);
+    meta.max_depth = Some(settings.max_depth);
     // Everything else the settings hold; these three have fields of their own.
     for (k, v) in settings.metadata_pairs() {
         if !matches!(k.as_str(), "method" | "seed" | "max_depth") {
             meta.extra.insert(k, v);
         }
     }
-    meta
 }
 
 /// The image a run outputs: the film's exact sums, or the inverse-variance combination

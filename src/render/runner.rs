@@ -1,8 +1,9 @@
 //! The GPU renderer behind `eval::compare`: one scene on the device, the method switched
 //! per run, every other setting as given. The command line's `compare` and the Python
-//! module's `compare()` both run their comparisons through it.
+//! module's `compare()` both run their comparisons through it. Each image's metadata
+//! records the settings of its own run (its method and that method's settings).
 
-use super::output::outcome_image;
+use super::output::{outcome_image, set_settings_meta};
 use super::{run, Method, RenderSettings, Renderer};
 use crate::eval::compare::{Budget, MethodResult, MethodRunner};
 use crate::eval::BoxError;
@@ -32,7 +33,7 @@ impl MethodRunner for CompareRunner<'_> {
             ..self.base.clone()
         };
         let (w, h) = (settings.width, settings.height);
-        self.renderer.set_settings(settings)?;
+        self.renderer.set_settings(settings.clone())?;
         let prep = Instant::now();
         self.renderer.prepare()?;
         log::debug!(
@@ -47,8 +48,9 @@ impl MethodRunner for CompareRunner<'_> {
         if self.cancel.load(Ordering::SeqCst) {
             return Err("interrupted".into());
         }
+        // `meta` was made from `base`: its settings keys give way to this run's.
         let mut meta = self.meta.clone();
-        meta.method = Some(method.name().to_string());
+        set_settings_meta(&mut meta, &settings, Some(&self.base));
         meta.render_seconds = Some(out.seconds);
         let image = outcome_image(&out, w, h, meta)?;
         log::info!(
