@@ -1,0 +1,171 @@
+//! The dispatch loop: ranges of sample indices rendered over bands of the image, each
+//! submission sized from measured times to stay near half a second (a GPU watchdog and
+//! Ctrl-C both want it short), until a sample count or a deadline; and the debug kernel's
+//! one-pixel traces.
+
+use super::{RenderError, RenderStats, Renderer, Result};
+use crate::gpu;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+/// Target duration of one submission (a GPU watchdog and Ctrl-C both want it short).
+const TARGET_SUBMIT_SECONDS: f64 = 0.5;
+
+impl Renderer {
+    /// Render samples [begin, begin + count) of pixel (x, y) alone with the debug kernel,
+    /// printing a trace of every path vertex of sample `traced` (all when None) through
+    /// debug printf; returns the printed lines (the device must have been opened with
+    /// debug printf). The film then holds that pixel's samples.
+    pub fn trace_pixel(
+        &mut self,
+        x: u32,
+        y: u32,
+        begin: u64,
+        count: u64,
+        traced: Option<u32>,
+    ) -> Result<Vec<String>> {
+        if x >= self.settings.width || y >= self.settings.height {
+            return Err(RenderError::Invalid(format!(
+                "pixel ({x}, {y}) is outside the {}×{} image",
+                self.settings.width, self.settings.height
+            )));
+        }
+        if !self.device.instance.debug_printf {
+            return Err(RenderError::Invalid(
+                "per-pixel traces need the validation layer's debug printf (package vulkan-validationlayers)".into(),
+            ));
+        }
+        self.debug_pixel = y * self.settings.width + x;
+        self.debug_sample = traced.unwrap_or(gpu::INVALID_INDEX);
+        self.clear_film()?;
+        self.film_offset = begin;
+        self.upload_params()?;
+        let mut v = self.variant(false);
+        v.debug = true;
+        self.pipeline(v)?;
+        let set = self.descriptor_set(v)?;
+        crate::vk::take_debug_printf_messages();
+        let pipeline = &self.pipelines[&v];
+        let push = gpu::PushConstants {
+            tile_origin: [x, y],
+            tile_size: [1, 1],
+            sample_begin: begin as u32,
+            sample_count: count as u32,
+        };
+        self.device
+            .submit(|cmd| pipeline.cmd_dispatch(cmd, set, bytemuck::bytes_of(&push), [1, 1, 1]))?;
+        self.film_spp = count;
+        self.debug_pixel = gpu::INVALID_INDEX;
+        self.debug_sample = gpu::INVALID_INDEX;
+        self.upload_params()?;
+        Ok(crate::vk::take_debug_printf_messages())
+    }
+
+    /// Render sample indices [begin, begin + count) into the film. `training` records
+    /// guiding data (guided methods). Stops early, at a chunk boundary, when `cancel` is
+    /// set; returns the number of samples rendered.
+    pub fn render_samples(
+        &mut self,
+        begin: u64,
+        count: u64,
+        training: bool,
+        cancel: &AtomicBool,
+        progress: &mut dyn FnMut(u64),
+        stats: &mut RenderStats,
+    ) -> Result<u64> {
+        self.render_until(begin, Some(count), None, training, cancel, progress, stats)
+    }
+
+    /// Render from sample index `begin` until `count` samples are done or `deadline`
+    /// passes (checked between chunks; every pixel always has the same sample count).
+    #[allow(clippy::too_many_arguments)]
+    pub fn render_until(
+        &mut self,
+        begin: u64,
+        count: Option<u64>,
+        deadline: Option<Instant>,
+        training: bool,
+        cancel: &AtomicBool,
+        progress: &mut dyn FnMut(u64),
+        stats: &mut RenderStats,
+    ) -> Result<u64> {
+        if begin + count.unwrap_or(0) > u32::MAX as u64 {
+            return Err(RenderError::Invalid(
+                "sample indices beyond 2^32 are not supported".into(),
+            ));
+        }
+        let v = self.variant(training);
+        self.pipeline(v)?;
+        let set = self.descriptor_set(v)?;
+        if self.film_spp == 0 && self.film_offset != begin {
+            self.film_offset = begin;
+            self.upload_params()?;
+        }
+        let (w, h) = (self.settings.width, self.settings.height);
+        let started = Instant::now();
+        let mut done = 0u64;
+        while count.is_none_or(|c| done < c) {
+            if cancel.load(Ordering::SeqCst) || deadline.is_some_and(|d| Instant::now() >= d) {
+                break;
+            }
+            // Size the chunk: bands of rows × samples per dispatch near the target time.
+            let (bands, spp) = match self.seconds_per_sample {
+                None => (((w as u64 * h as u64) / 65536).max(1) as u32, 1u32),
+                Some(t) if t > TARGET_SUBMIT_SECONDS => {
+                    ((t / TARGET_SUBMIT_SECONDS).ceil() as u32, 1)
+                }
+                Some(t) => (
+                    1,
+                    ((TARGET_SUBMIT_SECONDS / t.max(1e-6)).floor() as u32).clamp(1, 256),
+                ),
+            };
+            let mut spp = spp as u64;
+            if let Some(c) = count {
+                spp = spp.min(c - done);
+            }
+            if let (Some(d), Some(t)) = (deadline, self.seconds_per_sample) {
+                // Do not overshoot the time budget by more than one sample's worth.
+                let left = d.saturating_duration_since(Instant::now()).as_secs_f64();
+                spp = spp.min(((left / t).ceil() as u64).max(1));
+            }
+            let bands = bands.min(h);
+            let band_rows = h.div_ceil(bands);
+            let chunk_started = Instant::now();
+            let pipeline = &self.pipelines[&v];
+            for band in 0..bands {
+                let y0 = band * band_rows;
+                if y0 >= h {
+                    break;
+                }
+                let rows = band_rows.min(h - y0);
+                let push = gpu::PushConstants {
+                    tile_origin: [0, y0],
+                    tile_size: [w, rows],
+                    sample_begin: (begin + done) as u32,
+                    sample_count: spp as u32,
+                };
+                let (_, gpu_time) = self.device.submit_timed(
+                    |cmd| {
+                        pipeline.cmd_dispatch(
+                            cmd,
+                            set,
+                            bytemuck::bytes_of(&push),
+                            [w.div_ceil(8), rows.div_ceil(8), 1],
+                        )
+                    },
+                    true,
+                )?;
+                stats.gpu_seconds += gpu_time.unwrap_or(0.0);
+            }
+            let elapsed = chunk_started.elapsed().as_secs_f64();
+            self.seconds_per_sample = Some(elapsed / spp as f64);
+            done += spp;
+            self.film_spp += spp;
+            progress(done);
+        }
+        self.collect_stats(stats)?;
+        stats.samples += done;
+        stats.wall_seconds += started.elapsed().as_secs_f64();
+        Ok(done)
+    }
+}

@@ -1,0 +1,182 @@
+//! The path-tracing kernel on the device: its variants (one pipeline per combination of
+//! specialization constants), its one binding table — from which both the descriptor-set
+//! layout and the descriptor writes are made, so the two cannot disagree — and the
+//! pipelines' creation and warm-up.
+
+use super::{Renderer, Result};
+use crate::gpu;
+use crate::vk::{AccelStructure, BindingSpec, Buffer, ComputePipeline, DescriptorSet};
+use ash::vk as raw;
+use std::time::Instant;
+
+/// Specialization of the render kernel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(super) struct Variant {
+    pub ris: bool,
+    pub guiding: bool,
+    pub training: bool,
+    pub aovs: bool,
+    /// The debug-printf kernel (per-pixel traces).
+    pub debug: bool,
+}
+
+/// What one binding of the kernel's descriptor set holds.
+enum Bound<'a> {
+    Buffer(&'a Buffer),
+    Accel(&'a AccelStructure),
+    Images(Vec<(raw::ImageView, raw::Sampler)>),
+}
+
+impl Renderer {
+    /// Every binding of the kernel and what is bound there.
+    fn binding_table(&self) -> Vec<(u32, Bound<'_>)> {
+        let g = &self.gpu_scene;
+        let buffers = [
+            (gpu::BINDING_PARAMS, &self.params),
+            (gpu::BINDING_VERTICES, &g.vertices),
+            (gpu::BINDING_INDICES, &g.indices),
+            (gpu::BINDING_INSTANCES, &g.instances),
+            (gpu::BINDING_MATERIALS, &g.materials),
+            (gpu::BINDING_LIGHT_TRIANGLES, &g.light_triangles),
+            (gpu::BINDING_LIGHT_MODELS, &g.light_models),
+            (gpu::BINDING_MODEL_ALIAS, &g.model_alias),
+            (gpu::BINDING_TRIANGLE_ALIAS, &g.triangle_alias),
+            (gpu::BINDING_PUNCTUAL_LIGHTS, &g.punctual),
+            (gpu::BINDING_TRIANGLE_LIGHT_INDEX, &g.triangle_light_index),
+            (gpu::BINDING_FILM, &self.film),
+            (gpu::BINDING_AOV, &self.aov),
+            (gpu::BINDING_STATS, &self.stats),
+            (gpu::BINDING_GUIDE_SPATIAL, &self.guide.spatial),
+            (gpu::BINDING_GUIDE_LEAVES, &self.guide.leaves),
+            (gpu::BINDING_GUIDE_SAMPLING, &self.guide.sampling),
+            (gpu::BINDING_GUIDE_TRAINING, &self.guide.training),
+            (gpu::BINDING_GUIDE_LIGHTS, &self.guide.lights),
+            (
+                gpu::BINDING_GUIDE_LIGHT_TRAINING,
+                &self.guide.light_training,
+            ),
+            (gpu::BINDING_OUTLIERS, &self.outliers),
+        ];
+        let mut table: Vec<(u32, Bound<'_>)> = buffers
+            .into_iter()
+            .map(|(binding, buffer)| (binding, Bound::Buffer(buffer)))
+            .collect();
+        table.push((gpu::BINDING_TLAS, Bound::Accel(&g.tlas)));
+        table.push((
+            gpu::BINDING_TEXTURES,
+            Bound::Images(g.texture_descriptors()),
+        ));
+        table
+    }
+
+    /// The descriptor-set layout's bindings, from the table.
+    fn bindings(&self) -> Vec<BindingSpec> {
+        self.binding_table()
+            .iter()
+            .map(|(binding, bound)| match bound {
+                Bound::Buffer(_) => BindingSpec::buffer(*binding),
+                Bound::Accel(_) => BindingSpec::accel(*binding),
+                Bound::Images(images) => BindingSpec::images(*binding, images.len() as u32),
+            })
+            .collect()
+    }
+
+    pub(super) fn pipeline(&mut self, v: Variant) -> Result<()> {
+        if self.pipelines.contains_key(&v) {
+            return Ok(());
+        }
+        let spirv = self
+            .shaders
+            .load(if v.debug { "render_debug" } else { "render" })?;
+        let spec = [
+            if v.ris {
+                gpu::NEE_RIS
+            } else {
+                gpu::NEE_UNIFORM
+            },
+            v.guiding as u32,
+            v.training as u32,
+            v.aovs as u32,
+        ];
+        let started = Instant::now();
+        let name = format!(
+            "render (ris={}, guiding={}, training={}, aovs={}, debug={})",
+            v.ris, v.guiding, v.training, v.aovs, v.debug
+        );
+        let p = ComputePipeline::new(
+            &self.device,
+            &spirv,
+            &self.bindings(),
+            std::mem::size_of::<gpu::PushConstants>() as u32,
+            &spec,
+            &name,
+        )?;
+        log::debug!(
+            "compiled {name} in {:.1} s",
+            started.elapsed().as_secs_f64()
+        );
+        self.pipelines.insert(v, p);
+        Ok(())
+    }
+
+    pub(super) fn descriptor_set(&mut self, v: Variant) -> Result<raw::DescriptorSet> {
+        if let Some(s) = &self.set {
+            return Ok(s.raw);
+        }
+        let set = DescriptorSet::new(&self.device, &self.pipelines[&v])?;
+        for (binding, bound) in self.binding_table() {
+            match bound {
+                Bound::Buffer(buffer) => set.write_buffer(binding, buffer),
+                Bound::Accel(accel) => set.write_accel(binding, accel),
+                Bound::Images(images) => set.write_images(binding, &images),
+            }
+        }
+        let raw_set = set.raw;
+        self.set = Some(set);
+        Ok(raw_set)
+    }
+
+    /// Compile the pipeline(s) the current method needs (pipeline creation can take a
+    /// while on lavapipe; call this before timing a render).
+    pub fn prepare(&mut self) -> Result<()> {
+        let mut variants = vec![self.variant(false)];
+        if self.settings.method.uses_guiding() {
+            variants.push(self.variant(true));
+        }
+        for v in variants {
+            self.pipeline(v)?;
+            // Some drivers (lavapipe) compile at the first dispatch: run an empty one.
+            let set = self.descriptor_set(v)?;
+            let push = gpu::PushConstants::default();
+            let pipeline = &self.pipelines[&v];
+            let t = Instant::now();
+            self.device.submit(|cmd| {
+                pipeline.cmd_dispatch(cmd, set, bytemuck::bytes_of(&push), [1, 1, 1])
+            })?;
+            log::debug!(
+                "{}: first dispatch (driver compile) {:.1} s",
+                pipeline.name,
+                t.elapsed().as_secs_f64()
+            );
+        }
+        Ok(())
+    }
+
+    pub(super) fn variant(&self, training: bool) -> Variant {
+        Variant {
+            ris: self.settings.method.uses_ris(),
+            guiding: self.settings.method.uses_guiding(),
+            training,
+            aovs: self.settings.aovs,
+            debug: false,
+        }
+    }
+
+    /// Drop the compiled pipelines so the next render loads the kernels again (after
+    /// they changed on disk, with a directory shader source).
+    pub fn reload_shaders(&mut self) {
+        self.device.wait_idle();
+        self.set = None;
+        self.pipelines.clear();
+    }
+}
