@@ -15,6 +15,20 @@
 #ifndef CLOSESTHIT_GLSL
 #define CLOSESTHIT_GLSL
 
+#include "inc/common.glsl"
+#include "inc/specialization.glsl"
+#include "inc/random.glsl"
+#include "inc/sampling.glsl"
+#include "inc/scene_data.glsl"
+#include "inc/debug.glsl"
+#include "inc/geometry.glsl"
+#include "inc/trace.glsl"
+#include "inc/bsdf.glsl"
+#include "inc/material.glsl"
+#include "inc/guiding.glsl"
+#include "inc/lights.glsl"
+#include "inc/reservoir.glsl"
+
 // ---- direction sampling: BSDF / guiding mixture -----------------------------------------
 
 struct DirectionSampler {

@@ -7,6 +7,18 @@
 #ifndef RAYGEN_GLSL
 #define RAYGEN_GLSL
 
+#include "inc/common.glsl"
+#include "inc/specialization.glsl"
+#include "inc/random.glsl"
+#include "inc/sampling.glsl"
+#include "inc/scene_data.glsl"
+#include "inc/debug.glsl"
+#include "inc/trace.glsl"
+#include "inc/material.glsl"
+#include "inc/guiding.glsl"
+#include "inc/lights.glsl"
+#include "closesthit.glsl"
+
 struct RayCounts {
     uint camera;
     uint bounce;

@@ -8,6 +8,9 @@
 #ifndef INC_BSDF_GLSL
 #define INC_BSDF_GLSL
 
+#include "common.glsl"
+#include "sampling.glsl"
+
 struct BsdfParams {
     vec3 base_color;
     float metallic;

@@ -4,6 +4,8 @@
 #ifndef INC_DEBUG_GLSL
 #define INC_DEBUG_GLSL
 
+#include "common.glsl"
+
 bool g_trace = false;  // set by raygen for the traced pixel and sample
 
 #ifdef LANTERNA_DEBUG_PRINTF

@@ -2,6 +2,9 @@
 #ifndef INC_GEOMETRY_GLSL
 #define INC_GEOMETRY_GLSL
 
+#include "common.glsl"
+#include "scene_data.glsl"
+
 uvec3 triangle_vertices(Instance inst, uint primitive) {
     uint base = inst.index_offset + 3u * primitive;
     return uvec3(indices[base], indices[base + 1u], indices[base + 2u]) + inst.vertex_offset;

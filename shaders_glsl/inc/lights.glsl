@@ -5,6 +5,15 @@
 #ifndef INC_LIGHTS_GLSL
 #define INC_LIGHTS_GLSL
 
+#include "specialization.glsl"
+#include "guiding.glsl"
+
+#include "common.glsl"
+#include "scene_data.glsl"
+#include "geometry.glsl"
+#include "sampling.glsl"
+#include "random.glsl"
+
 // A light point seen from a shading point x.
 struct LightSample {
     vec3 wi;        // unit direction x → light

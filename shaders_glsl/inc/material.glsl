@@ -3,6 +3,13 @@
 #ifndef INC_MATERIAL_GLSL
 #define INC_MATERIAL_GLSL
 
+#include "trace.glsl"
+
+#include "common.glsl"
+#include "scene_data.glsl"
+#include "geometry.glsl"
+#include "bsdf.glsl"
+
 struct Surface {
     vec3 p;            // world position
     vec3 ng;           // geometric normal, on the side of wo

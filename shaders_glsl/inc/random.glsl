@@ -4,6 +4,8 @@
 #ifndef INC_RANDOM_GLSL
 #define INC_RANDOM_GLSL
 
+#include "common.glsl"
+
 // Jarzynski & Olano 2020, "Hash Functions for GPU Rendering": pcg4d.
 uvec4 pcg4d(uvec4 v) {
     v = v * 1664525u + 1013904223u;

@@ -5,6 +5,8 @@
 #ifndef INC_RESERVOIR_GLSL
 #define INC_RESERVOIR_GLSL
 
+#include "common.glsl"
+
 struct Reservoir {
     float w_sum;    // sum of the candidates' resampling weights
     uint count;     // candidates seen (M)

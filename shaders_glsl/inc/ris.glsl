@@ -16,6 +16,9 @@
 #ifndef INC_RIS_GLSL
 #define INC_RIS_GLSL
 
+#include "random.glsl"
+#include "reservoir.glsl"
+
 #include "debug.glsl"
 
 struct RisResult {

@@ -2,6 +2,8 @@
 #ifndef INC_SAMPLING_GLSL
 #define INC_SAMPLING_GLSL
 
+#include "common.glsl"
+
 // Orthonormal basis around n (Duff et al. 2017).
 void make_basis(vec3 n, out vec3 t, out vec3 b) {
     float s = n.z >= 0.0 ? 1.0 : -1.0;

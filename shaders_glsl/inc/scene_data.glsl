@@ -2,6 +2,8 @@
 #ifndef INC_SCENE_DATA_GLSL
 #define INC_SCENE_DATA_GLSL
 
+#include "common.glsl"
+
 #extension GL_EXT_ray_query : require
 
 layout(set = 0, binding = BINDING_TLAS) uniform accelerationStructureEXT tlas;

@@ -3,6 +3,11 @@
 #ifndef INC_TRACE_GLSL
 #define INC_TRACE_GLSL
 
+#include "common.glsl"
+#include "scene_data.glsl"
+#include "geometry.glsl"
+#include "random.glsl"
+
 struct Hit {
     bool valid;
     uint instance;

@@ -1,0 +1,13 @@
+// The path-tracing kernel's specialization constants: each method compiles to its own
+// pipeline without dead branches (render/kernel.rs sets them per variant).
+#ifndef INC_SPECIALIZATION_GLSL
+#define INC_SPECIALIZATION_GLSL
+
+#include "common.glsl"
+
+layout(constant_id = 0) const uint NEE_MODE = NEE_UNIFORM;  // NEE_UNIFORM (pt) or NEE_RIS
+layout(constant_id = 1) const bool GUIDING = false;         // sample directions from the SD-tree
+layout(constant_id = 2) const bool TRAINING = false;        // record training data
+layout(constant_id = 3) const bool AOVS = false;            // write first-hit AOVs and outliers
+
+#endif
