@@ -10,6 +10,8 @@ pub mod export_mitsuba;
 pub mod generate;
 mod gltf_check;
 mod load;
+mod load_light;
+mod load_primitive;
 mod material;
 mod sources;
 pub mod spatial_order;

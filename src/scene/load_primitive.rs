@@ -1,0 +1,186 @@
+//! One glTF mesh primitive → vertices and indices appended to the scene's arrays and a
+//! [`MeshPrimitive`]: attributes read and checked (`gltf_check`), triangles only, within
+//! the loader's allocation budget.
+
+use super::gltf_check::{self, Role};
+use super::sources;
+use super::MeshPrimitive;
+use crate::gpu;
+
+/// Where primitives' vertices and indices go, and what they may still take.
+pub(super) struct Geometry<'a> {
+    /// The document's JSON, for the checks of `gltf_check`.
+    pub root: &'a gltf::json::Root,
+    pub vertices: &'a mut Vec<gpu::Vertex>,
+    pub indices: &'a mut Vec<u32>,
+    pub budget: &'a mut sources::Budget,
+}
+
+pub(super) fn load_primitive(
+    mesh: &gltf::Mesh<'_>,
+    prim: &gltf::Primitive<'_>,
+    buffers: &[gltf::buffer::Data],
+    default_material: u32,
+    materials: &[gpu::Material],
+    out: &mut Geometry<'_>,
+    warnings: &mut Vec<String>,
+) -> Result<Option<MeshPrimitive>, String> {
+    use gltf::mesh::Mode;
+    let name = format!(
+        "mesh {} primitive {}",
+        mesh.name()
+            .map(|n| format!("`{n}`"))
+            .unwrap_or_else(|| format!("#{}", mesh.index())),
+        prim.index()
+    );
+    match prim.mode() {
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan => {}
+        other => {
+            warnings.push(format!("{name}: mode {other:?} is not triangles; skipped"));
+            return Ok(None);
+        }
+    }
+    // Types and ranges first: the crate's readers reinterpret any type as the one asked
+    // for, stop silently at a view's end, and panic on some component types.
+    let root = out.root;
+    let max_bytes = out.budget.left();
+    for (semantic, accessor) in prim.attributes() {
+        use gltf::Semantic as S;
+        let role = match semantic {
+            S::Positions => Role::Position,
+            S::Normals => Role::Normal,
+            S::Tangents => Role::Tangent,
+            S::TexCoords(_) => Role::TexCoord,
+            S::Colors(_) => Role::Color,
+            _ => continue,
+        };
+        gltf_check::check_accessor(root, accessor.index(), role, max_bytes)
+            .map_err(|e| format!("{name}: {e}"))?;
+    }
+    if let Some(accessor) = prim.indices() {
+        gltf_check::check_accessor(root, accessor.index(), Role::Indices, max_bytes)
+            .map_err(|e| format!("{name}: {e}"))?;
+    }
+    // Reading holds every attribute and the index list as temporary arrays, about
+    // twice the final vertices and indices: refuse before, not after, allocating them.
+    let vertex_count = prim
+        .get(&gltf::Semantic::Positions)
+        .map_or(0, |a| a.count() as u64);
+    let index_count = prim.indices().map_or(vertex_count, |a| a.count() as u64);
+    let reading = 2 * (vertex_count * std::mem::size_of::<gpu::Vertex>() as u64 + index_count * 4);
+    if reading > out.budget.left() {
+        return Err(format!(
+            "{name}: {vertex_count} vertices and {index_count} indices would take the scene past the input limit"
+        ));
+    }
+    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let positions: Vec<[f32; 3]> = reader
+        .read_positions()
+        .ok_or_else(|| format!("{name} has no POSITION data"))?
+        .collect();
+    if positions.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(format!("{name} has non-finite vertex positions"));
+    }
+    let n = positions.len();
+    let normals: Vec<[f32; 3]> = reader
+        .read_normals()
+        .map(|r| r.collect())
+        .unwrap_or_else(|| vec![[0.0; 3]; n]);
+    let tangents: Vec<[f32; 4]> = reader
+        .read_tangents()
+        .map(|r| r.collect())
+        .unwrap_or_else(|| vec![[0.0; 4]; n]);
+    let uv = |set: u32| -> Vec<[f32; 2]> {
+        reader
+            .read_tex_coords(set)
+            .map(|r| r.into_f32().collect())
+            .unwrap_or_else(|| vec![[0.0; 2]; n])
+    };
+    let (uv0, uv1) = (uv(0), uv(1));
+    if [normals.len(), tangents.len(), uv0.len(), uv1.len()]
+        .iter()
+        .any(|&l| l != n)
+    {
+        return Err(format!("{name} has attributes of different lengths"));
+    }
+    if prim.get(&gltf::Semantic::Colors(0)).is_some() {
+        warnings.push(format!("{name}: COLOR_0 vertex colours are ignored"));
+    }
+    let raw_indices: Vec<u32> = match reader.read_indices() {
+        Some(r) => r.into_u32().collect(),
+        None => (0..n as u32).collect(),
+    };
+    let tri: Vec<u32> = match prim.mode() {
+        Mode::Triangles => raw_indices,
+        Mode::TriangleStrip => (2..raw_indices.len())
+            .flat_map(|i| {
+                let (a, b, c) = (raw_indices[i - 2], raw_indices[i - 1], raw_indices[i]);
+                if i % 2 == 0 {
+                    [a, b, c]
+                } else {
+                    [b, a, c]
+                }
+            })
+            .collect(),
+        _ => (2..raw_indices.len())
+            .flat_map(|i| [raw_indices[0], raw_indices[i - 1], raw_indices[i]])
+            .collect(),
+    };
+    let tri_count = tri.len() / 3;
+    if tri_count == 0 {
+        warnings.push(format!("{name} has no triangles; skipped"));
+        return Ok(None);
+    }
+    if let Some(bad) = tri.iter().find(|&&i| i as usize >= n) {
+        return Err(format!("{name} has index {bad} but only {n} vertices"));
+    }
+    let material = prim
+        .material()
+        .index()
+        .map_or(default_material, |i| i as u32);
+    let opaque = materials[material as usize].alpha_mode == gpu::ALPHA_MODE_OPAQUE;
+
+    let bytes = n * std::mem::size_of::<gpu::Vertex>() + tri_count * 3 * 4;
+    out.budget.take(bytes as u64, &name)?;
+    if out.vertices.len() + n > u32::MAX as usize
+        || out.indices.len() + 3 * tri_count > u32::MAX as usize
+    {
+        return Err(format!(
+            "{name}: the scene has more than 2^32 vertices or indices"
+        ));
+    }
+    let (vertices, indices) = (&mut *out.vertices, &mut *out.indices);
+    let vertex_offset = vertices.len() as u32;
+    let index_offset = indices.len() as u32;
+    vertices.extend((0..n).map(|i| {
+        // Zero normals mean "use the geometric normal" (glTF: flat shading when absent).
+        let nrm = normals[i];
+        let len = (nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]).sqrt();
+        let normal = if len.is_finite() && len > 1e-12 {
+            nrm.map(|c| c / len)
+        } else {
+            [0.0; 3]
+        };
+        gpu::Vertex {
+            position: positions[i],
+            normal,
+            tangent: if tangents[i].iter().all(|c| c.is_finite()) {
+                tangents[i]
+            } else {
+                [0.0; 4]
+            },
+            uv0: uv0[i],
+            uv1: uv1[i],
+        }
+    }));
+    indices.extend_from_slice(&tri[..tri_count * 3]);
+    Ok(Some(MeshPrimitive {
+        vertex_offset,
+        vertex_count: n as u32,
+        index_offset,
+        triangle_count: tri_count as u32,
+        material,
+        opaque,
+        name,
+    }))
+}
