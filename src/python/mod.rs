@@ -6,12 +6,14 @@
 //! their shape; the pure-Python package (`python/lanterna/`) turns them into numpy
 //! arrays, so this crate needs no numpy bindings.
 
+mod args;
 mod convert;
 mod errors;
 mod eval;
 mod options;
 mod renderer;
 mod scene;
+mod watch;
 
 use crate::vk::{Device, DeviceSelector};
 use pyo3::prelude::*;

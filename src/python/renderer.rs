@@ -6,14 +6,16 @@
 //! so Ctrl-C stops the loop at the next chunk, raises `KeyboardInterrupt` and leaves the
 //! renderer as usable as before.
 
+use super::args::{budget, device_selector, unsigned};
 use super::convert::{f32_bytes, image_from_py, image_to_py, json_value};
 use super::errors;
 use super::options;
 use super::scene::PyScene;
+use super::watch::Watch;
 use crate::eval::compare::{run_compare, CompareConfig, Crop};
 use crate::guiding::{density_grid, scene_hash_number, SdTree};
 use crate::render::output::{aov_layers, outcome_image, render_meta, Aov};
-use crate::render::run::{self, Budget};
+use crate::render::run;
 use crate::render::runner::CompareRunner;
 use crate::render::session::{self, LoadedScene, ViewOptions};
 use crate::render::{
@@ -21,12 +23,11 @@ use crate::render::{
 };
 use crate::scene::Camera;
 use crate::shaders::ShaderSource;
-use crate::vk::DeviceSelector;
 use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Instant;
 
@@ -78,76 +79,12 @@ pub struct PyRenderer {
     scene: Py<PyScene>,
 }
 
-/// A non-negative integer argument, refused like the command line refuses it.
-fn unsigned<T: TryFrom<i64>>(flag: &str, v: i64) -> PyResult<T> {
-    T::try_from(v).map_err(|_| {
-        PyValueError::new_err(format!(
-            "invalid value '{v}' for '--{flag}': expected a non-negative integer in range"
-        ))
-    })
-}
-
-fn device_selector(device: Option<&Bound<'_, PyAny>>) -> PyResult<DeviceSelector> {
-    let Some(d) = device.filter(|d| !d.is_none()) else {
-        return Ok(DeviceSelector::Auto);
-    };
-    if let Ok(i) = d.extract::<i64>() {
-        return Ok(DeviceSelector::Index(unsigned("device", i)?));
-    }
-    let s: String = d.extract()?;
-    Ok(s.parse().unwrap_or(DeviceSelector::Auto))
-}
-
-/// Between chunks: let Python handle signals and call the progress callback; the first
-/// exception (KeyboardInterrupt from Ctrl-C, or the callback's) cancels the run and is
-/// kept for the caller to raise.
-struct Watch<'a> {
-    callback: Option<&'a Py<PyAny>>,
-    cancel: &'a AtomicBool,
-    error: Option<PyErr>,
-    started: Instant,
-}
-
-impl<'a> Watch<'a> {
-    fn new(callback: Option<&'a Py<PyAny>>, cancel: &'a AtomicBool) -> Self {
-        Watch {
-            callback,
-            cancel,
-            error: None,
-            started: Instant::now(),
-        }
-    }
-
-    fn tick(&mut self, done: u64) {
-        if self.error.is_some() {
-            return;
-        }
-        let seconds = self.started.elapsed().as_secs_f64();
-        let result = Python::attach(|py| -> PyResult<()> {
-            py.check_signals()?;
-            if let Some(cb) = self.callback {
-                cb.call1(py, (done, seconds))?;
-            }
-            Ok(())
-        });
-        if let Err(e) = result {
-            self.error = Some(e);
-            self.cancel.store(true, Ordering::SeqCst);
-        }
-    }
-}
-
 impl PyRenderer {
     fn lock(&self) -> PyResult<MutexGuard<'_, Inner>> {
         self.inner.try_lock().map_err(|_| {
             PyRuntimeError::new_err("the renderer is busy (rendering in another thread)")
         })
     }
-}
-
-fn budget(spp: Option<i64>, seconds: Option<f64>) -> PyResult<Budget> {
-    let spp = spp.map(|n| if n < 0 { 0 } else { n as u64 });
-    Budget::from_request(spp, seconds).map_err(errors::render)
 }
 
 #[pymethods]
