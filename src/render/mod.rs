@@ -6,6 +6,7 @@
 //! exactly the same film as a one-shot render. Dispatches are sized from measured times
 //! so that no single submission runs much longer than half a second.
 
+mod bvh;
 mod film;
 mod gpu_scene;
 mod guided;
@@ -15,6 +16,8 @@ pub mod run;
 pub mod runner;
 pub mod session;
 mod settings;
+pub mod trace;
+pub mod traversal;
 
 pub use film::Film;
 pub use gpu_scene::GpuScene;
@@ -22,6 +25,7 @@ pub use guided::{train, GuidingOutcome, IterationStats, Training, TrainingPlan};
 pub use settings::{
     GuidedOutput, GuidingSettings, LightSource, Method, RenderSettings, SettingsError, Strategy,
 };
+pub use traversal::{Traversal, TraversalChoice, TraversalKind};
 
 use crate::gpu;
 use crate::lights::LightTable;
@@ -43,6 +47,8 @@ pub enum RenderError {
     Shader(#[from] crate::shaders::ShaderError),
     #[error(transparent)]
     Settings(#[from] SettingsError),
+    #[error(transparent)]
+    NoRayQueries(#[from] traversal::NoRayQueries),
     #[error("{0}")]
     Invalid(String),
 }
@@ -175,6 +181,8 @@ impl GuideBuffers {
 pub struct Renderer {
     pub device: Arc<Device>,
     pub gpu_scene: GpuScene,
+    /// The traversal the kernels use, and why (`settings.traversal` resolved).
+    pub traversal: TraversalChoice,
     pub settings: RenderSettings,
     camera: Camera,
     scene_radius: f32,
@@ -184,6 +192,10 @@ pub struct Renderer {
     shaders: ShaderSource,
     pipelines: HashMap<Variant, ComputePipeline>,
     set: Option<DescriptorSet>,
+    /// The trace kernel and its rays and hits (`trace.rs`); placeholders until used.
+    trace_pipeline: Option<ComputePipeline>,
+    trace_rays: Buffer,
+    trace_hits: Buffer,
     params: Buffer,
     film: Buffer,
     stats: Buffer,
@@ -220,8 +232,12 @@ impl Renderer {
     ) -> Result<Renderer> {
         settings.validate()?;
         limits::check_image_size(&device, &settings)?;
-        let gpu_scene = GpuScene::upload(&device, scene, lights)?;
+        let traversal = settings.traversal.resolve(&device.info)?;
+        log::info!("traversal: {} ({})", traversal.kind, traversal.reason);
+        let gpu_scene = GpuScene::upload(&device, scene, lights, traversal.kind)?;
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
+        let trace_rays = Buffer::zeroed(&device, 64, usage, "trace rays (unused)")?;
+        let trace_hits = Buffer::zeroed(&device, 64, usage, "trace hits (unused)")?;
         let pixels = settings.width as u64 * settings.height as u64;
         let params = Buffer::zeroed(
             &device,
@@ -246,6 +262,7 @@ impl Renderer {
         let mut r = Renderer {
             device,
             gpu_scene,
+            traversal,
             settings,
             camera,
             scene_radius: 0.5 * scene.extent(),
@@ -255,6 +272,9 @@ impl Renderer {
             shaders,
             pipelines: HashMap::new(),
             set: None,
+            trace_pipeline: None,
+            trace_rays,
+            trace_hits,
             params,
             film,
             stats,
@@ -337,6 +357,11 @@ impl Renderer {
             ));
         }
         settings.validate()?;
+        if settings.traversal.resolve(&self.device.info)?.kind != self.traversal.kind {
+            return Err(RenderError::Invalid(
+                "set_settings cannot change the traversal".into(),
+            ));
+        }
         self.settings = settings;
         // Another method has another cost per sample: measure it again.
         self.seconds_per_sample = None;
@@ -376,11 +401,20 @@ impl Renderer {
             gpu::BINDING_GUIDE_LIGHTS,
             gpu::BINDING_GUIDE_LIGHT_TRAINING,
             gpu::BINDING_OUTLIERS,
+            gpu::BINDING_TRACE_RAYS,
+            gpu::BINDING_TRACE_HITS,
         ]
         .into_iter()
         .map(BindingSpec::buffer)
         .collect();
-        b.push(BindingSpec::accel(gpu::BINDING_TLAS));
+        // Only the variant's traversal structures: a device without ray queries cannot
+        // have an acceleration-structure binding.
+        match self.traversal.kind {
+            TraversalKind::RayQuery => b.push(BindingSpec::accel(gpu::BINDING_TLAS)),
+            TraversalKind::Software => b.extend(
+                [gpu::BINDING_BVH_NODES, gpu::BINDING_BVH_TRIANGLES].map(BindingSpec::buffer),
+            ),
+        }
         b.push(BindingSpec::images(
             gpu::BINDING_TEXTURES,
             self.gpu_scene.textures.len() as u32,
@@ -392,9 +426,11 @@ impl Renderer {
         if self.pipelines.contains_key(&v) {
             return Ok(());
         }
-        let spirv = self
-            .shaders
-            .load(if v.debug { "render_debug" } else { "render" })?;
+        let spirv = self.shaders.load(&self.traversal.kind.kernel(if v.debug {
+            "render_debug"
+        } else {
+            "render"
+        }))?;
         let spec = [
             if v.ris {
                 gpu::NEE_RIS
@@ -407,8 +443,8 @@ impl Renderer {
         ];
         let started = Instant::now();
         let name = format!(
-            "render (ris={}, guiding={}, training={}, aovs={}, debug={})",
-            v.ris, v.guiding, v.training, v.aovs, v.debug
+            "render (ris={}, guiding={}, training={}, aovs={}, debug={}, traversal={})",
+            v.ris, v.guiding, v.training, v.aovs, v.debug, self.traversal.kind
         );
         let p = ComputePipeline::new(
             &self.device,
@@ -432,8 +468,22 @@ impl Renderer {
         }
         let pipeline = &self.pipelines[&v];
         let set = DescriptorSet::new(&self.device, pipeline)?;
+        self.write_scene_descriptors(&set);
+        let raw_set = set.raw;
+        self.set = Some(set);
+        Ok(raw_set)
+    }
+
+    /// Write every binding of the render layout into `set`.
+    fn write_scene_descriptors(&self, set: &DescriptorSet) {
         let g = &self.gpu_scene;
-        set.write_accel(gpu::BINDING_TLAS, &g.tlas);
+        if let Some(tlas) = &g.tlas {
+            set.write_accel(gpu::BINDING_TLAS, tlas);
+        }
+        if let Some((nodes, tris)) = &g.bvh {
+            set.write_buffer(gpu::BINDING_BVH_NODES, nodes);
+            set.write_buffer(gpu::BINDING_BVH_TRIANGLES, tris);
+        }
         for (binding, buffer) in [
             (gpu::BINDING_PARAMS, &self.params),
             (gpu::BINDING_VERTICES, &g.vertices),
@@ -459,13 +509,12 @@ impl Renderer {
                 &self.guide.light_training,
             ),
             (gpu::BINDING_OUTLIERS, &self.outliers),
+            (gpu::BINDING_TRACE_RAYS, &self.trace_rays),
+            (gpu::BINDING_TRACE_HITS, &self.trace_hits),
         ] {
             set.write_buffer(binding, buffer);
         }
         set.write_images(gpu::BINDING_TEXTURES, &g.texture_descriptors());
-        let raw_set = set.raw;
-        self.set = Some(set);
-        Ok(raw_set)
     }
 
     /// Compile the pipeline(s) the current method needs (pipeline creation can take a
