@@ -7,7 +7,7 @@
 use super::{BenchError, Result};
 use crate::render::run::{run_method, Budget};
 use crate::render::session::{self, LoadedScene};
-use crate::render::{IterationStats, Method, RenderSettings, RenderStats, Renderer};
+use crate::render::{IterationStats, Method, RenderSettings, RenderStats, Renderer, Traversal};
 use crate::scene::CameraOverride;
 use crate::shaders::ShaderSource;
 use crate::vk::Device;
@@ -92,6 +92,7 @@ impl Session {
         height: Option<u32>,
         method: Method,
         seed: u32,
+        traversal: Traversal,
     ) -> Result<Session> {
         let started = Instant::now();
         let loaded = session::load_scene(path).map_err(BenchError::Scene)?;
@@ -103,7 +104,10 @@ impl Session {
             &loaded.scene,
             &loaded.lights,
             camera,
-            base_settings(method, width, height, seed),
+            RenderSettings {
+                traversal,
+                ..base_settings(method, width, height, seed)
+            },
             shaders.clone(),
         )?;
         Ok(Session {
@@ -131,7 +135,10 @@ impl Session {
 
     /// Default settings of `method` at this session's size.
     pub fn settings(&self, method: Method) -> RenderSettings {
-        base_settings(method, self.width, self.height, self.renderer.settings.seed)
+        RenderSettings {
+            traversal: self.renderer.settings.traversal,
+            ..base_settings(method, self.width, self.height, self.renderer.settings.seed)
+        }
     }
 
     /// Switch to `settings` and compile what they need; returns the seconds it took.

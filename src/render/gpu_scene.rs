@@ -40,6 +40,8 @@ pub struct GpuScene {
     _flat_positions: Option<Buffer>,
     /// Scene instance index of each GPU instance (the merge order).
     pub instance_order: Vec<usize>,
+    /// Size of the software BVH (zeros with ray queries).
+    pub bvh_stats: BvhStats,
     /// The BVH's nodes and triangles (software traversal).
     pub bvh: Option<(Buffer, Buffer)>,
     /// Seconds spent building acceleration structures.
@@ -48,6 +50,15 @@ pub struct GpuScene {
     pub upload_seconds: f64,
     /// Bytes of device memory held (buffers, textures, acceleration structures).
     pub device_bytes: u64,
+}
+
+/// What the software BVH came out as.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BvhStats {
+    pub nodes: usize,
+    pub triangles: usize,
+    pub max_leaf: usize,
+    pub depth: usize,
 }
 
 const STORAGE: raw::BufferUsageFlags = raw::BufferUsageFlags::STORAGE_BUFFER;
@@ -150,6 +161,7 @@ impl GpuScene {
         let upload_seconds = started.elapsed().as_secs_f64();
 
         let started = Instant::now();
+        let mut bvh_stats = BvhStats::default();
         let (tlas, blases, flat_buffer, bvh) = if ray_query {
             let (tlas, blases, flat) = build_ray_query_structures(
                 device,
@@ -161,7 +173,14 @@ impl GpuScene {
             )?;
             (Some(tlas), blases, Some(flat), None)
         } else {
-            let bvh = build_bvh(scene, &plan);
+            let options = BvhOptions::from_env();
+            let bvh = build_bvh(scene, &plan, options);
+            bvh_stats = BvhStats {
+                nodes: bvh.nodes.len(),
+                triangles: bvh.triangles.len(),
+                max_leaf: options.max_leaf,
+                depth: bvh.depth,
+            };
             log::info!(
                 "software BVH: {} nodes, {} triangles, depth {}",
                 bvh.nodes.len(),
@@ -228,6 +247,7 @@ impl GpuScene {
             _flat_positions: flat_buffer,
             bvh,
             instance_order: plan.order.clone(),
+            bvh_stats,
             accel_seconds,
             upload_seconds,
             device_bytes,
@@ -343,7 +363,7 @@ fn build_ray_query_structures(
 /// The software traversal's BVH over every instance's triangles in world space, each
 /// tagged with the instance index ray queries report (its position in the GPU instance
 /// buffer, `plan.order`) and its index within its primitive.
-fn build_bvh(scene: &Scene, plan: &FlattenPlan) -> Bvh {
+fn build_bvh(scene: &Scene, plan: &FlattenPlan, options: BvhOptions) -> Bvh {
     let total: usize = plan
         .order
         .iter()
@@ -368,7 +388,7 @@ fn build_bvh(scene: &Scene, plan: &FlattenPlan) -> Bvh {
             });
         }
     }
-    Bvh::build(&tris, BvhOptions::from_env())
+    Bvh::build(&tris, options)
 }
 
 /// Which instances are copied into world space and merged into shared BLASes.

@@ -20,7 +20,7 @@ pub mod trace;
 pub mod traversal;
 
 pub use film::Film;
-pub use gpu_scene::GpuScene;
+pub use gpu_scene::{BvhStats, GpuScene};
 pub use guided::{train, GuidingOutcome, IterationStats, Training, TrainingPlan};
 pub use settings::{
     GuidedOutput, GuidingSettings, LightSource, Method, RenderSettings, SettingsError, Strategy,
@@ -366,6 +366,11 @@ impl Renderer {
         // Another method has another cost per sample: measure it again.
         self.seconds_per_sample = None;
         self.upload_params()
+    }
+
+    /// The view being rendered.
+    pub fn camera(&self) -> &Camera {
+        &self.camera
     }
 
     /// Replace the guiding buffers (after a refit).
