@@ -118,7 +118,11 @@ fn quick_bench_writes_results() {
     // Throughput: both shipped scenes with each traversal the device has (software
     // always), every method, exact camera-ray counts.
     let scenes = r["throughput"]["scenes"].as_array().unwrap();
-    assert!(scenes.len() == 2 || scenes.len() == 4, "{} scenes", scenes.len());
+    assert!(
+        scenes.len() == 2 || scenes.len() == 4,
+        "{} scenes",
+        scenes.len()
+    );
     assert!(scenes.iter().any(|s| s["traversal"] == "software"));
     for s in scenes {
         assert!(matches!(

@@ -7,7 +7,7 @@
 use super::{BenchError, Result};
 use crate::render::run::{run_method, Budget};
 use crate::render::session::{self, LoadedScene};
-use crate::render::{IterationStats, Method, RenderSettings, RenderStats, Renderer, Traversal};
+use crate::render::{IterationStats, Method, RenderSettings, RenderStats, Renderer};
 use crate::scene::CameraOverride;
 use crate::shaders::ShaderSource;
 use crate::vk::Device;
@@ -83,16 +83,14 @@ pub struct Session {
 
 impl Session {
     /// Load `path` and set up a renderer at `width` × (height from the camera's aspect
-    /// unless given) for `method`.
+    /// unless given) with `settings` (their size is replaced).
     pub fn open(
         device: &Arc<Device>,
         shaders: &ShaderSource,
         path: &Path,
         width: u32,
         height: Option<u32>,
-        method: Method,
-        seed: u32,
-        traversal: Traversal,
+        settings: RenderSettings,
     ) -> Result<Session> {
         let started = Instant::now();
         let loaded = session::load_scene(path).map_err(BenchError::Scene)?;
@@ -105,8 +103,9 @@ impl Session {
             &loaded.lights,
             camera,
             RenderSettings {
-                traversal,
-                ..base_settings(method, width, height, seed)
+                width,
+                height,
+                ..settings
             },
             shaders.clone(),
         )?;

@@ -21,7 +21,7 @@ pub mod spread;
 pub mod throughput;
 pub mod traversal;
 
-use crate::render::{Method, Traversal};
+use crate::render::{Method, RenderSettings, Traversal};
 use crate::shaders::ShaderSource;
 use crate::vk::Device;
 use harness::Session;
@@ -227,9 +227,10 @@ impl Bench {
             path,
             width,
             height,
-            method,
-            self.seed,
-            traversal,
+            RenderSettings {
+                traversal,
+                ..harness::base_settings(method, 0, 0, self.seed)
+            },
         )
     }
 }

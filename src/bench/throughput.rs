@@ -95,32 +95,37 @@ pub fn run(bench: &Bench) -> Result<Throughput> {
             traversals.insert(0, Traversal::RayQuery);
         }
         for traversal in traversals {
-        log::info!("throughput: {} at width {}, {traversal:?} traversal", size.scene, size.width);
-        let mut session = bench.open_with(&path, size.width, size.height, Method::Pt, traversal)?;
-        let pixels = session.pixels();
-        let mut methods = Vec::new();
-        for method in Method::ALL {
-            let mut settings = session.settings(method);
-            settings.max_depth = bench.sizes.max_depth;
-            let runs = session.measure(
-                settings,
-                Budget::Spp(bench.sizes.warmup_spp),
-                Budget::Spp(size.spp),
-                bench.repeat,
-            )?;
-            methods.push(summarise(method, size.spp, pixels, &runs));
-        }
-        scenes.push(SceneThroughput {
-            scene: size.scene.clone(),
-            traversal: session.renderer.traversal.kind.name().into(),
-            width: session.width,
-            height: session.height,
-            triangles: session.loaded.scene.triangle_count(),
-            emissive_triangles: session.loaded.lights.triangles.len() as u64,
-            light_models: session.loaded.lights.models.len() as u64,
-            setup_seconds: session.setup_seconds,
-            methods,
-        });
+            log::info!(
+                "throughput: {} at width {}, {traversal:?} traversal",
+                size.scene,
+                size.width
+            );
+            let mut session =
+                bench.open_with(&path, size.width, size.height, Method::Pt, traversal)?;
+            let pixels = session.pixels();
+            let mut methods = Vec::new();
+            for method in Method::ALL {
+                let mut settings = session.settings(method);
+                settings.max_depth = bench.sizes.max_depth;
+                let runs = session.measure(
+                    settings,
+                    Budget::Spp(bench.sizes.warmup_spp),
+                    Budget::Spp(size.spp),
+                    bench.repeat,
+                )?;
+                methods.push(summarise(method, size.spp, pixels, &runs));
+            }
+            scenes.push(SceneThroughput {
+                scene: size.scene.clone(),
+                traversal: session.renderer.traversal.kind.name().into(),
+                width: session.width,
+                height: session.height,
+                triangles: session.loaded.scene.triangle_count(),
+                emissive_triangles: session.loaded.lights.triangles.len() as u64,
+                light_models: session.loaded.lights.models.len() as u64,
+                setup_seconds: session.setup_seconds,
+                methods,
+            });
         }
     }
     Ok(Throughput { scenes })
