@@ -103,3 +103,40 @@ impl Traversal {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vk::FeatureReport;
+    use ash::vk::PhysicalDeviceType as Kind;
+
+    fn device(kind: Kind, ray_queries: bool) -> DeviceInfo {
+        DeviceInfo {
+            index: 0,
+            name: "test".into(),
+            kind,
+            api_version: 0,
+            driver: String::new(),
+            features: FeatureReport {
+                ray_query: ray_queries,
+                acceleration_structure: ray_queries,
+                ..Default::default()
+            },
+            timestamp_period_ns: 1.0,
+            min_scratch_alignment: 1,
+        }
+    }
+
+    #[test]
+    fn auto_takes_software_on_cpus_and_without_ray_queries() {
+        let auto = |k, rq| Traversal::Auto.resolve(&device(k, rq)).unwrap().kind;
+        assert_eq!(auto(Kind::CPU, true), TraversalKind::Software);
+        assert_eq!(auto(Kind::DISCRETE_GPU, true), TraversalKind::RayQuery);
+        assert_eq!(auto(Kind::DISCRETE_GPU, false), TraversalKind::Software);
+        assert!(Traversal::RayQuery
+            .resolve(&device(Kind::DISCRETE_GPU, false))
+            .is_err());
+        let sw = Traversal::Software.resolve(&device(Kind::DISCRETE_GPU, true));
+        assert_eq!(sw.unwrap().kind, TraversalKind::Software);
+    }
+}
