@@ -22,8 +22,7 @@ pub fn device() -> Arc<Device> {
                 debug_printf: false,
             })
             .expect("Vulkan instance (run scripts/setup)");
-            Device::new(Arc::new(instance), &DeviceSelector::Auto)
-                .expect("a Vulkan device with ray queries")
+            Device::new(Arc::new(instance), &DeviceSelector::Auto).expect("a Vulkan device")
         })
         .clone()
 }
@@ -125,9 +124,19 @@ pub struct Batches {
 
 /// A renderer on the test device with the kernels of [`shader_source`].
 fn test_renderer(scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Renderer {
+    test_renderer_on(device(), scene, camera, settings)
+}
+
+/// A renderer on `device` with the kernels of [`shader_source`].
+pub fn test_renderer_on(
+    device: Arc<Device>,
+    scene: &Scene,
+    camera: &Camera,
+    settings: &RenderSettings,
+) -> Renderer {
     let lights = LightTable::build(scene).expect("light table");
     Renderer::new(
-        device(),
+        device,
         scene,
         &lights,
         camera.clone(),
@@ -155,7 +164,19 @@ pub fn render_batches(
     batches: u32,
     spp: u64,
 ) -> Batches {
-    let mut r = test_renderer(scene, camera, &settings);
+    render_batches_on(device(), scene, camera, settings, batches, spp)
+}
+
+/// [`render_batches`] on a given device (e.g. one created with ray queries hidden).
+pub fn render_batches_on(
+    device: Arc<Device>,
+    scene: &Scene,
+    camera: &Camera,
+    settings: RenderSettings,
+    batches: u32,
+    spp: u64,
+) -> Batches {
+    let mut r = test_renderer_on(device, scene, camera, &settings);
     let cancel = AtomicBool::new(false);
     let mut stats = RenderStats::default();
     let mut images = Vec::new();

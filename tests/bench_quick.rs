@@ -101,10 +101,34 @@ fn quick_bench_writes_results() {
     assert!(!machine["device"].as_str().unwrap().is_empty());
     assert!(num(&r["total_seconds"], "total_seconds") > 0.0);
 
-    // Throughput: both shipped scenes, every method, exact camera-ray counts.
+    // Traversal: both shipped scenes, three ray sets each, software always timed.
+    let tscenes = r["traversal"]["scenes"].as_array().unwrap();
+    assert_eq!(tscenes.len(), 2);
+    for s in tscenes {
+        let sets = s["sets"].as_array().unwrap();
+        let names: Vec<&str> = sets.iter().map(|x| x["set"].as_str().unwrap()).collect();
+        assert_eq!(names, ["camera", "bounce", "shadow"]);
+        for x in sets {
+            let what = format!("traversal {} {}", s["scene"], x["set"]);
+            assert!(x["rays"].as_u64().unwrap() > 0, "{what}");
+            check_spread(&x["software_mrays_per_s"], &what);
+        }
+    }
+
+    // Throughput: both shipped scenes with each traversal the device has (software
+    // always), every method, exact camera-ray counts.
     let scenes = r["throughput"]["scenes"].as_array().unwrap();
-    assert_eq!(scenes.len(), 2);
+    assert!(
+        scenes.len() == 2 || scenes.len() == 4,
+        "{} scenes",
+        scenes.len()
+    );
+    assert!(scenes.iter().any(|s| s["traversal"] == "software"));
     for s in scenes {
+        assert!(matches!(
+            s["traversal"].as_str(),
+            Some("software" | "ray-query")
+        ));
         let ms = &s["methods"];
         assert_eq!(
             methods(ms, "throughput"),

@@ -1,5 +1,6 @@
 //! Every GLSL include compiles on its own: a kernel made of `#version 460`, the include
-//! and an empty `main` must compile with the same options as the real kernels. An include
+//! and an empty `main` must compile with the same options as the real kernels, with
+//! ray-query traversal and with software traversal (`LANTERNA_SOFTWARE_TRAVERSAL`). An include
 //! that uses a function, struct, buffer or extension without including the file that
 //! declares it fails here, instead of working only because `render_main.glsl` happens to
 //! include that file earlier.
@@ -46,7 +47,11 @@ fn includes(root: &Path) -> Vec<PathBuf> {
 /// `ris.glsl` resamples whatever `RisContext` / `RisCandidate` / `ris_draw` /
 /// `ris_target` the including kernel defines (closesthit.glsl for lights, the test kernel
 /// `tests/ris.comp` for a stub distribution, which compiles it in every build).
-const BRIDGED: [&str; 1] = ["ris.glsl"];
+///
+/// `bvh.glsl` is the software half of `trace.glsl` (its `trace_closest` and `visible`
+/// under `LANTERNA_SOFTWARE_TRAVERSAL`), included by it at that point and compiled
+/// through it here.
+const BRIDGED: [&str; 2] = ["ris.glsl", "bvh.glsl"];
 
 /// The parts that hold the kernel's `main`.
 const HAS_MAIN: [&str; 2] = ["raygen.glsl", "render_main.glsl"];
@@ -69,20 +74,29 @@ fn every_include_compiles_on_its_own() {
         if BRIDGED.contains(&file.as_str()) {
             continue;
         }
-        let name = include.to_string_lossy().replace(['/', '.'], "_");
-        // raygen.glsl and render_main.glsl hold the kernel's main.
-        let main = if HAS_MAIN.contains(&file.as_str()) {
-            ""
-        } else {
-            "void main() {}\n"
-        };
-        let kernel = format!(
-            "#version 460\n#include \"../{}\"\n{main}",
-            include.display()
-        );
-        std::fs::write(dir.join("alone").join(format!("{name}.comp")), kernel).unwrap();
-        if let Err(e) = shaders.load(&format!("alone/{name}")) {
-            failures.push(format!("{}:\n{e}", include.display()));
+        // Both traversal variants (render.comp and render_sw.comp).
+        for (variant, define) in [
+            ("rq", ""),
+            ("sw", "#define LANTERNA_SOFTWARE_TRAVERSAL 1\n"),
+        ] {
+            let name = format!(
+                "{}_{variant}",
+                include.to_string_lossy().replace(['/', '.'], "_")
+            );
+            // raygen.glsl and render_main.glsl hold the kernel's main.
+            let main = if HAS_MAIN.contains(&file.as_str()) {
+                ""
+            } else {
+                "void main() {}\n"
+            };
+            let kernel = format!(
+                "#version 460\n{define}#include \"../{}\"\n{main}",
+                include.display()
+            );
+            std::fs::write(dir.join("alone").join(format!("{name}.comp")), kernel).unwrap();
+            if let Err(e) = shaders.load(&format!("alone/{name}")) {
+                failures.push(format!("{} ({variant}):\n{e}", include.display()));
+            }
         }
     }
     let _ = std::fs::remove_dir_all(&dir);

@@ -133,7 +133,8 @@ class Renderer:
             ``guiding_memory`` (MiB), ``spatial_filter`` ("jitter"/"nearest"),
             ``directional_filter`` ("box"/"nearest"), ``guided_output``
             ("render-phase"/"inverse-variance"), ``learn_lights`` (bool),
-            ``light_mix``; and ``validation`` (Vulkan validation layers),
+            ``light_mix``, ``traversal`` ("auto"/"ray-query"/"software"); and
+            ``validation`` (Vulkan validation layers),
             ``shader_dir`` (compile the GLSL kernels from a directory).
 
     Renderers with the same device share it. Construction uploads the scene, builds

@@ -12,6 +12,7 @@
 #include "../shared/constants.h"
 #include "../shared/scene.h"
 #include "../shared/guiding.h"
+#include "../shared/traversal.h"
 
 const float PI = 3.14159265358979323846;
 const float TWO_PI = 6.28318530717958647692;

@@ -4,9 +4,16 @@
 
 #include "common.glsl"
 
+// The traversal variant: ray queries against the TLAS, or (LANTERNA_SOFTWARE_TRAVERSAL,
+// the *_sw kernels) inc/bvh.glsl over the CPU-built BVH. The software variant declares no
+// acceleration structure, so it needs neither VK_KHR_ray_query nor its SPIR-V capability.
+#ifdef LANTERNA_SOFTWARE_TRAVERSAL
+layout(set = 0, binding = BINDING_BVH_NODES, scalar) readonly buffer BvhNodeBuffer { BvhNode bvh_nodes[]; };
+layout(set = 0, binding = BINDING_BVH_TRIANGLES, scalar) readonly buffer BvhTriangleBuffer { BvhTriangle bvh_triangles[]; };
+#else
 #extension GL_EXT_ray_query : require
-
 layout(set = 0, binding = BINDING_TLAS) uniform accelerationStructureEXT tlas;
+#endif
 layout(set = 0, binding = BINDING_PARAMS, scalar) readonly buffer ParamsBuffer { FrameParams params; };
 layout(set = 0, binding = BINDING_VERTICES, scalar) readonly buffer VertexBuffer { Vertex vertices[]; };
 layout(set = 0, binding = BINDING_INDICES, scalar) readonly buffer IndexBuffer { uint indices[]; };

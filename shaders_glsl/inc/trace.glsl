@@ -1,5 +1,7 @@
-// Ray queries: the closest hit and visibility, with alpha-masked (MASK) and stochastic
+// Ray traversal: the closest hit and visibility, with alpha-masked (MASK) and stochastic
 // (BLEND) geometry resolved in the candidate loop, for camera, bounce and shadow rays.
+// Ray queries here, or (LANTERNA_SOFTWARE_TRAVERSAL) the software traversal of inc/bvh.glsl
+// behind the same two functions.
 #ifndef INC_TRACE_GLSL
 #define INC_TRACE_GLSL
 
@@ -16,11 +18,13 @@ struct Hit {
     float t;
 };
 
+#ifndef LANTERNA_SOFTWARE_TRAVERSAL
 // Instance index of the candidate (C = false) or committed (C = true) intersection: the
 // TLAS instance's custom index plus the geometry's index in its BLAS. (A macro: the
 // `committed` argument of the ray-query getters must be a compile-time constant.)
 #define HIT_INSTANCE(rq, C) \
     (rayQueryGetIntersectionInstanceCustomIndexEXT(rq, C) + uint(rayQueryGetIntersectionGeometryIndexEXT(rq, C)))
+#endif
 
 // Does a candidate hit on non-opaque geometry count? MASK compares alpha with the
 // cutoff; BLEND keeps the hit with probability alpha, decided by a hash of the ray and
@@ -44,6 +48,9 @@ uvec4 ray_key(vec3 o, vec3 d) {
                  floatBitsToUint(o.z) ^ floatBitsToUint(d.y), 0u);
 }
 
+#ifdef LANTERNA_SOFTWARE_TRAVERSAL
+#include "bvh.glsl"
+#else
 Hit trace_closest(vec3 origin, vec3 dir, float tmax) {
     rayQueryEXT rq;
     rayQueryInitializeEXT(rq, tlas, gl_RayFlagsNoneEXT, 0xffu, origin, 0.0, dir, tmax);
@@ -83,6 +90,7 @@ bool visible(vec3 origin, vec3 dir, float tmax) {
     }
     return rayQueryGetIntersectionTypeEXT(rq, true) == gl_RayQueryCommittedIntersectionNoneEXT;
 }
+#endif
 
 // Offset a ray origin off the surface along the geometric normal, scaled to the
 // position's magnitude (Wächter & Binder, Ray Tracing Gems ch. 6): 256 ulps of each

@@ -83,15 +83,14 @@ pub struct Session {
 
 impl Session {
     /// Load `path` and set up a renderer at `width` × (height from the camera's aspect
-    /// unless given) for `method`.
+    /// unless given) with `settings` (their size is replaced).
     pub fn open(
         device: &Arc<Device>,
         shaders: &ShaderSource,
         path: &Path,
         width: u32,
         height: Option<u32>,
-        method: Method,
-        seed: u32,
+        settings: RenderSettings,
     ) -> Result<Session> {
         let started = Instant::now();
         let loaded = session::load_scene(path).map_err(BenchError::Scene)?;
@@ -103,7 +102,11 @@ impl Session {
             &loaded.scene,
             &loaded.lights,
             camera,
-            base_settings(method, width, height, seed),
+            RenderSettings {
+                width,
+                height,
+                ..settings
+            },
             shaders.clone(),
         )?;
         Ok(Session {
@@ -131,7 +134,10 @@ impl Session {
 
     /// Default settings of `method` at this session's size.
     pub fn settings(&self, method: Method) -> RenderSettings {
-        base_settings(method, self.width, self.height, self.renderer.settings.seed)
+        RenderSettings {
+            traversal: self.renderer.settings.traversal,
+            ..base_settings(method, self.width, self.height, self.renderer.settings.seed)
+        }
     }
 
     /// Switch to `settings` and compile what they need; returns the seconds it took.

@@ -70,6 +70,9 @@ pub fn render(r: &BenchReport) -> String {
          RIS M = 32, guiding with 30 % of the spp budget training. GPU time is from timestamp queries around each dispatch.\n",
         r.sizes.warmup_spp, r.repeat, r.seed, r.sizes.max_depth
     );
+    if let Some(t) = &r.traversal {
+        traversal(&mut md, t);
+    }
     if let Some(t) = &r.throughput {
         throughput(&mut md, t);
     }
@@ -89,14 +92,52 @@ pub fn render(r: &BenchReport) -> String {
     md
 }
 
+fn traversal(md: &mut String, t: &super::traversal::TraversalBench) {
+    let _ = writeln!(md, "## Traversal\n");
+    let _ = writeln!(
+        md,
+        "The same rays through the device's ray queries and through the software traversal (`inc/bvh.glsl`), \
+         M rays per GPU second; camera rays of an image twice the throughput size, one cosine bounce ray and one shadow ray \
+         (to a point on a random emissive triangle) per camera hit.\n"
+    );
+    let _ = writeln!(
+        md,
+        "| scene | BVH (nodes, leaf ≤, depth) | rays | count | ray query M rays/s | software M rays/s | speed-up | hits differing |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
+    for s in &t.scenes {
+        for x in &s.sets {
+            let rq = x.ray_query_mrays_per_s.as_ref();
+            let _ = writeln!(
+                md,
+                "| {} | {}, {}, {} | {} | {} | {} | {} | {} | {} |",
+                s.scene,
+                s.bvh_nodes,
+                s.bvh_max_leaf,
+                s.bvh_depth,
+                x.set,
+                x.rays,
+                rq.map(|r| spread(r, 1.0)).unwrap_or_else(|| "—".into()),
+                spread(&x.software_mrays_per_s, 1.0),
+                rq.map(|r| format!("{:.1}×", x.software_mrays_per_s.median / r.median))
+                    .unwrap_or_else(|| "—".into()),
+                x.different_hits
+                    .map(|d| d.to_string())
+                    .unwrap_or_else(|| "—".into()),
+            );
+        }
+    }
+    let _ = writeln!(md);
+}
+
 fn throughput(md: &mut String, t: &super::throughput::Throughput) {
     let _ = writeln!(md, "## Throughput\n");
     for s in &t.scenes {
         let spp = s.methods.first().map(|m| m.spp).unwrap_or(0);
         let _ = writeln!(
             md,
-            "`{}` at {}×{}, {} spp per run ({} triangles, {} emissive in {} light models):\n",
-            s.scene, s.width, s.height, spp, s.triangles, s.emissive_triangles, s.light_models
+            "`{}` at {}×{}, {} traversal, {} spp per run ({} triangles, {} emissive in {} light models):\n",
+            s.scene, s.width, s.height, s.traversal, spp, s.triangles, s.emissive_triangles, s.light_models
         );
         let _ = writeln!(
             md,

@@ -20,8 +20,9 @@ pub mod scaling;
 pub mod sizes;
 pub mod spread;
 pub mod throughput;
+pub mod traversal;
 
-use crate::render::Method;
+use crate::render::{Method, RenderSettings, Traversal};
 use crate::shaders::ShaderSource;
 use crate::vk::Device;
 use harness::Session;
@@ -80,10 +81,12 @@ pub enum Suite {
     Quality,
     Mitsuba,
     Profile,
+    Traversal,
 }
 
 impl Suite {
-    pub const ALL: [Suite; 6] = [
+    pub const ALL: [Suite; 7] = [
+        Suite::Traversal,
         Suite::Throughput,
         Suite::Scaling,
         Suite::Guiding,
@@ -100,6 +103,7 @@ impl Suite {
             Suite::Quality => "quality",
             Suite::Mitsuba => "mitsuba",
             Suite::Profile => "profile",
+            Suite::Traversal => "traversal",
         }
     }
 }
@@ -206,14 +210,28 @@ impl Bench {
         height: Option<u32>,
         method: Method,
     ) -> Result<Session> {
+        self.open_with(path, width, height, method, Traversal::Auto)
+    }
+
+    /// Like [`open`](Self::open) with a given traversal.
+    pub fn open_with(
+        &self,
+        path: &Path,
+        width: u32,
+        height: Option<u32>,
+        method: Method,
+        traversal: Traversal,
+    ) -> Result<Session> {
         Session::open(
             &self.device,
             &self.shaders,
             path,
             width,
             height,
-            method,
-            self.seed,
+            RenderSettings {
+                traversal,
+                ..harness::base_settings(method, 0, 0, self.seed)
+            },
         )
     }
 }
@@ -313,6 +331,7 @@ fn run_suites(config: &BenchConfig, bench: &Bench) -> Result<BenchReport> {
         mitsuba: None,
         mitsuba_skipped: None,
         profile: None,
+        traversal: None,
         load_average_start: None,
         load_average_end: None,
         total_seconds: 0.0,
@@ -326,6 +345,7 @@ fn run_suites(config: &BenchConfig, bench: &Bench) -> Result<BenchReport> {
             Suite::Guiding => report.guiding = Some(guiding::run(bench)?),
             Suite::Quality => report.quality = Some(quality::run(bench)?),
             Suite::Profile => report.profile = Some(profile::run(bench)?),
+            Suite::Traversal => report.traversal = Some(traversal::run(bench)?),
             Suite::Mitsuba => {
                 if config.skip_mitsuba {
                     report.mitsuba_skipped = Some("--skip-mitsuba".into());

@@ -39,6 +39,9 @@ pub struct BenchReport {
     /// Why the Mitsuba suite did not run (not installed, `--skip-mitsuba`, or its error).
     pub mitsuba_skipped: Option<String>,
     pub profile: Option<Profile>,
+    /// Ray traversal alone: ray queries against the software traversal.
+    #[serde(default)]
+    pub traversal: Option<super::traversal::TraversalBench>,
     /// /proc/loadavg before and after the run: other work on the machine shows up here
     /// (and in every timing).
     pub load_average_start: Option<String>,

@@ -1,4 +1,5 @@
-//! Suite 1, throughput: every method on every shipped scene at a fixed spp; samples per
+//! Suite 1, throughput: every method on every shipped scene at a fixed spp, with each
+//! traversal the device has (ray queries, software); samples per
 //! second of wall time, rays per second by kind from the kernel's counters, and GPU time
 //! from timestamp queries against wall time (their gap is the host: submission, waits,
 //! film clears and read-backs, and for guided methods the SD-tree's read-back, refit and
@@ -8,7 +9,7 @@ use super::harness::{RunSample, Session};
 use super::spread::Spread;
 use super::{Bench, Result};
 use crate::render::run::Budget;
-use crate::render::Method;
+use crate::render::{Method, Traversal};
 
 /// One method on one scene.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
@@ -41,6 +42,9 @@ pub struct MethodThroughput {
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct SceneThroughput {
     pub scene: String,
+    /// `ray-query` or `software`.
+    #[serde(default)]
+    pub traversal: String,
     pub width: u32,
     pub height: u32,
     pub triangles: u64,
@@ -86,31 +90,43 @@ pub fn run(bench: &Bench) -> Result<Throughput> {
     let mut scenes = Vec::new();
     for size in &bench.sizes.throughput {
         let path = bench.scene_path(&size.scene)?;
-        log::info!("throughput: {} at width {}", size.scene, size.width);
-        let mut session = bench.open(&path, size.width, size.height, Method::Pt)?;
-        let pixels = session.pixels();
-        let mut methods = Vec::new();
-        for method in Method::ALL {
-            let mut settings = session.settings(method);
-            settings.max_depth = bench.sizes.max_depth;
-            let runs = session.measure(
-                settings,
-                Budget::Spp(bench.sizes.warmup_spp),
-                Budget::Spp(size.spp),
-                bench.repeat,
-            )?;
-            methods.push(summarise(method, size.spp, pixels, &runs));
+        let mut traversals = vec![Traversal::Software];
+        if bench.device.info.features.ray_queries() {
+            traversals.insert(0, Traversal::RayQuery);
         }
-        scenes.push(SceneThroughput {
-            scene: size.scene.clone(),
-            width: session.width,
-            height: session.height,
-            triangles: session.loaded.scene.triangle_count(),
-            emissive_triangles: session.loaded.lights.triangles.len() as u64,
-            light_models: session.loaded.lights.models.len() as u64,
-            setup_seconds: session.setup_seconds,
-            methods,
-        });
+        for traversal in traversals {
+            log::info!(
+                "throughput: {} at width {}, {traversal:?} traversal",
+                size.scene,
+                size.width
+            );
+            let mut session =
+                bench.open_with(&path, size.width, size.height, Method::Pt, traversal)?;
+            let pixels = session.pixels();
+            let mut methods = Vec::new();
+            for method in Method::ALL {
+                let mut settings = session.settings(method);
+                settings.max_depth = bench.sizes.max_depth;
+                let runs = session.measure(
+                    settings,
+                    Budget::Spp(bench.sizes.warmup_spp),
+                    Budget::Spp(size.spp),
+                    bench.repeat,
+                )?;
+                methods.push(summarise(method, size.spp, pixels, &runs));
+            }
+            scenes.push(SceneThroughput {
+                scene: size.scene.clone(),
+                traversal: session.renderer.traversal.kind.name().into(),
+                width: session.width,
+                height: session.height,
+                triangles: session.loaded.scene.triangle_count(),
+                emissive_triangles: session.loaded.lights.triangles.len() as u64,
+                light_models: session.loaded.lights.models.len() as u64,
+                setup_seconds: session.setup_seconds,
+                methods,
+            });
+        }
     }
     Ok(Throughput { scenes })
 }

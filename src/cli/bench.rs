@@ -23,8 +23,8 @@ pub struct Args {
     /// Skip the Mitsuba 3 peer comparison even when Mitsuba is installed.
     #[arg(long)]
     pub skip_mitsuba: bool,
-    /// Suites to run, comma-separated: throughput, scaling, guiding, quality, mitsuba,
-    /// profile (default: all).
+    /// Suites to run, comma-separated: traversal, throughput, scaling, guiding, quality,
+    /// mitsuba, profile (default: all).
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     pub suite: Vec<Suite>,
     /// Directory of the shipped scenes (default: ./scenes, else the source tree's).

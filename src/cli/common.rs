@@ -178,6 +178,11 @@ pub struct EstimatorArgs {
     /// Guiding with --learn-lights: probability of choosing from the learned table.
     #[arg(long, default_value_t = 0.5)]
     pub light_mix: f32,
+    /// Ray traversal: the device's ray queries, or the kernels' own traversal of a BVH
+    /// built on the CPU; auto takes software on CPU devices (lavapipe, where it is
+    /// faster) and on devices without ray queries, ray queries on GPUs.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub traversal: lanterna::render::Traversal,
 }
 
 /// `--spatial-filter`.
@@ -230,6 +235,7 @@ impl EstimatorArgs {
                 light_mix: self.light_mix,
                 output: self.guided_output,
             },
+            traversal: self.traversal,
             ..RenderSettings::default()
         }
     }

@@ -2,7 +2,7 @@
 //! needs, or a scene's statistics.
 
 use anyhow::{Context, Result};
-use lanterna::render::session;
+use lanterna::render::{session, Traversal};
 use lanterna::scene::SceneStats;
 use lanterna::vk::{Device, Instance, InstanceOptions};
 use std::path::PathBuf;
@@ -64,6 +64,7 @@ fn device_info(json: bool) -> Result<()> {
                     "api_version": d.api_version_string(),
                     "driver": d.driver,
                     "missing": d.features.missing(),
+                    "traversal": Traversal::Auto.resolve(d).map(|c| serde_json::json!({"kind": c.kind, "reason": c.reason})).ok(),
                     "features": d.features.rows().iter().map(|(n, ok, _)| (n.to_string(), *ok)).collect::<std::collections::BTreeMap<_, _>>(),
                 })
             })
@@ -89,6 +90,12 @@ fn device_info(json: bool) -> Result<()> {
                 "cannot render"
             }
         );
+        if let Ok(c) = Traversal::Auto.resolve(d) {
+            println!(
+                "      traversal (--traversal auto): {} — {}",
+                c.kind, c.reason
+            );
+        }
         for (name, ok, need) in d.features.rows() {
             println!(
                 "      {} {name:<34} ({need})",

@@ -345,6 +345,13 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
     meta.render_seconds = Some(render_seconds);
     meta.extra
         .insert("gpu_seconds".into(), format!("{:.6}", stats.gpu_seconds));
+    meta.extra.insert(
+        "traversal_used".into(),
+        format!(
+            "{} ({})",
+            renderer.traversal.kind, renderer.traversal.reason
+        ),
+    );
     if stats.clamped_samples > 0 {
         meta.extra
             .insert("clamped_samples".into(), stats.clamped_samples.to_string());
@@ -434,7 +441,7 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
     }
     let pixels = width as f64 * height as f64;
     log::info!(
-        "{} {}×{} {} spp in {:.2} s ({:.2} s setup): {:.3} M samples/s, {:.3} M rays/s (camera {}, bounce {}, shadow {}), GPU {:.2} s, host {:.2} s",
+        "{} {}×{} {} spp in {:.2} s ({:.2} s setup): {:.3} M samples/s, {:.3} M rays/s (camera {}, bounce {}, shadow {}), GPU {:.2} s, host {:.2} s; {} traversal ({})",
         args.method.method,
         width,
         height,
@@ -448,6 +455,8 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
         stats.shadow_rays,
         stats.gpu_seconds,
         (render_seconds - stats.gpu_seconds).max(0.0),
+        renderer.traversal.kind,
+        renderer.traversal.reason,
     );
     log::info!(
         "wrote {}{}",

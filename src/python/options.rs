@@ -4,14 +4,14 @@
 //! the command line checks them (the renderer, the guiding configuration), so the same
 //! values fail with the same messages.
 
-use crate::render::{GuidedOutput, LightSource, RenderSettings, Strategy};
+use crate::render::{GuidedOutput, LightSource, RenderSettings, Strategy, Traversal};
 use crate::shaders::ShaderSource;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 /// The keyword options `Renderer` accepts besides its named parameters.
-pub const OPTIONS: [&str; 17] = [
+pub const OPTIONS: [&str; 18] = [
     "rr_depth",
     "source",
     "ris_candidates",
@@ -27,6 +27,7 @@ pub const OPTIONS: [&str; 17] = [
     "guided_output",
     "learn_lights",
     "light_mix",
+    "traversal",
     "validation",
     "shader_dir",
 ];
@@ -115,6 +116,9 @@ pub fn apply(
             }
             "learn_lights" => settings.guiding.learn_lights = v.extract()?,
             "light_mix" => settings.guiding.light_mix = v.extract()?,
+            "traversal" => {
+                settings.traversal = value_enum::<Traversal>(&flag, &v.extract::<String>()?)?
+            }
             "validation" => extras.validation = v.extract()?,
             "shader_dir" => {
                 if !v.is_none() {

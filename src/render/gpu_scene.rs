@@ -1,6 +1,10 @@
 //! The scene on the device: vertex, index, instance, material and light buffers,
-//! textures and samplers, one BLAS per primitive and the TLAS.
+//! textures and samplers, and what the traversal needs: for ray queries the BLASes and the
+//! TLAS, for the software traversal the BVH of `bvh.rs` over the same instances in world
+//! space (instance and primitive indices as the ray queries would report them).
 
+use super::bvh::{BuildTriangle, Bvh, BvhOptions};
+use super::traversal::TraversalKind;
 use crate::gpu;
 use crate::lights::LightTable;
 use crate::scene::spatial_order::kd_order;
@@ -29,15 +33,32 @@ pub struct GpuScene {
     /// Sampler of each texture (index into `samplers`).
     pub texture_samplers: Vec<usize>,
     pub samplers: Vec<Sampler>,
-    pub tlas: AccelStructure,
+    pub traversal: TraversalKind,
+    /// The TLAS (ray-query traversal).
+    pub tlas: Option<AccelStructure>,
     _blases: Vec<AccelStructure>,
-    _flat_positions: Buffer,
+    _flat_positions: Option<Buffer>,
+    /// Scene instance index of each GPU instance (the merge order).
+    pub instance_order: Vec<usize>,
+    /// Size of the software BVH (zeros with ray queries).
+    pub bvh_stats: BvhStats,
+    /// The BVH's nodes and triangles (software traversal).
+    pub bvh: Option<(Buffer, Buffer)>,
     /// Seconds spent building acceleration structures.
     pub accel_seconds: f64,
     /// Seconds spent uploading buffers and textures.
     pub upload_seconds: f64,
     /// Bytes of device memory held (buffers, textures, acceleration structures).
     pub device_bytes: u64,
+}
+
+/// What the software BVH came out as.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BvhStats {
+    pub nodes: usize,
+    pub triangles: usize,
+    pub max_leaf: usize,
+    pub depth: usize,
 }
 
 const STORAGE: raw::BufferUsageFlags = raw::BufferUsageFlags::STORAGE_BUFFER;
@@ -47,11 +68,17 @@ impl GpuScene {
         device: &Arc<Device>,
         scene: &Scene,
         lights: &LightTable,
+        traversal: TraversalKind,
     ) -> vk::Result<GpuScene> {
         let started = Instant::now();
-        let geometry_usage = STORAGE
-            | raw::BufferUsageFlags::SHADER_DEVICE_ADDRESS
-            | raw::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR;
+        let ray_query = traversal == TraversalKind::RayQuery;
+        let geometry_usage = if ray_query {
+            STORAGE
+                | raw::BufferUsageFlags::SHADER_DEVICE_ADDRESS
+                | raw::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
+        } else {
+            STORAGE
+        };
         let vertices = Buffer::from_slice(device, &scene.vertices, geometry_usage, "vertices")?;
         let indices = Buffer::from_slice(device, &scene.indices, geometry_usage, "indices")?;
 
@@ -134,92 +161,36 @@ impl GpuScene {
         let upload_seconds = started.elapsed().as_secs_f64();
 
         let started = Instant::now();
-        let stride = std::mem::size_of::<gpu::Vertex>() as u64;
-        let geometry = |p: &crate::scene::MeshPrimitive,
-                        vertex_address: u64,
-                        vertex_stride: u64| BlasGeometry {
-            vertex_address,
-            vertex_stride,
-            max_vertex: p.vertex_count.saturating_sub(1),
-            index_address: indices.address + p.index_offset as u64 * 4,
-            triangle_count: p.triangle_count,
-            opaque: p.opaque,
-        };
-        // World-space positions of the flattened instances, then one geometry each.
-        let mut flat_positions: Vec<[f32; 3]> =
-            Vec::with_capacity(plan.flattened_vertices as usize);
-        let mut flat_geometries = Vec::with_capacity(plan.flattened);
-        for &i in &plan.order[..plan.flattened] {
-            let inst = &scene.instances[i];
-            let p = &scene.primitives[inst.primitive as usize];
-            let first = flat_positions.len() as u64;
-            flat_positions.extend(
-                scene.vertices
-                    [p.vertex_offset as usize..(p.vertex_offset + p.vertex_count) as usize]
-                    .iter()
-                    .map(|v| {
-                        inst.transform
-                            .transform_point3(glam::Vec3::from(v.position))
-                            .to_array()
-                    }),
+        let mut bvh_stats = BvhStats::default();
+        let (tlas, blases, flat_buffer, bvh) = if ray_query {
+            let (tlas, blases, flat) = build_ray_query_structures(
+                device,
+                scene,
+                &plan,
+                &vertices,
+                &indices,
+                geometry_usage,
+            )?;
+            (Some(tlas), blases, Some(flat), None)
+        } else {
+            let options = BvhOptions::from_env();
+            let bvh = build_bvh(scene, &plan, options);
+            bvh_stats = BvhStats {
+                nodes: bvh.nodes.len(),
+                triangles: bvh.triangles.len(),
+                max_leaf: options.max_leaf,
+                depth: bvh.depth,
+            };
+            log::info!(
+                "software BVH: {} nodes, {} triangles, depth {}",
+                bvh.nodes.len(),
+                bvh.triangles.len(),
+                bvh.depth
             );
-            flat_geometries.push((p, first));
-        }
-        let flat_buffer = Buffer::from_slice(
-            device,
-            &flat_positions,
-            geometry_usage,
-            "flattened positions",
-        )?;
-        let mut blas_lists: Vec<Vec<BlasGeometry>> = plan
-            .groups
-            .iter()
-            .map(|g| {
-                flat_geometries[g.clone()]
-                    .iter()
-                    .map(|&(p, first)| geometry(p, flat_buffer.address + first * 12, 12))
-                    .collect()
-            })
-            .collect();
-        // Then one BLAS per primitive that stays instanced.
-        let mut primitive_blas: HashMap<u32, usize> = HashMap::new();
-        for &i in &plan.order[plan.flattened..] {
-            let prim = scene.instances[i].primitive;
-            primitive_blas.entry(prim).or_insert_with(|| {
-                let p = &scene.primitives[prim as usize];
-                blas_lists.push(vec![geometry(
-                    p,
-                    vertices.address + p.vertex_offset as u64 * stride,
-                    stride,
-                )]);
-                blas_lists.len() - 1
-            });
-        }
-        let blases = AccelStructure::build_blases(device, &blas_lists)?;
-        const IDENTITY: [f32; 12] = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
-        let mut tlas_instances: Vec<TlasInstance> = plan
-            .groups
-            .iter()
-            .enumerate()
-            .map(|(b, g)| TlasInstance {
-                transform: IDENTITY,
-                custom_index: g.start as u32,
-                blas_address: blases[b].address,
-                force_opaque: false,
-            })
-            .collect();
-        for (k, &i) in plan.order.iter().enumerate().skip(plan.flattened) {
-            let inst = &scene.instances[i];
-            let m = inst.transform.transpose().to_cols_array();
-            tlas_instances.push(TlasInstance {
-                // Row-major 3×4: the first three rows of the matrix.
-                transform: m[..12].try_into().unwrap(),
-                custom_index: k as u32,
-                blas_address: blases[primitive_blas[&inst.primitive]].address,
-                force_opaque: false,
-            });
-        }
-        let tlas = AccelStructure::build_tlas(device, &tlas_instances)?;
+            let nodes = Buffer::from_slice(device, &bvh.nodes, STORAGE, "BVH nodes")?;
+            let tris = Buffer::from_slice(device, &bvh.triangles, STORAGE, "BVH triangles")?;
+            (None, Vec::new(), None, Some((nodes, tris)))
+        };
         let accel_seconds = started.elapsed().as_secs_f64();
 
         let device_bytes = [
@@ -243,14 +214,16 @@ impl GpuScene {
                 .map(|t| t.rgba.len() as u64)
                 .sum::<u64>()
             + blases.iter().map(|b| b.size).sum::<u64>()
-            + tlas.size;
+            + tlas.as_ref().map_or(0, |t| t.size)
+            + flat_buffer.as_ref().map_or(0, |b| b.size)
+            + bvh.as_ref().map_or(0, |(n, t)| n.size + t.size);
         log::info!(
-            "scene on device: {:.1} MiB, uploads {:.2} s, acceleration structures {:.2} s ({} BLAS, {} TLAS instances; {} of {} instances flattened)",
+            "scene on device: {:.1} MiB, uploads {:.2} s, {} traversal structures {:.2} s ({} BLAS; {} of {} instances flattened)",
             device_bytes as f64 / (1 << 20) as f64,
             upload_seconds,
+            traversal,
             accel_seconds,
             blases.len(),
-            tlas_instances.len(),
             plan.flattened,
             scene.instances.len()
         );
@@ -268,9 +241,13 @@ impl GpuScene {
             textures,
             texture_samplers,
             samplers,
+            traversal,
             tlas,
             _blases: blases,
             _flat_positions: flat_buffer,
+            bvh,
+            instance_order: plan.order.clone(),
+            bvh_stats,
             accel_seconds,
             upload_seconds,
             device_bytes,
@@ -285,6 +262,133 @@ impl GpuScene {
             .map(|(t, &s)| (t.view, self.samplers[s].raw))
             .collect()
     }
+}
+
+/// The ray-query structures: merged BLASes of the flattened instances, one BLAS per
+/// primitive that stays instanced, and the TLAS over them.
+fn build_ray_query_structures(
+    device: &Arc<Device>,
+    scene: &Scene,
+    plan: &FlattenPlan,
+    vertices: &Buffer,
+    indices: &Buffer,
+    geometry_usage: raw::BufferUsageFlags,
+) -> vk::Result<(AccelStructure, Vec<AccelStructure>, Buffer)> {
+    let stride = std::mem::size_of::<gpu::Vertex>() as u64;
+    let geometry =
+        |p: &crate::scene::MeshPrimitive, vertex_address: u64, vertex_stride: u64| BlasGeometry {
+            vertex_address,
+            vertex_stride,
+            max_vertex: p.vertex_count.saturating_sub(1),
+            index_address: indices.address + p.index_offset as u64 * 4,
+            triangle_count: p.triangle_count,
+            opaque: p.opaque,
+        };
+    // World-space positions of the flattened instances, then one geometry each.
+    let mut flat_positions: Vec<[f32; 3]> = Vec::with_capacity(plan.flattened_vertices as usize);
+    let mut flat_geometries = Vec::with_capacity(plan.flattened);
+    for &i in &plan.order[..plan.flattened] {
+        let inst = &scene.instances[i];
+        let p = &scene.primitives[inst.primitive as usize];
+        let first = flat_positions.len() as u64;
+        flat_positions.extend(
+            scene.vertices[p.vertex_offset as usize..(p.vertex_offset + p.vertex_count) as usize]
+                .iter()
+                .map(|v| {
+                    inst.transform
+                        .transform_point3(glam::Vec3::from(v.position))
+                        .to_array()
+                }),
+        );
+        flat_geometries.push((p, first));
+    }
+    let flat_buffer = Buffer::from_slice(
+        device,
+        &flat_positions,
+        geometry_usage,
+        "flattened positions",
+    )?;
+    let mut blas_lists: Vec<Vec<BlasGeometry>> = plan
+        .groups
+        .iter()
+        .map(|g| {
+            flat_geometries[g.clone()]
+                .iter()
+                .map(|&(p, first)| geometry(p, flat_buffer.address + first * 12, 12))
+                .collect()
+        })
+        .collect();
+    // Then one BLAS per primitive that stays instanced.
+    let mut primitive_blas: HashMap<u32, usize> = HashMap::new();
+    for &i in &plan.order[plan.flattened..] {
+        let prim = scene.instances[i].primitive;
+        primitive_blas.entry(prim).or_insert_with(|| {
+            let p = &scene.primitives[prim as usize];
+            blas_lists.push(vec![geometry(
+                p,
+                vertices.address + p.vertex_offset as u64 * stride,
+                stride,
+            )]);
+            blas_lists.len() - 1
+        });
+    }
+    let blases = AccelStructure::build_blases(device, &blas_lists)?;
+    const IDENTITY: [f32; 12] = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let mut tlas_instances: Vec<TlasInstance> = plan
+        .groups
+        .iter()
+        .enumerate()
+        .map(|(b, g)| TlasInstance {
+            transform: IDENTITY,
+            custom_index: g.start as u32,
+            blas_address: blases[b].address,
+            force_opaque: false,
+        })
+        .collect();
+    for (k, &i) in plan.order.iter().enumerate().skip(plan.flattened) {
+        let inst = &scene.instances[i];
+        let m = inst.transform.transpose().to_cols_array();
+        tlas_instances.push(TlasInstance {
+            // Row-major 3×4: the first three rows of the matrix.
+            transform: m[..12].try_into().unwrap(),
+            custom_index: k as u32,
+            blas_address: blases[primitive_blas[&inst.primitive]].address,
+            force_opaque: false,
+        });
+    }
+    let tlas = AccelStructure::build_tlas(device, &tlas_instances)?;
+    Ok((tlas, blases, flat_buffer))
+}
+
+/// The software traversal's BVH over every instance's triangles in world space, each
+/// tagged with the instance index ray queries report (its position in the GPU instance
+/// buffer, `plan.order`) and its index within its primitive.
+fn build_bvh(scene: &Scene, plan: &FlattenPlan, options: BvhOptions) -> Bvh {
+    let total: usize = plan
+        .order
+        .iter()
+        .map(|&i| scene.primitives[scene.instances[i].primitive as usize].triangle_count as usize)
+        .sum();
+    let mut tris = Vec::with_capacity(total);
+    for (k, &i) in plan.order.iter().enumerate() {
+        let inst = &scene.instances[i];
+        let p = &scene.primitives[inst.primitive as usize];
+        for t in 0..p.triangle_count {
+            let base = (p.index_offset + 3 * t) as usize;
+            let v = |j: usize| {
+                let idx = p.vertex_offset + scene.indices[base + j];
+                inst.transform
+                    .transform_point3(glam::Vec3::from(scene.vertices[idx as usize].position))
+            };
+            tris.push(BuildTriangle {
+                v: [v(0), v(1), v(2)],
+                instance: k as u32,
+                primitive: t,
+                opaque: p.opaque,
+            });
+        }
+    }
+    Bvh::build(&tris, options)
 }
 
 /// Which instances are copied into world space and merged into shared BLASes.

@@ -56,12 +56,22 @@ impl Renderer {
                 &self.guide.light_training,
             ),
             (gpu::BINDING_OUTLIERS, &self.outliers),
+            (gpu::BINDING_TRACE_RAYS, &self.trace_rays),
+            (gpu::BINDING_TRACE_HITS, &self.trace_hits),
         ];
         let mut table: Vec<(u32, Bound<'_>)> = buffers
             .into_iter()
             .map(|(binding, buffer)| (binding, Bound::Buffer(buffer)))
             .collect();
-        table.push((gpu::BINDING_TLAS, Bound::Accel(&g.tlas)));
+        // Only the variant's traversal structures: a device without ray queries cannot
+        // have an acceleration-structure binding.
+        if let Some(tlas) = &g.tlas {
+            table.push((gpu::BINDING_TLAS, Bound::Accel(tlas)));
+        }
+        if let Some((nodes, triangles)) = &g.bvh {
+            table.push((gpu::BINDING_BVH_NODES, Bound::Buffer(nodes)));
+            table.push((gpu::BINDING_BVH_TRIANGLES, Bound::Buffer(triangles)));
+        }
         table.push((
             gpu::BINDING_TEXTURES,
             Bound::Images(g.texture_descriptors()),
@@ -70,7 +80,7 @@ impl Renderer {
     }
 
     /// The descriptor-set layout's bindings, from the table.
-    fn bindings(&self) -> Vec<BindingSpec> {
+    pub(super) fn bindings(&self) -> Vec<BindingSpec> {
         self.binding_table()
             .iter()
             .map(|(binding, bound)| match bound {
@@ -85,9 +95,11 @@ impl Renderer {
         if self.pipelines.contains_key(&v) {
             return Ok(());
         }
-        let spirv = self
-            .shaders
-            .load(if v.debug { "render_debug" } else { "render" })?;
+        let spirv = self.shaders.load(&self.traversal.kind.kernel(if v.debug {
+            "render_debug"
+        } else {
+            "render"
+        }))?;
         let spec = [
             if v.ris {
                 gpu::NEE_RIS
@@ -100,8 +112,8 @@ impl Renderer {
         ];
         let started = Instant::now();
         let name = format!(
-            "render (ris={}, guiding={}, training={}, aovs={}, debug={})",
-            v.ris, v.guiding, v.training, v.aovs, v.debug
+            "render (ris={}, guiding={}, training={}, aovs={}, debug={}, traversal={})",
+            v.ris, v.guiding, v.training, v.aovs, v.debug, self.traversal.kind
         );
         let p = ComputePipeline::new(
             &self.device,
@@ -124,6 +136,15 @@ impl Renderer {
             return Ok(s.raw);
         }
         let set = DescriptorSet::new(&self.device, &self.pipelines[&v])?;
+        self.write_scene_descriptors(&set);
+        let raw_set = set.raw;
+        self.set = Some(set);
+        Ok(raw_set)
+    }
+
+    /// Write every binding of the table into `set` (a set of a pipeline made with
+    /// [`Self::bindings`]).
+    pub(super) fn write_scene_descriptors(&self, set: &DescriptorSet) {
         for (binding, bound) in self.binding_table() {
             match bound {
                 Bound::Buffer(buffer) => set.write_buffer(binding, buffer),
@@ -131,9 +152,6 @@ impl Renderer {
                 Bound::Images(images) => set.write_images(binding, &images),
             }
         }
-        let raw_set = set.raw;
-        self.set = Some(set);
-        Ok(raw_set)
     }
 
     /// Compile the pipeline(s) the current method needs (pipeline creation can take a

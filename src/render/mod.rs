@@ -12,6 +12,7 @@
 //! buffers and acceleration structures); `run`/`guided` run a method under a budget.
 
 mod budget;
+mod bvh;
 mod dispatch;
 mod film;
 mod gpu_scene;
@@ -25,15 +26,18 @@ pub mod run;
 pub mod runner;
 pub mod session;
 mod settings;
+pub mod trace;
+pub mod traversal;
 
 pub use film::Film;
-pub use gpu_scene::GpuScene;
+pub use gpu_scene::{BvhStats, GpuScene};
 pub use guide_buffers::GuideBuffers;
 pub use guided::{train, GuidingOutcome, IterationStats, Training, TrainingPlan};
 pub use readback::Outlier;
 pub use settings::{
     GuidedOutput, GuidingSettings, LightSource, Method, RenderSettings, SettingsError, Strategy,
 };
+pub use traversal::{Traversal, TraversalChoice, TraversalKind};
 
 use crate::gpu;
 use crate::lights::LightTable;
@@ -54,6 +58,8 @@ pub enum RenderError {
     Shader(#[from] crate::shaders::ShaderError),
     #[error(transparent)]
     Settings(#[from] SettingsError),
+    #[error(transparent)]
+    NoRayQueries(#[from] traversal::NoRayQueries),
     #[error("{0}")]
     Invalid(String),
 }
@@ -86,6 +92,8 @@ impl RenderStats {
 pub struct Renderer {
     pub device: Arc<Device>,
     pub gpu_scene: GpuScene,
+    /// The traversal the kernels use, and why (`settings.traversal` resolved).
+    pub traversal: TraversalChoice,
     pub settings: RenderSettings,
     camera: Camera,
     scene_radius: f32,
@@ -95,6 +103,10 @@ pub struct Renderer {
     shaders: ShaderSource,
     pipelines: HashMap<Variant, ComputePipeline>,
     set: Option<DescriptorSet>,
+    /// The trace kernel and its rays and hits (`trace.rs`); placeholders until used.
+    trace_pipeline: Option<ComputePipeline>,
+    trace_rays: Buffer,
+    trace_hits: Buffer,
     params: Buffer,
     film: Buffer,
     stats: Buffer,
@@ -128,8 +140,12 @@ impl Renderer {
     ) -> Result<Renderer> {
         settings.validate()?;
         limits::check_image_size(&device, &settings)?;
-        let gpu_scene = GpuScene::upload(&device, scene, lights)?;
+        let traversal = settings.traversal.resolve(&device.info)?;
+        log::info!("traversal: {} ({})", traversal.kind, traversal.reason);
+        let gpu_scene = GpuScene::upload(&device, scene, lights, traversal.kind)?;
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
+        let trace_rays = Buffer::zeroed(&device, 64, usage, "trace rays (unused)")?;
+        let trace_hits = Buffer::zeroed(&device, 64, usage, "trace hits (unused)")?;
         let pixels = settings.width as u64 * settings.height as u64;
         let params = Buffer::zeroed(
             &device,
@@ -154,6 +170,7 @@ impl Renderer {
         let mut r = Renderer {
             device,
             gpu_scene,
+            traversal,
             settings,
             camera,
             scene_radius: 0.5 * scene.extent(),
@@ -163,6 +180,9 @@ impl Renderer {
             shaders,
             pipelines: HashMap::new(),
             set: None,
+            trace_pipeline: None,
+            trace_rays,
+            trace_hits,
             params,
             film,
             stats,
@@ -245,10 +265,20 @@ impl Renderer {
             ));
         }
         settings.validate()?;
+        if settings.traversal.resolve(&self.device.info)?.kind != self.traversal.kind {
+            return Err(RenderError::Invalid(
+                "set_settings cannot change the traversal".into(),
+            ));
+        }
         self.settings = settings;
         // Another method has another cost per sample: measure it again.
         self.seconds_per_sample = None;
         self.upload_params()
+    }
+
+    /// The view being rendered.
+    pub fn camera(&self) -> &Camera {
+        &self.camera
     }
 
     /// Replace the guiding buffers (after a refit).

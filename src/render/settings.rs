@@ -173,6 +173,10 @@ pub struct RenderSettings {
     /// no influence on the image).
     #[serde(skip)]
     pub aovs: bool,
+    /// Ray traversal asked for (`--traversal`); the renderer resolves it against the
+    /// device (`Renderer::traversal` holds what is used and why).
+    #[serde(default)]
+    pub traversal: super::traversal::Traversal,
     pub guiding: GuidingSettings,
 }
 
@@ -192,6 +196,7 @@ impl Default for RenderSettings {
             fov_degrees: None,
             exposure: 0.0,
             aovs: false,
+            traversal: super::traversal::Traversal::Auto,
             guiding: GuidingSettings::default(),
         }
     }

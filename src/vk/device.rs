@@ -1,7 +1,8 @@
 //! Physical-device choice and the logical device.
 //!
-//! lanterna needs ray queries in compute shaders, acceleration structures, buffer device
-//! addresses (for AS builds), scalar block layout, bindless sampled images, 64-bit
+//! lanterna uses ray queries in compute shaders and acceleration structures where the
+//! device has them (otherwise the kernels traverse a BVH of their own, see
+//! `render::traversal`), and needs buffer device addresses, scalar block layout, bindless sampled images, 64-bit
 //! integers (exact film accumulation) and, for the guided methods, float atomics. The
 //! chooser prefers a hardware GPU that has all of them and falls back to lavapipe (Mesa's
 //! CPU implementation); `--device` picks one by index or name substring.
@@ -42,6 +43,9 @@ impl std::str::FromStr for DeviceSelector {
 pub struct FeatureReport {
     pub ray_query: bool,
     pub acceleration_structure: bool,
+    /// Ray queries were reported unavailable by `LANTERNA_NO_RAY_QUERY` (a test and
+    /// debugging override: the device is then used as if it had none).
+    pub ray_queries_hidden: bool,
     pub buffer_device_address: bool,
     pub scalar_block_layout: bool,
     pub descriptor_indexing: bool,
@@ -58,8 +62,6 @@ impl FeatureReport {
     pub fn missing(&self) -> Vec<&'static str> {
         let mut m = Vec::new();
         let req = [
-            (self.ray_query, "VK_KHR_ray_query"),
-            (self.acceleration_structure, "VK_KHR_acceleration_structure"),
             (self.buffer_device_address, "bufferDeviceAddress"),
             (self.scalar_block_layout, "scalarBlockLayout"),
             (
@@ -77,14 +79,19 @@ impl FeatureReport {
         m
     }
 
+    /// Ray queries and acceleration structures, both (the ray-query traversal).
+    pub fn ray_queries(&self) -> bool {
+        self.ray_query && self.acceleration_structure
+    }
+
     /// Rows for `lanterna info`: (feature, supported, required).
     pub fn rows(&self) -> Vec<(&'static str, bool, &'static str)> {
         vec![
-            ("VK_KHR_ray_query", self.ray_query, "required"),
+            ("VK_KHR_ray_query", self.ray_query, "ray-query traversal"),
             (
                 "VK_KHR_acceleration_structure",
                 self.acceleration_structure,
-                "required",
+                "ray-query traversal",
             ),
             (
                 "bufferDeviceAddress",
@@ -165,6 +172,13 @@ fn has_ext(exts: &[vk::ExtensionProperties], name: &CStr) -> bool {
         .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name))
 }
 
+/// `LANTERNA_NO_RAY_QUERY` set (to anything but `0` or empty): report every device as
+/// having no ray queries, so the software traversal is chosen and the device is created
+/// without the ray-query extensions (how the tests check that path on lavapipe).
+pub fn ray_queries_hidden() -> bool {
+    std::env::var_os("LANTERNA_NO_RAY_QUERY").is_some_and(|v| !v.is_empty() && v != "0")
+}
+
 /// Query what a physical device supports.
 fn describe(instance: &Instance, index: usize, pd: vk::PhysicalDevice) -> Result<DeviceInfo> {
     let raw = &instance.raw;
@@ -211,11 +225,14 @@ fn describe(instance: &Instance, index: usize, pd: vk::PhysicalDevice) -> Result
         .iter()
         .any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE) && q.timestamp_valid_bits > 0);
 
+    let hidden = ray_queries_hidden();
     let features = FeatureReport {
-        ray_query: has_rq && f_rq.ray_query == vk::TRUE,
-        acceleration_structure: has_as
+        ray_query: !hidden && has_rq && f_rq.ray_query == vk::TRUE,
+        acceleration_structure: !hidden
+            && has_as
             && has_ext(&exts, ash::khr::deferred_host_operations::NAME)
             && f_as.acceleration_structure == vk::TRUE,
+        ray_queries_hidden: hidden,
         buffer_device_address: f12.buffer_device_address == vk::TRUE,
         scalar_block_layout: f12.scalar_block_layout == vk::TRUE,
         descriptor_indexing: f12.runtime_descriptor_array == vk::TRUE
@@ -365,12 +382,15 @@ impl Device {
             .ok_or_else(|| VkError::Other(format!("{} has no compute queue", info.name)))?
             as u32;
 
-        let mut ext_names = vec![
-            ash::khr::acceleration_structure::NAME.as_ptr(),
-            ash::khr::ray_query::NAME.as_ptr(),
-            ash::khr::deferred_host_operations::NAME.as_ptr(),
-        ];
         let f = &info.features;
+        let mut ext_names = Vec::new();
+        if f.ray_queries() {
+            ext_names.extend([
+                ash::khr::acceleration_structure::NAME.as_ptr(),
+                ash::khr::ray_query::NAME.as_ptr(),
+                ash::khr::deferred_host_operations::NAME.as_ptr(),
+            ]);
+        }
         if f.float_atomics {
             ext_names.push(ash::ext::shader_atomic_float::NAME.as_ptr());
         }
@@ -399,9 +419,10 @@ impl Device {
             vk::PhysicalDeviceShaderClockFeaturesKHR::default().shader_subgroup_clock(true);
         let mut features2 = vk::PhysicalDeviceFeatures2::default()
             .features(base)
-            .push_next(&mut f12)
-            .push_next(&mut f_as)
-            .push_next(&mut f_rq);
+            .push_next(&mut f12);
+        if f.ray_queries() {
+            features2 = features2.push_next(&mut f_as).push_next(&mut f_rq);
+        }
         if f.float_atomics {
             features2 = features2.push_next(&mut f_af);
         }

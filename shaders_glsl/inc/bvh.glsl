@@ -1,0 +1,102 @@
+// Software traversal: trace_closest and visible over the BVH2 built on the CPU
+// (src/render/bvh.rs), for devices without ray queries and for CPU devices, where it is
+// faster than the driver's ray queries (lavapipe builds a BVH2 with one triangle per leaf
+// split at the index median; `lanterna bench --suite traversal` measures both).
+//
+// It reports what a ray query reports: the instance index (custom index + geometry
+// index), the triangle's index within its geometry, barycentrics of vertices 1 and 2 and
+// t in units of `dir`, over [0, tmax]; non-opaque triangles are resolved by the same
+// alpha_passes call (inc/trace.glsl) with the same ray key, so MASK and stochastic BLEND
+// decide alike. Triangles are stored in world space (instances are flattened), which
+// moves t and the barycentrics by rounding only.
+#ifndef INC_BVH_GLSL
+#define INC_BVH_GLSL
+
+// Entry distance of the ray into a box, or FLT_MAX when it misses it or enters beyond
+// `tmax`. The exit distance is widened by 2·γ₃ (Ize, "Robust BVH ray traversal") so that
+// rounding cannot make a ray miss the box of a triangle it hits (flat boxes of
+// axis-aligned walls included).
+float bvh_box_entry(vec3 bmin, vec3 bmax, vec3 o, vec3 inv_d, float tmax) {
+    vec3 t0 = (bmin - o) * inv_d;
+    vec3 t1 = (bmax - o) * inv_d;
+    vec3 tn = min(t0, t1);
+    vec3 tf = max(t0, t1);
+    float tnear = max(max(tn.x, tn.y), max(tn.z, 0.0));
+    float tfar = min(min(tf.x, tf.y), tf.z) * 1.0000004;
+    return (tnear <= tfar && tnear <= tmax) ? tnear : FLT_MAX;
+}
+
+// The closest hit (any_hit = false) or the first accepted hit (any_hit = true) on
+// [0, tmax]. `any_hit` is a constant at every call, so each caller compiles its own loop.
+Hit bvh_trace(vec3 o, vec3 d, float tmax, const bool any_hit) {
+    Hit h;
+    h.valid = false;
+    h.instance = INVALID_INDEX;
+    h.primitive = INVALID_INDEX;
+    h.bary = vec2(0.0);
+    h.t = tmax;
+    uvec4 key = ray_key(o, d);
+    // A zero component becomes a tiny one of the same sign: 1/±0 = ±inf would make
+    // 0·inf = NaN in the slab test when the origin lies on a box's plane.
+    vec3 safe_d = mix(d, mix(vec3(-1e-30), vec3(1e-30), greaterThanEqual(d, vec3(0.0))),
+                      lessThan(abs(d), vec3(1e-30)));
+    vec3 inv_d = 1.0 / safe_d;
+    float best = tmax;
+
+    uint stack[BVH_STACK_SIZE];
+    uint sp = 0u;
+    uint ref = 0u;  // the root is always inner node 0
+    while (true) {
+        if ((ref & BVH_LEAF_BIT) == 0u) {
+            BvhNode n = bvh_nodes[ref];
+            float ta = bvh_box_entry(n.a_min, n.a_max, o, inv_d, best);
+            float tb = bvh_box_entry(n.b_min, n.b_max, o, inv_d, best);
+            bool ha = ta < FLT_MAX;
+            bool hb = tb < FLT_MAX;
+            if (ha || hb) {
+                bool a_first = ha && (!hb || ta <= tb);
+                if (ha && hb) stack[sp++] = a_first ? n.b_ref : n.a_ref;
+                ref = a_first ? n.a_ref : n.b_ref;
+                continue;
+            }
+        } else if (ref != BVH_EMPTY) {
+            uint first = ref & BVH_LEAF_FIRST_MASK;
+            uint end = first + ((ref >> BVH_LEAF_COUNT_SHIFT) & BVH_LEAF_COUNT_MASK) + 1u;
+            for (uint i = first; i < end; ++i) {
+                BvhTriangle tri = bvh_triangles[i];
+                // Möller–Trumbore.
+                vec3 pvec = cross(d, tri.e2);
+                float det = dot(tri.e1, pvec);
+                float inv_det = 1.0 / det;
+                vec3 tvec = o - tri.v0;
+                float u = dot(tvec, pvec) * inv_det;
+                vec3 qvec = cross(tvec, tri.e1);
+                float v = dot(d, qvec) * inv_det;
+                float t = dot(tri.e2, qvec) * inv_det;
+                if (det != 0.0 && u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t >= 0.0 && t < best) {
+                    if ((tri.flags & BVH_TRIANGLE_OPAQUE) != 0u ||
+                        alpha_passes(tri.instance, tri.primitive, vec2(u, v), key)) {
+                        best = t;
+                        h.valid = true;
+                        h.instance = tri.instance;
+                        h.primitive = tri.primitive;
+                        h.bary = vec2(u, v);
+                        h.t = t;
+                        if (any_hit) return h;
+                    }
+                }
+            }
+        }
+        if (sp == 0u) break;
+        ref = stack[--sp];
+    }
+    return h;
+}
+
+Hit trace_closest(vec3 origin, vec3 dir, float tmax) { return bvh_trace(origin, dir, tmax, false); }
+
+// True when nothing blocks the segment origin → origin + dir·tmax (`dir` need not be
+// unit length: t is measured in multiples of it).
+bool visible(vec3 origin, vec3 dir, float tmax) { return !bvh_trace(origin, dir, tmax, true).valid; }
+
+#endif
