@@ -19,6 +19,7 @@ layout(constant_id = 3) const bool AOVS = false;            // write first-hit A
 #include "inc/bsdf.glsl"
 #include "inc/material.glsl"
 #include "inc/guiding.glsl"
+#include "inc/guiding_selection.glsl"
 #include "inc/lights.glsl"
 #include "inc/reservoir.glsl"
 #include "closesthit.glsl"

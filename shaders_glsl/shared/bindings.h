@@ -26,7 +26,8 @@
 #define BINDING_OUTLIERS 20
 #define BINDING_GUIDE_LIGHTS 21
 #define BINDING_GUIDE_LIGHT_TRAINING 22
-#define BINDING_COUNT 23
+#define BINDING_GUIDE_SELECTION 23
+#define BINDING_COUNT 24
 
 // Upper bound on bindless textures in one scene.
 #define MAX_TEXTURES 8192
