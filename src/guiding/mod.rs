@@ -18,6 +18,7 @@ mod config;
 mod flat;
 mod io;
 pub mod kernel_checks;
+mod probe;
 mod quadtree;
 mod refit;
 mod schedule;
