@@ -359,7 +359,10 @@ impl SdTree {
                 return bad(format!("{what}: bad box"));
             }
             if !(0.0..=1.0).contains(&g.bsdf_fraction) {
-                return bad(format!("{what}: BSDF fraction {} not in [0, 1]", g.bsdf_fraction));
+                return bad(format!(
+                    "{what}: BSDF fraction {} not in [0, 1]",
+                    g.bsdf_fraction
+                ));
             }
             let sampling = match shared.get(&g.sampling_root) {
                 Some(t) => t.clone(),

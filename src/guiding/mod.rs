@@ -22,8 +22,8 @@ mod probe;
 mod quadtree;
 mod refit;
 mod schedule;
-mod selection;
 mod sdtree;
+mod selection;
 mod sphere;
 mod view;
 
@@ -38,9 +38,9 @@ pub use flat::GuideArrays;
 pub use io::{scene_hash_number, SavedTreeInfo, SceneHasher, FORMAT_VERSION};
 pub use quadtree::{Cell, QuadNode, QuadTree};
 pub use refit::RefitStats;
-pub use selection::{SelectionState, SelectionStats, RECORD_CAPACITY as SELECTION_RECORD_CAPACITY};
 pub use schedule::{SppSchedule, TimeSchedule, DEFAULT_TRAIN_FRACTION};
 pub use sdtree::{Leaf, SdTree};
+pub use selection::{SelectionState, SelectionStats, RECORD_CAPACITY as SELECTION_RECORD_CAPACITY};
 pub use sphere::{dir_to_square, square_to_dir, INV_4PI};
 pub use view::{density_grid, draw_quadtree, LeafInfo, LeafView};
 

@@ -45,7 +45,7 @@ impl SdTree {
         let mut t = self.leaf(leaf).training.clone();
         t.build();
         let total = f64::from(t.total());
-        if !(total > 0.0) {
+        if total.is_nan() || total <= 0.0 {
             return (vec![0.0; n * n], 0.0);
         }
         (grid_masses(&t, n), total)

@@ -90,14 +90,18 @@ impl SelectionState {
     /// record that carries no usable gradient.
     pub fn gradient(&self, r: &GuideSelectionRecord) -> Option<f32> {
         let ok = |x: f32| x.is_finite() && x >= 0.0;
-        if !(ok(r.bsdf_pdf) && ok(r.guide_pdf) && ok(r.product) && r.product > 0.0)
-            || !(r.wo_pdf.is_finite() && r.wo_pdf > 0.0)
-        {
+        let usable = ok(r.bsdf_pdf)
+            && ok(r.guide_pdf)
+            && ok(r.product)
+            && r.product > 0.0
+            && r.wo_pdf.is_finite()
+            && r.wo_pdf > 0.0;
+        if !usable {
             return None;
         }
         let alpha = sigmoid(self.theta);
         let mix = alpha * r.bsdf_pdf + (1.0 - alpha) * r.guide_pdf;
-        if !(mix > 0.0) {
+        if mix.is_nan() || mix <= 0.0 {
             return None;
         }
         // In f64: product / (mix · wo) spans many decades.

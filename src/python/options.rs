@@ -89,10 +89,8 @@ pub fn apply(
                 settings.guiding.bsdf_fraction = f.unwrap_or(0.5);
             }
             "guide_target" => {
-                settings.guiding.target = value_enum::<crate::guiding::GuideTarget>(
-                    &flag,
-                    &v.extract::<String>()?,
-                )?
+                settings.guiding.target =
+                    value_enum::<crate::guiding::GuideTarget>(&flag, &v.extract::<String>()?)?
             }
             "train_fraction" => settings.guiding.train_fraction = v.extract()?,
             "record_nee" => settings.guiding.record_nee = v.extract()?,
