@@ -8,12 +8,13 @@
 //! compared with the probe's histogram in relative L1 distance Σ|p − q| (0: equal, 2:
 //! disjoint). It must fall as the training budget grows and end below 0.6.
 //!
-//! Measured (32×24, this seed): see the test's output; the probe's own noise floor is
-//! printed too (two halves of its samples against each other).
+//! Measured (32×24, seed 41): mean L1 1.125, 0.698, 0.527 after 4, 32, 256 spp; the
+//! probe's own noise (two halves of its samples against each other) is 0.33–0.81 per
+//! leaf, so the bound is close to what this probe resolves.
 //!
 //! Defects this test was seen to fail on (injected once, then reverted):
 //! - NEE records splatted toward the opposite direction (`nee_rec.dir = -nee_dir` in
-//!   raygen.glsl, through LANTERNA_TEST_SHADER_DIR): L1 stays above 1.
+//!   raygen.glsl, through LANTERNA_TEST_SHADER_DIR): mean L1 1.612, 1.255, 1.167.
 
 use lanterna::guiding::{DirectionalFilter, GuidingConfig, SdTree, SpatialFilter};
 use lanterna::lights::LightTable;
