@@ -38,6 +38,8 @@ fn learned_distributions_approach_the_incident_radiance() {
     let (w, h) = (32, 24);
     let mut s = testing::settings(Method::Guided, w, h);
     s.seed = 41;
+    // The paper's target: all incident radiance, what the probe measures.
+    s.guiding.target = lanterna::guiding::GuideTarget::All;
     let mut r = Renderer::new(
         testing::device(),
         &t.scene,

@@ -27,6 +27,8 @@ fn learned(kind: Kind, options: Options, method: Method, spp: u64) -> (f64, f64)
     let mut s = testing::settings(method, 32, 24);
     s.aovs = true;
     s.seed = 5;
+    // As measured below (the default target is now `indirect`).
+    s.guiding.target = lanterna::guiding::GuideTarget::All;
     let mut r = Renderer::new(
         testing::device(),
         &t.scene,

@@ -138,10 +138,10 @@ pub struct EstimatorArgs {
     /// al. 2019).
     #[arg(long)]
     pub bsdf_fraction: Option<f32>,
-    /// Guiding: what radiance the SD-tree learns: all incident light (with NEE's light
-    /// samples, the paper's), indirect light only, or what the direction estimator
-    /// carries (MIS-weighted emission plus indirect).
-    #[arg(long, value_enum, default_value = "all")]
+    /// Guiding: what radiance the SD-tree learns: indirect light only (the default),
+    /// all incident light (with NEE's light samples, the paper's), or what the
+    /// direction estimator carries (MIS-weighted emission plus indirect).
+    #[arg(long, value_enum, default_value = "indirect")]
     pub guide_target: lanterna::guiding::GuideTarget,
     /// Guiding: share of the budget (spp, or time with --time) spent training.
     #[arg(long, default_value_t = 0.3)]

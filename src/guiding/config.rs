@@ -49,7 +49,8 @@ pub enum GuideTarget {
     #[default]
     All,
     /// Indirect light only: what the next vertex reflects; no NEE records, and emission
-    /// reached by the sampled direction is not recorded (Müller's suggestion for NEE).
+    /// reached by the sampled direction is not recorded (Müller's suggestion for NEE;
+    /// the renderer's default, see `GuidingSettings`).
     Indirect,
     /// What the direction estimator carries: its MIS-weighted emission plus the
     /// reflected light; no NEE records (with RIS NEE the same as `indirect` for
