@@ -41,6 +41,8 @@ struct DirectionSample {
     vec3 wi;
     vec3 weight;   // f·cos / pdf
     float pdf;     // mixture pdf (solid angle)
+    float bsdf_pdf;   // its two parts: the BSDF's pdf of wi,
+    float guide_pdf;  // and the leaf quadtree's (0 where the vertex is not guided)
     bool valid;
     bool guided;   // drawn from the SD-tree rather than the BSDF
 };
@@ -55,17 +57,28 @@ DirectionSampler direction_sampler(Surface s) {
             && bsdf_specular_probability(s.bsdf, surface_to_local(s, s.wo)) >= 0.9;
         if (!nearly_specular) {
             d.leaf = guide_find_leaf(s.p);
-            d.bsdf_fraction = guide_header.bsdf_fraction;
+            // Learned per leaf (Müller et al. 2019), or the fixed --bsdf-fraction.
+            d.bsdf_fraction = (guide_header.flags & GUIDE_FLAG_LEARN_SELECTION) != 0u
+                ? guide_leaves[d.leaf].bsdf_fraction
+                : guide_header.bsdf_fraction;
         }
     }
     d.lights = light_context(s.p, d.leaf);
     return d;
 }
 
-float direction_pdf(Surface s, DirectionSampler d, vec3 wi) {
-    float p = d.bsdf_fraction * surface_bsdf_pdf(s, wi);
-    if (d.bsdf_fraction < 1.0) p += (1.0 - d.bsdf_fraction) * guide_pdf(d.leaf, wi);
+// Mixture pdf of wi, with the BSDF's and the quadtree's pdfs it mixes.
+float direction_pdfs(Surface s, DirectionSampler d, vec3 wi, out float bsdf_pdf, out float tree_pdf) {
+    bsdf_pdf = surface_bsdf_pdf(s, wi);
+    tree_pdf = d.bsdf_fraction < 1.0 ? guide_pdf(d.leaf, wi) : 0.0;
+    float p = d.bsdf_fraction * bsdf_pdf;
+    if (d.bsdf_fraction < 1.0) p += (1.0 - d.bsdf_fraction) * tree_pdf;
     return p;
+}
+
+float direction_pdf(Surface s, DirectionSampler d, vec3 wi) {
+    float bsdf_pdf, tree_pdf;
+    return direction_pdfs(s, d, wi, bsdf_pdf, tree_pdf);
 }
 
 // The direction strategy's density as RIS's resampling weights see it: the BSDF part
@@ -90,6 +103,8 @@ DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
         if (!ok) {
             ds.valid = false;
             ds.pdf = 0.0;
+            ds.bsdf_pdf = 0.0;
+            ds.guide_pdf = 0.0;
             ds.weight = vec3(0.0);
             return ds;
         }
@@ -97,7 +112,7 @@ DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
         float unused_pdf;
         ds.wi = guide_sample(d.leaf, u.xy, unused_pdf);
     }
-    ds.pdf = direction_pdf(s, d, ds.wi);
+    ds.pdf = direction_pdfs(s, d, ds.wi, ds.bsdf_pdf, ds.guide_pdf);
     vec3 f = surface_bsdf_eval(s, ds.wi);
     ds.valid = ds.pdf > 0.0 && max3(f) > 0.0;
     ds.weight = ds.valid ? f / ds.pdf : vec3(0.0);

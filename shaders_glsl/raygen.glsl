@@ -16,6 +16,7 @@
 #include "inc/trace.glsl"
 #include "inc/material.glsl"
 #include "inc/guiding.glsl"
+#include "inc/guiding_selection.glsl"
 #include "inc/lights.glsl"
 #include "closesthit.glsl"
 
@@ -34,6 +35,10 @@ struct VertexRecord {
     vec3 weight;      // f·cos/pdf (with Russian roulette folded in)
     vec3 nee;         // NEE contribution at this vertex
     vec3 emitted;     // emission arriving along wi that this vertex's record counts
+    vec3 emitted_mis; // emission arriving along wi as the image counts it (MIS-weighted)
+    uint leaf;        // SD-tree leaf whose selection probability drew wi (guided vertices)
+    float bsdf_pdf;   // the two pdfs the mixture pdf `pdf` mixes
+    float guide_pdf;
     vec3 nee_dir;
     float nee_value;  // NEE record value (0: none)
     uint nee_model;   // light model NEE picked, for learned light selection
@@ -58,27 +63,51 @@ void camera_ray(uvec2 pixel, vec2 jitter, out vec3 origin, out vec3 dir) {
 
 void record_path(VertexRecord rec[GUIDE_MAX_RECORDED_VERTICES], uint count, inout Rng rng) {
     // Incident radiance along each vertex's direction, from the back of the path:
-    // L_in(k) = emitted(k) + nee(k+1) + weight(k+1) · L_in(k+1).
-    vec3 l_in = vec3(0.0);
+    // L_in(k) = emitted(k) + nee(k+1) + weight(k+1) · L_in(k+1). Two versions: l_rec
+    // with `emitted` (what the paper's target records), l_act with the MIS-weighted
+    // emission (what the direction sample contributes to the image).
+    uint target = guide_header.flags & (GUIDE_FLAG_TARGET_INDIRECT | GUIDE_FLAG_TARGET_CONTRIBUTION);
+    bool learn_selection = (guide_header.flags & GUIDE_FLAG_LEARN_SELECTION) != 0u;
+    vec3 l_rec = vec3(0.0);
+    vec3 l_act = vec3(0.0);
     for (int k = int(count) - 1; k >= 0; --k) {
-        if (k + 1 < int(count)) l_in = rec[k].emitted + rec[k + 1].nee + rec[k + 1].weight * l_in;
-        else l_in = rec[k].emitted;
+        if (k + 1 < int(count)) {
+            l_rec = rec[k].emitted + rec[k + 1].nee + rec[k + 1].weight * l_rec;
+            l_act = rec[k].emitted_mis + rec[k + 1].nee + rec[k + 1].weight * l_act;
+        } else {
+            l_rec = rec[k].emitted;
+            l_act = rec[k].emitted_mis;
+        }
+        vec3 l = target == 0u ? l_rec
+            : target == GUIDE_FLAG_TARGET_INDIRECT ? l_act - rec[k].emitted_mis
+            : l_act;
         // The vertex's direction record carries its statistical weight (value 0 when no
         // direction was sampled); its NEE record only adds the light NEE found (see
         // GuideRecord in shared/guiding.h).
         GuideRecord dir_rec;
         dir_rec.pos = rec[k].p;
         dir_rec.dir = rec[k].wi;
-        dir_rec.value = rec[k].pdf > 0.0 ? (l_in.x + l_in.y + l_in.z) / (3.0 * rec[k].pdf) : 0.0;
+        dir_rec.value = rec[k].pdf > 0.0 ? max(l.x + l.y + l.z, 0.0) / (3.0 * rec[k].pdf) : 0.0;
         dir_rec.weight = 1.0;
         guide_record(dir_rec, vec3(rng_next2(rng), rng_next(rng)));
-        if ((guide_header.flags & GUIDE_FLAG_RECORD_NEE) != 0u && rec[k].nee_value > 0.0) {
+        if (target == 0u && (guide_header.flags & GUIDE_FLAG_RECORD_NEE) != 0u && rec[k].nee_value > 0.0) {
             GuideRecord nee_rec;
             nee_rec.pos = rec[k].p;
             nee_rec.dir = rec[k].nee_dir;
             nee_rec.value = rec[k].nee_value;
             nee_rec.weight = 0.0;
             guide_record(nee_rec, vec3(rng_next2(rng), rng_next(rng)));
+        }
+        if (learn_selection && rec[k].leaf != INVALID_INDEX && rec[k].pdf > 0.0) {
+            // f·cos·L_in = weight · pdf · L_in: the direction estimate times its pdf.
+            vec3 product = rec[k].weight * l_act * rec[k].pdf;
+            GuideSelectionRecord sel;
+            sel.leaf = rec[k].leaf;
+            sel.bsdf_pdf = rec[k].bsdf_pdf;
+            sel.guide_pdf = rec[k].guide_pdf;
+            sel.wo_pdf = rec[k].pdf;
+            sel.product = max((product.x + product.y + product.z) / 3.0, 0.0);
+            guide_selection_record(sel, rng_next(rng));
         }
         if ((guide_header.flags & GUIDE_FLAG_LEARN_LIGHTS) != 0u && rec[k].nee_model != INVALID_INDEX && rec[k].nee_lum > 0.0)
             guide_light_record(guide_find_leaf(rec[k].p), rec[k].nee_model, rec[k].nee_lum);
@@ -177,6 +206,10 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
             r.weight = weight;
             r.nee = nee.contribution;
             r.emitted = emitted_recorded;
+            r.emitted_mis = emitted;
+            r.leaf = d.bsdf_fraction < 1.0 ? d.leaf : INVALID_INDEX;
+            r.bsdf_pdf = ds.bsdf_pdf;
+            r.guide_pdf = ds.guide_pdf;
             r.nee_dir = nee.record_dir;
             r.nee_value = nee.record_value;
             r.nee_model = nee.connected ? nee.chosen_model : INVALID_INDEX;

@@ -31,9 +31,15 @@
 //! - `punctual_lights_near_surfaces`: the spot falloff squared once more: p = 1e-16.
 //! - `lamp_behind_alpha_masked_screen`: shadow rays that treat alpha-masked geometry as
 //!   opaque: block (8, 0) 0.00001 vs 0.029, p = 2e-16.
+//! - `sconces_guiding_options` (learned and fixed selection probability, `indirect` and
+//!   `contribution` targets): passed against the live Mitsuba reference (smallest
+//!   block p 5.8e-5 for `guided --guide-target indirect`); not yet run with an injected
+//!   defect (prepared: the mixture pdf evaluated with the header's α while directions
+//!   are drawn with the leaf's learned α).
 //! - `sconces_far_from_origin`: no rebasing of the scene toward the origin (256-ulp ray
 //!   offsets are 0.24 m at 10⁴): block (8, 8) 0.147 vs 0.368, p = 7e-32.
 
+use lanterna::guiding::GuideTarget;
 use lanterna::lights::LightTable;
 use lanterna::render::{Method, RenderSettings, Strategy};
 use lanterna::scene::export_mitsuba::{self, ExportOptions};
@@ -57,6 +63,10 @@ struct Config {
     method: Method,
     strategy: Strategy,
     learn_lights: bool,
+    /// None: the BSDF selection probability learned per leaf (the default); Some(x):
+    /// fixed (`--bsdf-fraction x`).
+    bsdf_fraction: Option<f32>,
+    target: GuideTarget,
 }
 
 const fn config(name: &'static str, method: Method, strategy: Strategy) -> Config {
@@ -65,6 +75,8 @@ const fn config(name: &'static str, method: Method, strategy: Strategy) -> Confi
         method,
         strategy,
         learn_lights: false,
+        bsdf_fraction: None,
+        target: GuideTarget::All,
     }
 }
 
@@ -79,6 +91,26 @@ const GUIDED_RIS_LEARN: Config = Config {
     name: "guided-ris --learn-lights",
     learn_lights: true,
     ..GUIDED_RIS
+};
+const GUIDED_FIXED: Config = Config {
+    name: "guided --bsdf-fraction 0.5",
+    bsdf_fraction: Some(0.5),
+    ..GUIDED
+};
+const GUIDED_INDIRECT: Config = Config {
+    name: "guided --guide-target indirect",
+    target: GuideTarget::Indirect,
+    ..GUIDED
+};
+const GUIDED_RIS_INDIRECT: Config = Config {
+    name: "guided-ris --guide-target indirect",
+    target: GuideTarget::Indirect,
+    ..GUIDED_RIS
+};
+const GUIDED_CONTRIBUTION: Config = Config {
+    name: "guided --guide-target contribution",
+    target: GuideTarget::Contribution,
+    ..GUIDED
 };
 
 /// The reference: block and image means with their standard errors.
@@ -232,6 +264,9 @@ fn render(ts: &TestScene, c: Config, max_depth: u32, batches: u32, spp: u64) -> 
         hide_emitters: true,
         guiding: lanterna::render::GuidingSettings {
             learn_lights: c.learn_lights,
+            learn_selection: c.bsdf_fraction.is_none(),
+            bsdf_fraction: c.bsdf_fraction.unwrap_or(0.5),
+            target: c.target,
             ..Default::default()
         },
         ..testing::settings(c.method, WIDTH, HEIGHT)
@@ -406,6 +441,27 @@ fn sconces_direct_light_every_method() {
 fn sconces_global_illumination() {
     let ts = scene(Kind::Sconces, None);
     run_suite("sconces-d4", &ts, 4, &[PT, RIS, GUIDED_RIS], 16, 128);
+}
+
+/// The guiding options (learned or fixed selection probability, what the tree learns)
+/// with indirect light, where the guide samples more than direct light.
+#[test]
+fn sconces_guiding_options() {
+    let ts = scene(Kind::Sconces, None);
+    run_suite(
+        "sconces-d4",
+        &ts,
+        4,
+        &[
+            GUIDED,
+            GUIDED_FIXED,
+            GUIDED_INDIRECT,
+            GUIDED_RIS_INDIRECT,
+            GUIDED_CONTRIBUTION,
+        ],
+        16,
+        128,
+    );
 }
 
 /// The room 10⁴ units from the origin, against the reference of the room at the origin:

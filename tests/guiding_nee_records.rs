@@ -34,6 +34,8 @@ fn fraction_toward_lamp(record_nee: bool) -> f64 {
         max_depth: 2,
         guiding: lanterna::render::GuidingSettings {
             record_nee,
+            // NEE records are part of the paper's target (the default is `indirect`).
+            target: lanterna::guiding::GuideTarget::All,
             ..base.guiding.clone()
         },
         ..base

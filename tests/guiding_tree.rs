@@ -168,15 +168,15 @@ fn load_refuses_bad_files() {
     .unwrap_err();
     assert!(matches!(err, GuidingError::NotAnSdTree { .. }), "{err}");
 
-    let mut v3 = bytes.clone();
-    v3[16] = 3;
-    let err = SdTree::load(&write("v3.sdt", &v3), scene_hash()).unwrap_err();
+    let mut v4 = bytes.clone();
+    v4[16] = 4;
+    let err = SdTree::load(&write("v4.sdt", &v4), scene_hash()).unwrap_err();
     assert!(
         matches!(
             err,
             GuidingError::Version {
-                found: 3,
-                supported: 2,
+                found: 4,
+                supported: 3,
                 ..
             }
         ),

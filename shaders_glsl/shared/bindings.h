@@ -26,13 +26,15 @@
 #define BINDING_OUTLIERS 20
 #define BINDING_GUIDE_LIGHTS 21
 #define BINDING_GUIDE_LIGHT_TRAINING 22
+// Records of the learned BSDF/guide selection probability (training passes).
+#define BINDING_GUIDE_SELECTION 23
 // Software traversal (the ray-query kernels bind BINDING_TLAS instead).
-#define BINDING_BVH_NODES 23
-#define BINDING_BVH_TRIANGLES 24
+#define BINDING_BVH_NODES 24
+#define BINDING_BVH_TRIANGLES 25
 // The trace kernel's rays and hits (tests/trace.comp).
-#define BINDING_TRACE_RAYS 25
-#define BINDING_TRACE_HITS 26
-#define BINDING_COUNT 27
+#define BINDING_TRACE_RAYS 26
+#define BINDING_TRACE_HITS 27
+#define BINDING_COUNT 28
 
 // Upper bound on bindless textures in one scene.
 #define MAX_TEXTURES 8192

@@ -16,6 +16,16 @@
 #define GUIDE_FLAG_SPATIAL_JITTER 2u
 #define GUIDE_FLAG_DIRECTIONAL_BOX 4u
 #define GUIDE_FLAG_LEARN_LIGHTS 8u
+// Learned BSDF-vs-guide selection: sample with GuideLeaf.bsdf_fraction, and training
+// passes append GuideSelectionRecords (else GuideHeader.bsdf_fraction everywhere).
+#define GUIDE_FLAG_LEARN_SELECTION 16u
+// What the training records measure (GuideHeader.flags; neither bit: all incident
+// radiance, the paper's). INDIRECT: light reflected at the next vertex only (no NEE
+// records, no emission reached by the sampled direction). CONTRIBUTION: what the
+// direction sampler's estimate carries: the MIS-weighted emission it reaches plus the
+// reflected light, no NEE records.
+#define GUIDE_FLAG_TARGET_INDIRECT 32u
+#define GUIDE_FLAG_TARGET_CONTRIBUTION 64u
 
 // Learned light selection: per spatial leaf, a table of GUIDE_LIGHT_SLOTS light models
 // (open addressing, GUIDE_LIGHT_PROBES probes) with the NEE contribution each delivered.
@@ -70,6 +80,7 @@ struct GuideLeaf {
     vec3 box_min;
     vec3 box_size;
     float sampling_weight;  // statistical weight the sampling quadtree was learned from
+    float bsdf_fraction;    // learned probability of sampling the BSDF (GUIDE_FLAG_LEARN_SELECTION)
 };
 
 // Directional quadtree node. Child order: 0 = (lo u, lo v), 1 = (hi u, lo v),
@@ -101,6 +112,24 @@ struct GuideRecord {
     float value;
     vec3 dir;
     float weight;
+};
+
+// Learned selection probability (Müller et al. 2019; BINDING_GUIDE_SELECTION): a
+// training pass appends, with probability `rate`, one record per guided direction
+// sample; the CPU runs Adam on each leaf's logit over them between passes
+// (src/guiding/selection.rs). Records past `capacity` are dropped (count keeps counting).
+struct GuideSelectionHead {
+    uint count;
+    uint capacity;
+    float rate;
+    uint pad;
+};
+struct GuideSelectionRecord {
+    uint leaf;        // the leaf whose bsdf_fraction drew the sample
+    float bsdf_pdf;   // solid-angle pdfs of the sampled direction: the BSDF's,
+    float guide_pdf;  //   the leaf quadtree's,
+    float wo_pdf;     //   and the mixture's that drew it
+    float product;    // mean RGB of f·cos·L_in along it (the direction estimate × wo_pdf)
 };
 
 // Test kernel tests/guiding_sample: one input and its result. Mode GUIDE_TEST_SAMPLE

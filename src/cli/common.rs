@@ -133,9 +133,16 @@ pub struct EstimatorArgs {
     /// RIS candidates per NEE (M).
     #[arg(long, default_value_t = 32)]
     pub ris_candidates: u32,
-    /// Guiding: probability of sampling the BSDF instead of the SD-tree.
-    #[arg(long, default_value_t = 0.5)]
-    pub bsdf_fraction: f32,
+    /// Guiding: a fixed probability of sampling the BSDF instead of the SD-tree
+    /// everywhere; without it each SD-tree leaf learns its own (from 0.5, Müller et
+    /// al. 2019).
+    #[arg(long)]
+    pub bsdf_fraction: Option<f32>,
+    /// Guiding: what radiance the SD-tree learns: indirect light only (the default),
+    /// all incident light (with NEE's light samples, the paper's), or what the
+    /// direction estimator carries (MIS-weighted emission plus indirect).
+    #[arg(long, value_enum, default_value = "indirect")]
+    pub guide_target: lanterna::guiding::GuideTarget,
     /// Guiding: share of the budget (spp, or time with --time) spent training.
     #[arg(long, default_value_t = 0.3)]
     pub train_fraction: f32,
@@ -218,7 +225,9 @@ impl EstimatorArgs {
             strategy: self.strategy,
             hide_emitters: self.hide_emitters,
             guiding: GuidingSettings {
-                bsdf_fraction: self.bsdf_fraction,
+                bsdf_fraction: self.bsdf_fraction.unwrap_or(0.5),
+                learn_selection: self.bsdf_fraction.is_none(),
+                target: self.guide_target,
                 train_fraction: self.train_fraction,
                 record_nee: !self.no_record_nee,
                 spatial_filter: match self.spatial_filter {

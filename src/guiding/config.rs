@@ -30,6 +30,34 @@ pub enum DirectionalFilter {
     Box,
 }
 
+/// What radiance the training records measure (`--guide-target`).
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum GuideTarget {
+    /// All incident radiance: direction samples' full incident light and NEE's light
+    /// samples (Müller et al.; Sugita and Fujishiro's NEE records).
+    #[default]
+    All,
+    /// Indirect light only: what the next vertex reflects; no NEE records, and emission
+    /// reached by the sampled direction is not recorded (Müller's suggestion for NEE;
+    /// the renderer's default, see `GuidingSettings`).
+    Indirect,
+    /// What the direction estimator carries: its MIS-weighted emission plus the
+    /// reflected light; no NEE records (with RIS NEE the same as `indirect` for
+    /// emitters NEE can sample).
+    Contribution,
+}
+
 /// SD-tree options.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GuidingConfig {
@@ -54,6 +82,11 @@ pub struct GuidingConfig {
     /// models from (1 − light_mix)·source + light_mix·learned table.
     pub learn_lights: bool,
     pub light_mix: f32,
+    /// Learn the BSDF selection probability per leaf (`bsdf_fraction` is then each
+    /// leaf's starting value).
+    pub learn_selection: bool,
+    /// What the training records measure.
+    pub target: GuideTarget,
 }
 
 /// Default `--guiding-memory`: 256 MiB of GPU arrays is thousands of well-resolved leaves.
@@ -73,6 +106,8 @@ impl Default for GuidingConfig {
             bsdf_fraction: 0.5,
             learn_lights: false,
             light_mix: 0.5,
+            learn_selection: false,
+            target: GuideTarget::All,
         }
     }
 }
@@ -138,6 +173,14 @@ impl GuidingConfig {
         }
         if self.learn_lights {
             f |= crate::gpu::GUIDE_FLAG_LEARN_LIGHTS;
+        }
+        if self.learn_selection {
+            f |= crate::gpu::GUIDE_FLAG_LEARN_SELECTION;
+        }
+        match self.target {
+            GuideTarget::All => {}
+            GuideTarget::Indirect => f |= crate::gpu::GUIDE_FLAG_TARGET_INDIRECT,
+            GuideTarget::Contribution => f |= crate::gpu::GUIDE_FLAG_TARGET_CONTRIBUTION,
         }
         if self.spatial_filter == SpatialFilter::StochasticBox {
             f |= GUIDE_FLAG_SPATIAL_JITTER;

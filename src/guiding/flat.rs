@@ -212,6 +212,7 @@ impl SdTree {
                 box_min: leaf.box_min.to_array(),
                 box_size: leaf.box_size.to_array(),
                 sampling_weight: leaf.sampling_weight,
+                bsdf_fraction: leaf.selection.fraction(),
             });
         }
         let mut lights = vec![EMPTY_SLOT; self.leaves.len() * SLOTS];
@@ -357,6 +358,12 @@ impl SdTree {
             if !(box_min.is_finite() && box_size.is_finite() && box_size.min_element() > 0.0) {
                 return bad(format!("{what}: bad box"));
             }
+            if !(0.0..=1.0).contains(&g.bsdf_fraction) {
+                return bad(format!(
+                    "{what}: BSDF fraction {} not in [0, 1]",
+                    g.bsdf_fraction
+                ));
+            }
             let sampling = match shared.get(&g.sampling_root) {
                 Some(t) => t.clone(),
                 None => {
@@ -408,6 +415,7 @@ impl SdTree {
                 training_weight,
                 lights: Arc::new(lights),
                 light_training: Vec::new(),
+                selection: super::SelectionState::new(g.bsdf_fraction),
             });
         }
         Ok(SdTree {

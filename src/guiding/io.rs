@@ -6,7 +6,7 @@
 //! file, anything that is not such a file, another version, a corrupt file, or a tree
 //! trained on another scene. Files are written to a temporary name and renamed.
 //!
-//! Format version 2, all integers little-endian:
+//! Format version 3, all integers little-endian:
 //! `magic[16] version:u32 scene_hash:u64 iterations:u32 bbox_min:f32×3 bbox_max:f32×3`
 //! `spatial_threshold:f32 rho:f32 max_quad_depth:u32 max_spatial_depth:u32`
 //! `memory_cap:u64 spatial_filter:u32 directional_filter:u32 record_nee:u32`
@@ -14,7 +14,8 @@
 //! `n_spatial:u32 n_leaves:u32 n_sampling:u32 n_training:u32 n_lights:u32`
 //! `GuideHeader GuideSpatialNode[n_spatial] GuideLeaf[n_leaves]`
 //! `GuideQuadNode[n_sampling] GuideQuadNode[n_training] GuideLightSlot[n_lights] checksum:u64`
-//! (version 2 added the learned light tables).
+//! (version 2 added the learned light tables, version 3 the learned BSDF selection
+//! probability of each leaf, `GuideLeaf.bsdf_fraction`).
 
 use super::flat::GuideArrays;
 use super::{DirectionalFilter, GuidingConfig, GuidingError, SdTree, SpatialFilter};
@@ -23,7 +24,7 @@ use std::path::Path;
 
 const MAGIC: &[u8; 16] = b"lanterna-sdtree\0";
 /// The SD-tree file format version this build writes and reads.
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 
 /// FNV-1a, 64 bit: the file checksum, and a scene hash the renderer can feed with the
 /// scene's geometry and materials (`--load-guiding` refuses a tree from another scene).
@@ -251,7 +252,7 @@ fn parse(path: &Path, data: &[u8]) -> Result<(SdTree, SavedTreeInfo), GuidingErr
         for v in &mut b {
             *v = r.f32()?;
         }
-        let config = GuidingConfig {
+        let mut config = GuidingConfig {
             spatial_threshold: r.f32()?,
             rho: r.f32()?,
             max_quad_depth: r.u32()?,
@@ -271,9 +272,20 @@ fn parse(path: &Path, data: &[u8]) -> Result<(SdTree, SavedTreeInfo), GuidingErr
             bsdf_fraction: r.f32()?,
             learn_lights: r.u32()? != 0,
             light_mix: r.f32()?,
+            ..GuidingConfig::default()
         };
         let counts = [r.u32()?, r.u32()?, r.u32()?, r.u32()?, r.u32()?];
         let header = r.words::<GuideHeader>(1)?[0];
+        // The learned options live in the header's flags (the per-leaf fractions in
+        // the leaves).
+        config.learn_selection = header.flags & crate::gpu::GUIDE_FLAG_LEARN_SELECTION != 0;
+        config.target = if header.flags & crate::gpu::GUIDE_FLAG_TARGET_INDIRECT != 0 {
+            super::GuideTarget::Indirect
+        } else if header.flags & crate::gpu::GUIDE_FLAG_TARGET_CONTRIBUTION != 0 {
+            super::GuideTarget::Contribution
+        } else {
+            super::GuideTarget::All
+        };
         let arrays = GuideArrays {
             header,
             spatial: r.words::<GuideSpatialNode>(counts[0])?,

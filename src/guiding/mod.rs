@@ -18,10 +18,12 @@ mod config;
 mod flat;
 mod io;
 pub mod kernel_checks;
+mod probe;
 mod quadtree;
 mod refit;
 mod schedule;
 mod sdtree;
+mod selection;
 mod sphere;
 mod view;
 
@@ -29,13 +31,16 @@ pub use chi2::{
     bin_probabilities, check_guide_samples, chi2_directions, chi2_grid, chi2_leaf_cells,
     chi2_survival, chi2_test, square_histogram, Chi2, GuideSample, SampleCheck, CHI2_SIGNIFICANCE,
 };
-pub use config::{DirectionalFilter, GuidingConfig, SpatialFilter, DEFAULT_MEMORY_CAP_BYTES};
+pub use config::{
+    DirectionalFilter, GuideTarget, GuidingConfig, SpatialFilter, DEFAULT_MEMORY_CAP_BYTES,
+};
 pub use flat::GuideArrays;
 pub use io::{scene_hash_number, SavedTreeInfo, SceneHasher, FORMAT_VERSION};
 pub use quadtree::{Cell, QuadNode, QuadTree};
 pub use refit::RefitStats;
 pub use schedule::{SppSchedule, TimeSchedule, DEFAULT_TRAIN_FRACTION};
 pub use sdtree::{Leaf, SdTree};
+pub use selection::{SelectionState, SelectionStats, RECORD_CAPACITY as SELECTION_RECORD_CAPACITY};
 pub use sphere::{dir_to_square, square_to_dir, INV_4PI};
 pub use view::{density_grid, draw_quadtree, LeafInfo, LeafView};
 

@@ -125,7 +125,7 @@ impl SdTree {
 
     /// Split leaf `leaf` (spatial node `node`) in half along `depth % 3`: the low half
     /// keeps the leaf index, the high half is a new leaf. Returns the new leaf's index.
-    fn split(&mut self, leaf: u32, node: u32) -> u32 {
+    pub(crate) fn split(&mut self, leaf: u32, node: u32) -> u32 {
         let first = self.nodes.len() as u32;
         let new_leaf = self.leaves.len() as u32;
         let low = &mut self.leaves[leaf as usize];

@@ -6,6 +6,7 @@
 //! stand in for the GPU in tests and accumulate appended records (the records mode).
 
 use super::quadtree::QuadTree;
+use super::selection::SelectionState;
 use super::sphere::dir_to_square;
 use super::{DirectionalFilter, GuidingConfig, GuidingError, SpatialFilter};
 use crate::gpu::GuideRecord;
@@ -40,6 +41,9 @@ pub struct Leaf {
     pub lights: Arc<Vec<(u32, f32)>>,
     /// (light model, summed NEE contribution luminance) recorded this iteration.
     pub light_training: Vec<(u32, f32)>,
+    /// Learned BSDF selection probability (its optimiser; copied to both halves on a
+    /// split, as the reference does).
+    pub selection: SelectionState,
 }
 
 /// The SD-tree. See the module documentation.
@@ -80,6 +84,7 @@ impl SdTree {
             training_weight: 0.0,
             lights: Arc::new(Vec::new()),
             light_training: Vec::new(),
+            selection: SelectionState::new(config.bsdf_fraction),
         };
         Ok(Self {
             config: config.clone(),

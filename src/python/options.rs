@@ -18,6 +18,7 @@ pub const OPTIONS: [&str; 18] = [
     "bsdf_fraction",
     "train_fraction",
     "record_nee",
+    "guide_target",
     "strategy",
     "hide_emitters",
     "guiding_threshold",
@@ -82,7 +83,16 @@ pub fn apply(
                 settings.source = value_enum::<LightSource>(&flag, &v.extract::<String>()?)?
             }
             "ris_candidates" => settings.ris_candidates = v.extract()?,
-            "bsdf_fraction" => settings.guiding.bsdf_fraction = v.extract()?,
+            "bsdf_fraction" => {
+                // A fixed fraction, as on the command line; None: learned per leaf.
+                let f: Option<f32> = v.extract()?;
+                settings.guiding.learn_selection = f.is_none();
+                settings.guiding.bsdf_fraction = f.unwrap_or(0.5);
+            }
+            "guide_target" => {
+                settings.guiding.target =
+                    value_enum::<crate::guiding::GuideTarget>(&flag, &v.extract::<String>()?)?
+            }
             "train_fraction" => settings.guiding.train_fraction = v.extract()?,
             "record_nee" => settings.guiding.record_nee = v.extract()?,
             "strategy" => {

@@ -18,6 +18,20 @@ pub struct GuideBuffers {
     pub lights: Buffer,
     pub light_training: Buffer,
     pub light_slots: usize,
+    /// Records of the learned selection probability (GuideSelectionHead, then records);
+    /// a head with capacity 0 unless `with_selection_records` made room.
+    pub selection: Buffer,
+    pub selection_capacity: u32,
+}
+
+/// A zero-capacity selection head: the kernel appends nothing.
+fn empty_selection(device: &Arc<Device>) -> vk::Result<Buffer> {
+    Buffer::zeroed(
+        device,
+        64,
+        raw::BufferUsageFlags::STORAGE_BUFFER,
+        "guide selection records (none)",
+    )
 }
 
 impl GuideBuffers {
@@ -33,6 +47,8 @@ impl GuideBuffers {
             lights: Buffer::zeroed(device, 64, usage, "guide lights (unused)")?,
             light_training: Buffer::zeroed(device, 64, usage, "guide light training (unused)")?,
             light_slots: 0,
+            selection: empty_selection(device)?,
+            selection_capacity: 0,
         })
     }
 
@@ -71,7 +87,51 @@ impl GuideBuffers {
                 "guide light training",
             )?,
             light_slots: arrays.light_training.len(),
+            selection: empty_selection(device)?,
+            selection_capacity: 0,
         })
+    }
+
+    /// Make room for `capacity` selection records, each guided direction sample being
+    /// recorded with probability `rate` (a training pass of the learned selection).
+    pub fn with_selection_records(
+        mut self,
+        device: &Arc<Device>,
+        capacity: u32,
+        rate: f32,
+    ) -> vk::Result<GuideBuffers> {
+        let head = gpu::GuideSelectionHead {
+            count: 0,
+            capacity,
+            rate,
+            pad: 0,
+        };
+        let record = std::mem::size_of::<gpu::GuideSelectionRecord>();
+        // Only the head needs contents: records are read up to its count.
+        self.selection = Buffer::zeroed(
+            device,
+            (std::mem::size_of_val(&head) + record * capacity as usize) as u64,
+            raw::BufferUsageFlags::STORAGE_BUFFER,
+            "guide selection records",
+        )?;
+        self.selection.upload(0, bytemuck::bytes_of(&head))?;
+        self.selection_capacity = capacity;
+        Ok(self)
+    }
+
+    /// Read the selection records a pass appended (at most the capacity).
+    pub fn read_selection(&self) -> vk::Result<Vec<gpu::GuideSelectionRecord>> {
+        if self.selection_capacity == 0 {
+            return Ok(Vec::new());
+        }
+        let head: gpu::GuideSelectionHead = self.selection.read(1)?[0];
+        let n = head.count.min(self.selection_capacity) as usize;
+        let head_bytes = std::mem::size_of::<gpu::GuideSelectionHead>();
+        let record = std::mem::size_of::<gpu::GuideSelectionRecord>();
+        let bytes = self
+            .selection
+            .read_bytes((head_bytes + n * record) as u64)?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes[head_bytes..]))
     }
 
     /// Read the light training tables back after a pass.

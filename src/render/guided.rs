@@ -38,6 +38,10 @@ pub struct IterationStats {
     pub split_threshold: f32,
     pub splits: u32,
     pub refused_splits: u32,
+    /// Learned selection: records the optimisers took in, and their leaves' mean BSDF
+    /// selection probability afterwards (weighted by records).
+    pub selection_records: u64,
+    pub mean_bsdf_fraction: f32,
 }
 
 /// The guiding side of a run.
@@ -76,6 +80,8 @@ pub fn guiding_config(renderer: &Renderer) -> GuidingConfig {
         bsdf_fraction: g.bsdf_fraction,
         learn_lights: g.learn_lights,
         light_mix: g.light_mix,
+        learn_selection: g.learn_selection,
+        target: g.target,
         ..GuidingConfig::default()
     }
 }
@@ -391,7 +397,23 @@ fn train_iteration(
     passes: Option<&mut Vec<(Vec<f32>, f64)>>,
 ) -> Result<Option<IterationStats>> {
     let t = Instant::now();
-    renderer.set_guide_buffers(GuideBuffers::upload(&renderer.device, &tree.gpu_arrays())?);
+    let mut buffers = GuideBuffers::upload(&renderer.device, &tree.gpu_arrays())?;
+    // As in the reference implementation, the selection probability only learns once
+    // the leaves have sampling trees: against the first pass's uniform stand-in every
+    // leaf would learn to prefer the BSDF.
+    let learn_selection = tree.config().learn_selection && tree.iterations() > 0;
+    if learn_selection {
+        // Every guided vertex of every path at most; thinned uniformly beyond capacity.
+        let s = &renderer.settings;
+        let vertices = f64::from(s.width)
+            * f64::from(s.height)
+            * spp as f64
+            * f64::from(s.max_depth.saturating_sub(1).max(1));
+        let capacity = crate::guiding::SELECTION_RECORD_CAPACITY;
+        let rate = (f64::from(capacity) / vertices).min(1.0) as f32;
+        buffers = buffers.with_selection_records(&renderer.device, capacity, rate)?;
+    }
+    renderer.set_guide_buffers(buffers);
     let mut upload_seconds = t.elapsed().as_secs_f64();
 
     // Interrupted already: keep the film of the previous pass (clearing would lose it).
@@ -446,9 +468,16 @@ fn train_iteration(
 
     let t = Instant::now();
     let training = renderer.guide_buffers().read_training()?;
+    let selection_records = if learn_selection {
+        renderer.guide_buffers().read_selection()?
+    } else {
+        Vec::new()
+    };
     let readback_seconds = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
+    // Before the refit: the records name the leaves of the tree that rendered the pass.
+    let selection = tree.learn_selection(&selection_records);
     tree.load_training_readback(&training)
         .map_err(guiding_error)?;
     if renderer.settings.guiding.learn_lights {
@@ -476,9 +505,11 @@ fn train_iteration(
         split_threshold: refit.split_threshold,
         splits: refit.splits,
         refused_splits: refit.refused_splits,
+        selection_records: selection.records,
+        mean_bsdf_fraction: selection.mean_fraction,
     };
     log::debug!(
-        "guiding iteration {k}: {done} spp in {:.2} s (GPU {:.2} s), read-back {:.3} s, refit {:.3} s, upload {:.3} s; {} leaves, {} + {} nodes, {:.1} KiB",
+        "guiding iteration {k}: {done} spp in {:.2} s (GPU {:.2} s), read-back {:.3} s, refit {:.3} s, upload {:.3} s; {} leaves, {} + {} nodes, {:.1} KiB; selection: {} records, mean BSDF fraction {:.3}",
         it.render_seconds,
         it.gpu_seconds,
         it.readback_seconds,
@@ -487,7 +518,9 @@ fn train_iteration(
         it.leaves,
         it.sampling_nodes,
         it.training_nodes,
-        it.gpu_bytes as f64 / 1024.0
+        it.gpu_bytes as f64 / 1024.0,
+        it.selection_records,
+        it.mean_bsdf_fraction
     );
     Ok(Some(it))
 }

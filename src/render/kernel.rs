@@ -55,6 +55,7 @@ impl Renderer {
                 gpu::BINDING_GUIDE_LIGHT_TRAINING,
                 &self.guide.light_training,
             ),
+            (gpu::BINDING_GUIDE_SELECTION, &self.guide.selection),
             (gpu::BINDING_OUTLIERS, &self.outliers),
             (gpu::BINDING_TRACE_RAYS, &self.trace_rays),
             (gpu::BINDING_TRACE_HITS, &self.trace_hits),
