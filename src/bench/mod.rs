@@ -19,6 +19,7 @@ pub mod scaling;
 pub mod sizes;
 pub mod spread;
 pub mod throughput;
+pub mod trend;
 
 use crate::render::Method;
 use crate::shaders::ShaderSource;
@@ -79,10 +80,22 @@ pub enum Suite {
     Quality,
     Mitsuba,
     Profile,
+    Trend,
 }
 
 impl Suite {
-    pub const ALL: [Suite; 6] = [
+    pub const ALL: [Suite; 7] = [
+        Suite::Throughput,
+        Suite::Scaling,
+        Suite::Guiding,
+        Suite::Quality,
+        Suite::Mitsuba,
+        Suite::Profile,
+        Suite::Trend,
+    ];
+
+    /// What `lanterna bench` runs without `--suite`: all but the long `trend`.
+    pub const DEFAULT: [Suite; 6] = [
         Suite::Throughput,
         Suite::Scaling,
         Suite::Guiding,
@@ -99,6 +112,7 @@ impl Suite {
             Suite::Quality => "quality",
             Suite::Mitsuba => "mitsuba",
             Suite::Profile => "profile",
+            Suite::Trend => "trend",
         }
     }
 }
@@ -144,6 +158,8 @@ pub struct BenchConfig {
     /// The command line, for the Markdown.
     pub command: String,
     pub shaders: ShaderSource,
+    /// `trend`: skip points with more training paths than this.
+    pub trend_max_paths: Option<u64>,
 }
 
 impl BenchConfig {
@@ -154,7 +170,7 @@ impl BenchConfig {
             quick,
             out_dir: PathBuf::from("bench/results"),
             repeat: if quick { 1 } else { 3 },
-            suites: Suite::ALL.to_vec(),
+            suites: Suite::DEFAULT.to_vec(),
             skip_mitsuba: false,
             scenes_dir: repo_path("scenes"),
             mitsuba_script: repo_path("scripts/mitsuba_compare.py"),
@@ -162,6 +178,7 @@ impl BenchConfig {
             work_dir: None,
             command: "lanterna bench".into(),
             shaders: ShaderSource::Builtin,
+            trend_max_paths: None,
         }
     }
 }
@@ -186,6 +203,8 @@ pub struct Bench {
     pub mitsuba_script: PathBuf,
     pub python: String,
     pub shaders: ShaderSource,
+    /// `trend`: skip points with more training paths than this.
+    pub trend_max_paths: Option<u64>,
 }
 
 impl Bench {
@@ -260,6 +279,7 @@ pub fn run(config: &BenchConfig, device: Arc<Device>) -> Result<BenchOutput> {
         mitsuba_script: config.mitsuba_script.clone(),
         python: config.python.clone(),
         shaders: config.shaders.clone(),
+        trend_max_paths: config.trend_max_paths,
     };
     let result = run_suites(config, &bench);
     if own_work_dir {
@@ -279,6 +299,11 @@ pub fn run(config: &BenchConfig, device: Arc<Device>) -> Result<BenchOutput> {
     let text = serde_json::to_string_pretty(&report).expect("the report serializes");
     crate::image_io::write_atomically(&json, format!("{text}\n").as_bytes())?;
     crate::image_io::write_atomically(&markdown, markdown::render(&report).as_bytes())?;
+    if let Some(t) = &report.trend {
+        let csv = config.out_dir.join(format!("{stem}-trend.csv"));
+        crate::image_io::write_atomically(&csv, t.csv().as_bytes())?;
+        t.write_plot(&config.out_dir.join(format!("{stem}-trend.png")))?;
+    }
     log::info!(
         "bench finished in {:.0} s: {} and {}",
         report.total_seconds,
@@ -312,6 +337,7 @@ fn run_suites(config: &BenchConfig, bench: &Bench) -> Result<BenchReport> {
         mitsuba: None,
         mitsuba_skipped: None,
         profile: None,
+        trend: None,
         load_average_start: None,
         load_average_end: None,
         total_seconds: 0.0,
@@ -325,6 +351,7 @@ fn run_suites(config: &BenchConfig, bench: &Bench) -> Result<BenchReport> {
             Suite::Guiding => report.guiding = Some(guiding::run(bench)?),
             Suite::Quality => report.quality = Some(quality::run(bench)?),
             Suite::Profile => report.profile = Some(profile::run(bench)?),
+            Suite::Trend => report.trend = Some(trend::run(bench)?),
             Suite::Mitsuba => {
                 if config.skip_mitsuba {
                     report.mitsuba_skipped = Some("--skip-mitsuba".into());

@@ -10,6 +10,7 @@ use super::quality::Quality;
 use super::scaling::Scaling;
 use super::sizes::Sizes;
 use super::throughput::Throughput;
+use super::trend::Trend;
 
 /// Changes when a key changes meaning.
 pub const SCHEMA: u32 = 1;
@@ -39,6 +40,9 @@ pub struct BenchReport {
     /// Why the Mitsuba suite did not run (not installed, `--skip-mitsuba`, or its error).
     pub mitsuba_skipped: Option<String>,
     pub profile: Option<Profile>,
+    /// `--suite trend` only.
+    #[serde(default)]
+    pub trend: Option<Trend>,
     /// /proc/loadavg before and after the run: other work on the machine shows up here
     /// (and in every timing).
     pub load_average_start: Option<String>,
