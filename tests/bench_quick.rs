@@ -254,3 +254,80 @@ fn quick_bench_writes_results() {
     assert!(md.contains("| pt |"), "the tables list the methods");
     assert!(!Path::new(&md_files[0]).with_extension("md.tmp").exists());
 }
+
+/// `lanterna bench --quick --suite trend` measures the MAE ratios of the guided methods
+/// against training paths on `bistro-night` and writes them as JSON, CSV and a plot.
+/// Only the output's shape is checked: every method at every point, the four ratios,
+/// training paths that grow with the budget, and a CSV row per point and method.
+#[test]
+fn quick_trend_writes_ratios_csv_and_plot() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_lanterna"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(["bench", "--quick", "--suite", "trend", "--out"])
+        .arg(dir.path())
+        .output()
+        .expect("run lanterna bench");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success(),
+        "bench --suite trend failed:\n{stderr}"
+    );
+    let json_path = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.extension().is_some_and(|x| x == "json"))
+        .expect("a results file");
+    let r: Value = serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
+    assert_eq!(r["suites"], serde_json::json!(["trend"]));
+    let t = &r["trend"];
+    let points = t["points"].as_array().unwrap();
+    assert_eq!(points.len(), 2, "two spp budgets in quick mode");
+    let mut last_paths = 0.0;
+    for p in points {
+        assert_eq!(p["scene"], "bistro-night.gltf");
+        assert_eq!(
+            methods(&p["methods"], "trend"),
+            ["pt", "ris", "guided", "guided-ris"]
+        );
+        let paths = num(&p["training_paths"], "training paths");
+        assert!(paths > last_paths, "training paths grow: {paths}");
+        last_paths = paths;
+        assert!(num(&p["reference_mae"], "reference MAE") > 0.0);
+        for m in p["methods"].as_array().unwrap() {
+            let what = format!("{}", m["method"]);
+            check_spread(&m["mae"], &what);
+            check_spread(&m["seconds"], &what);
+            let guided = m["method"].as_str().unwrap().starts_with("guided");
+            assert_eq!(num(&m["training_spp"], &what) > 0.0, guided, "{what}");
+        }
+        let names: Vec<&str> = p["ratios"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x["name"].as_str().unwrap())
+            .collect();
+        assert_eq!(
+            names,
+            ["guided/pt", "guided-ris/ris", "guided-ris/pt", "ris/pt"]
+        );
+        for x in p["ratios"].as_array().unwrap() {
+            check_spread(&x["raw"], "ratio");
+        }
+    }
+    let stem = json_path.file_stem().unwrap().to_str().unwrap();
+    let csv = std::fs::read_to_string(dir.path().join(format!("{stem}-trend.csv"))).unwrap();
+    let rows: Vec<&str> = csv.lines().collect();
+    assert_eq!(rows.len(), 1 + 2 * 4, "header + a row per point and method");
+    let columns = rows[0].split(',').count();
+    assert!(rows.iter().all(|r| r.split(',').count() == columns));
+    assert!(rows[0].contains("ratio_guided/pt"));
+    let png = std::fs::read(dir.path().join(format!("{stem}-trend.png"))).unwrap();
+    assert!(
+        png.starts_with(b"\x89PNG") && png.len() > 10_000,
+        "{} bytes",
+        png.len()
+    );
+    let md = std::fs::read_to_string(json_path.with_extension("md")).unwrap();
+    assert!(md.contains("## Guiding against training paths"));
+}

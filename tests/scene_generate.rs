@@ -522,6 +522,72 @@ fn bad_options_and_outputs_are_clear_errors_and_leave_nothing_behind() {
     );
 }
 
+/// `bistro-night` has the light budget (≥ 10,000 emissive triangles) and every
+/// kind of fixture it promises, loads back with those counts, has metal and glass-like
+/// materials, grows with `--detail` and refuses a detail of 0.
+#[test]
+fn bistro_night_has_10000_emissive_triangles_and_every_fixture() {
+    let dir = tempfile::tempdir().unwrap();
+    let (path, s) = gen(Kind::BistroNight, &Options::default(), dir.path());
+    assert!(
+        s.emissive_triangles >= 10_000,
+        "{} emissive triangles",
+        s.emissive_triangles
+    );
+    let l = load(&path);
+    let emissive = triangles(&l)
+        .iter()
+        .filter(|t| t.emission.max_element() > 0.0)
+        .count() as u64;
+    assert_eq!(emissive, s.emissive_triangles);
+    let x = extras(&l);
+    let kinds = &x["analytic"]["light_models_by_kind"];
+    for k in [
+        "sconces",
+        "lamp_posts",
+        "arcade_lanterns",
+        "cafe_globes",
+        "cove_strip_segments",
+        "string_bulbs",
+        "candles",
+    ] {
+        assert!(kinds[k].as_u64().unwrap() > 0, "no {k}: {kinds}");
+    }
+    assert_eq!(x["options"]["detail"], 1);
+    // Metal and glass-like glossy dielectrics besides the diffuse majority.
+    let mats: Vec<_> = l.doc.materials().collect();
+    let metal = mats
+        .iter()
+        .filter(|m| m.pbr_metallic_roughness().metallic_factor() > 0.5)
+        .count();
+    assert!(metal >= 2, "{metal} metals");
+    assert!(mats
+        .iter()
+        .any(|m| m.name() == Some("screen-glass") && m.double_sided()));
+
+    std::fs::create_dir(dir.path().join("big")).unwrap();
+    let (_, big) = gen(
+        Kind::BistroNight,
+        &Options {
+            detail: Some(3),
+            seed: 7,
+            ..Options::default()
+        },
+        &dir.path().join("big"),
+    );
+    assert!(big.emissive_triangles > 2 * s.emissive_triangles);
+    assert!(big.triangles > s.triangles);
+    let bad = generate(
+        Kind::BistroNight,
+        &Options {
+            detail: Some(0),
+            ..Options::default()
+        },
+        &dir.path().join("bad.gltf"),
+    );
+    assert!(bad.unwrap_err().to_string().contains("--detail"));
+}
+
 /// The shipped scenes are exactly what their recorded options and seed generate, and
 /// together stay small enough for the repository.
 #[test]
@@ -529,7 +595,7 @@ fn shipped_scenes_match_their_recorded_options() {
     let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let dir = tempfile::tempdir().unwrap();
     let mut total = 0;
-    for name in ["street", "cornell-lights"] {
+    for name in ["street", "cornell-lights", "bistro-night"] {
         let shipped = scenes.join(format!("{name}.gltf"));
         let x = extras(&load(&shipped));
         let o = &x["options"];
@@ -538,6 +604,7 @@ fn shipped_scenes_match_their_recorded_options() {
             aspect: o["aspect"].as_f64().map(|v| v as f32),
             lamps: o["lamps"].as_u64().map(|v| v as u32),
             lights: o["lights"].as_u64().map(|v| v as u32),
+            detail: o["detail"].as_u64().map(|v| v as u32),
             ..Options::default()
         };
         let kind = Kind::from_name(x["kind"].as_str().unwrap()).unwrap();

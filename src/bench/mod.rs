@@ -21,6 +21,7 @@ pub mod sizes;
 pub mod spread;
 pub mod throughput;
 pub mod traversal;
+pub mod trend;
 
 use crate::render::{Method, RenderSettings, Traversal};
 use crate::shaders::ShaderSource;
@@ -82,10 +83,23 @@ pub enum Suite {
     Mitsuba,
     Profile,
     Traversal,
+    Trend,
 }
 
 impl Suite {
-    pub const ALL: [Suite; 7] = [
+    pub const ALL: [Suite; 8] = [
+        Suite::Traversal,
+        Suite::Throughput,
+        Suite::Scaling,
+        Suite::Guiding,
+        Suite::Quality,
+        Suite::Mitsuba,
+        Suite::Profile,
+        Suite::Trend,
+    ];
+
+    /// What `lanterna bench` runs without `--suite`: all but the long `trend`.
+    pub const DEFAULT: [Suite; 7] = [
         Suite::Traversal,
         Suite::Throughput,
         Suite::Scaling,
@@ -104,6 +118,7 @@ impl Suite {
             Suite::Mitsuba => "mitsuba",
             Suite::Profile => "profile",
             Suite::Traversal => "traversal",
+            Suite::Trend => "trend",
         }
     }
 }
@@ -149,6 +164,8 @@ pub struct BenchConfig {
     /// The command line, for the Markdown.
     pub command: String,
     pub shaders: ShaderSource,
+    /// `trend`: skip points with more training paths than this.
+    pub trend_max_paths: Option<u64>,
 }
 
 impl BenchConfig {
@@ -159,7 +176,7 @@ impl BenchConfig {
             quick,
             out_dir: PathBuf::from("bench/results"),
             repeat: if quick { 1 } else { 3 },
-            suites: Suite::ALL.to_vec(),
+            suites: Suite::DEFAULT.to_vec(),
             skip_mitsuba: false,
             scenes_dir: repo_path("scenes"),
             mitsuba_script: repo_path("scripts/mitsuba_compare.py"),
@@ -167,6 +184,7 @@ impl BenchConfig {
             work_dir: None,
             command: "lanterna bench".into(),
             shaders: ShaderSource::Builtin,
+            trend_max_paths: None,
         }
     }
 }
@@ -191,6 +209,8 @@ pub struct Bench {
     pub mitsuba_script: PathBuf,
     pub python: String,
     pub shaders: ShaderSource,
+    /// `trend`: skip points with more training paths than this.
+    pub trend_max_paths: Option<u64>,
 }
 
 impl Bench {
@@ -279,6 +299,7 @@ pub fn run(config: &BenchConfig, device: Arc<Device>) -> Result<BenchOutput> {
         mitsuba_script: config.mitsuba_script.clone(),
         python: config.python.clone(),
         shaders: config.shaders.clone(),
+        trend_max_paths: config.trend_max_paths,
     };
     let result = run_suites(config, &bench);
     if own_work_dir {
@@ -298,6 +319,11 @@ pub fn run(config: &BenchConfig, device: Arc<Device>) -> Result<BenchOutput> {
     let text = serde_json::to_string_pretty(&report).expect("the report serializes");
     crate::image_io::write_atomically(&json, format!("{text}\n").as_bytes())?;
     crate::image_io::write_atomically(&markdown, markdown::render(&report).as_bytes())?;
+    if let Some(t) = &report.trend {
+        let csv = config.out_dir.join(format!("{stem}-trend.csv"));
+        crate::image_io::write_atomically(&csv, t.csv().as_bytes())?;
+        t.write_plot(&config.out_dir.join(format!("{stem}-trend.png")))?;
+    }
     log::info!(
         "bench finished in {:.0} s: {} and {}",
         report.total_seconds,
@@ -332,6 +358,7 @@ fn run_suites(config: &BenchConfig, bench: &Bench) -> Result<BenchReport> {
         mitsuba_skipped: None,
         profile: None,
         traversal: None,
+        trend: None,
         load_average_start: None,
         load_average_end: None,
         total_seconds: 0.0,
@@ -346,6 +373,7 @@ fn run_suites(config: &BenchConfig, bench: &Bench) -> Result<BenchReport> {
             Suite::Quality => report.quality = Some(quality::run(bench)?),
             Suite::Profile => report.profile = Some(profile::run(bench)?),
             Suite::Traversal => report.traversal = Some(traversal::run(bench)?),
+            Suite::Trend => report.trend = Some(trend::run(bench)?),
             Suite::Mitsuba => {
                 if config.skip_mitsuba {
                     report.mitsuba_skipped = Some("--skip-mitsuba".into());

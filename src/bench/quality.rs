@@ -112,7 +112,7 @@ pub fn film_image(
     Image::from_sums(film.width, film.height, sums, meta)
 }
 
-fn reference(
+pub(crate) fn reference(
     bench: &Bench,
     session: &mut Session,
     size: &QualitySize,

@@ -10,6 +10,7 @@ use super::quality::Quality;
 use super::scaling::Scaling;
 use super::sizes::Sizes;
 use super::throughput::Throughput;
+use super::trend::Trend;
 
 /// Changes when a key changes meaning.
 pub const SCHEMA: u32 = 1;
@@ -42,6 +43,9 @@ pub struct BenchReport {
     /// Ray traversal alone: ray queries against the software traversal.
     #[serde(default)]
     pub traversal: Option<super::traversal::TraversalBench>,
+    /// `--suite trend` only.
+    #[serde(default)]
+    pub trend: Option<Trend>,
     /// /proc/loadavg before and after the run: other work on the machine shows up here
     /// (and in every timing).
     pub load_average_start: Option<String>,

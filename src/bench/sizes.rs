@@ -61,6 +61,9 @@ pub struct Sizes {
     pub profile_ris_candidates: Vec<u32>,
     /// Max depths of the profile's `pt` runs.
     pub profile_depths: Vec<u32>,
+    /// `trend`: scenes, image sizes and spp budgets (training paths ≈ 0.3 × pixels × spp).
+    #[serde(default)]
+    pub trend: Vec<super::trend::TrendSize>,
 }
 
 fn scene(name: &str, width: u32, height: Option<u32>, spp: u64) -> SceneSize {
@@ -69,6 +72,16 @@ fn scene(name: &str, width: u32, height: Option<u32>, spp: u64) -> SceneSize {
         width,
         height,
         spp,
+    }
+}
+
+fn trend(scene: &str, width: u32, spp: Vec<u64>, reference_spp: u64) -> super::trend::TrendSize {
+    super::trend::TrendSize {
+        scene: scene.into(),
+        width,
+        height: None,
+        spp,
+        reference_spp,
     }
 }
 
@@ -125,6 +138,18 @@ impl Sizes {
             profile: scene("street.gltf", 128, None, 4),
             profile_ris_candidates: vec![1, 8, 32],
             profile_depths: vec![1, 2, 3, 4],
+            trend: ["bistro-night.gltf", "street.gltf"]
+                .into_iter()
+                .flat_map(|scene| {
+                    [
+                        (64, vec![16, 64, 256], 1024),
+                        (128, vec![128, 512], 4096),
+                        (320, vec![256, 1024], 4096),
+                        (1024, vec![1024], 4096),
+                    ]
+                    .map(|(width, spp, reference_spp)| trend(scene, width, spp, reference_spp))
+                })
+                .collect(),
         }
     }
 
@@ -159,6 +184,7 @@ impl Sizes {
             profile: scene("street.gltf", 32, None, 2),
             profile_ris_candidates: vec![1, 32],
             profile_depths: vec![1, 4],
+            trend: vec![trend("bistro-night.gltf", 16, vec![4, 16], 32)],
         }
     }
 }

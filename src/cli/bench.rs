@@ -24,7 +24,7 @@ pub struct Args {
     #[arg(long)]
     pub skip_mitsuba: bool,
     /// Suites to run, comma-separated: traversal, throughput, scaling, guiding, quality,
-    /// mitsuba, profile (default: all).
+    /// mitsuba, profile, trend (default: all but trend, which takes hours at full size).
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     pub suite: Vec<Suite>,
     /// Directory of the shipped scenes (default: ./scenes, else the source tree's).
@@ -37,6 +37,9 @@ pub struct Args {
     /// directory, removed afterwards).
     #[arg(long, value_name = "DIR")]
     pub work_dir: Option<PathBuf>,
+    /// trend: skip the points with more training paths (pixels × training spp) than N.
+    #[arg(long, value_name = "N")]
+    pub max_training_paths: Option<f64>,
     #[command(flatten)]
     pub device: DeviceArgs,
 }
@@ -75,6 +78,13 @@ pub fn config(args: &Args) -> anyhow::Result<BenchConfig> {
     c.work_dir = args.work_dir.clone();
     c.command = command_line();
     c.shaders = args.device.shaders();
+    if let Some(n) = args.max_training_paths {
+        anyhow::ensure!(
+            n.is_finite() && n >= 1.0,
+            "--max-training-paths must be a number ≥ 1 (e.g. 1e6)"
+        );
+        c.trend_max_paths = Some(n as u64);
+    }
     Ok(c)
 }
 
@@ -109,7 +119,7 @@ mod tests {
         let c = config(&a).unwrap();
         assert!(!c.quick);
         assert_eq!(c.repeat, 3);
-        assert_eq!(c.suites, Suite::ALL);
+        assert_eq!(c.suites, Suite::DEFAULT);
         assert_eq!(c.out_dir, PathBuf::from("bench/results"));
         let a = parse(&["--quick", "--suite", "throughput,quality", "--out", "x"]).unwrap();
         let c = config(&a).unwrap();

@@ -39,6 +39,9 @@ enum KindArg {
     PunctualNear,
     /// Conformance: a lantern, a lamp inside an alpha-masked lattice cage.
     AlphaLights,
+    /// Night square with Bistro's character, most light indirect or through openings;
+    /// --detail N.
+    BistroNight,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -67,6 +70,10 @@ pub struct GenerateArgs {
     /// cornell-lights: number of emissive quads (default 16).
     #[arg(long)]
     lights: Option<u32>,
+    /// bistro-night: the square's area grows N× with more buildings, lamps and string
+    /// lights (default 1, the shipped scene).
+    #[arg(long)]
+    detail: Option<u32>,
     /// Lambertian albedo of the main surface.
     #[arg(long)]
     albedo: Option<f32>,
@@ -122,12 +129,14 @@ fn run_generate(a: GenerateArgs) -> anyhow::Result<()> {
         KindArg::Sconces => Kind::Sconces,
         KindArg::PunctualNear => Kind::PunctualNear,
         KindArg::AlphaLights => Kind::AlphaLights,
+        KindArg::BistroNight => Kind::BistroNight,
     };
     let options = Options {
         seed: a.seed,
         aspect: a.aspect,
         lamps: a.lamps,
         lights: a.lights,
+        detail: a.detail,
         albedo: a.albedo,
         emission: a.emission,
         height: a.height,

@@ -223,3 +223,149 @@ fn format_tick(v: f64) -> String {
         format!("{v:.1e}")
     }
 }
+
+/// One line of a ratio plot: `marker` picks the point shape (0 circles, 1 triangles,
+/// 2 squares), so lines of the same colour from different scenes stay apart.
+#[derive(Clone, Debug)]
+pub struct RatioLine {
+    pub label: String,
+    pub color: RGBColor,
+    pub marker: usize,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Ratios (linear y) against a log x axis, with horizontal guide lines (value, label);
+/// used by the bench's training-scale trend.
+pub fn write_ratio_plot(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    lines: &[RatioLine],
+    guides: &[(f64, String)],
+) -> Result<(), CompareError> {
+    let (w, h) = PLOT_SIZE;
+    let mut buffer = vec![0u8; (w * h * 3) as usize];
+    draw_ratios(&mut buffer, title, x_desc, lines, guides).map_err(|problem| {
+        CompareError::Figure {
+            path: path.to_path_buf(),
+            problem,
+        }
+    })?;
+    write_png_rgb8(path, w, h, &buffer)?;
+    Ok(())
+}
+
+fn draw_ratios(
+    buffer: &mut [u8],
+    title: &str,
+    x_desc: &str,
+    lines: &[RatioLine],
+    guides: &[(f64, String)],
+) -> Result<(), String> {
+    fonts::ensure_registered();
+    let e = |e: &dyn std::fmt::Display| e.to_string();
+    let root = TextBackend::with_buffer(buffer, PLOT_SIZE).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(&x))?;
+    let xs = || lines.iter().flat_map(|l| l.points.iter().map(|p| p.0));
+    let (x_lo, x_hi) = log_bounds(xs());
+    let ys = lines
+        .iter()
+        .flat_map(|l| l.points.iter().map(|p| p.1))
+        .chain(guides.iter().map(|g| g.0));
+    let (lo, hi) = ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+        (l.min(v), h.max(v))
+    });
+    let (y_lo, y_hi) = if lo.is_finite() && hi.is_finite() {
+        ((lo - 0.1).max(0.0), hi + 0.1)
+    } else {
+        (0.0, 1.5)
+    };
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, (fonts::FAMILY, 24))
+        .margin(16)
+        .x_label_area_size(56)
+        .y_label_area_size(70)
+        .build_cartesian_2d(
+            (x_lo..x_hi)
+                .log_scale()
+                .with_key_points(log_ticks(x_lo, x_hi, false))
+                .with_light_points(light_ticks(x_lo, x_hi)),
+            y_lo..y_hi,
+        )
+        .map_err(|x| e(&x))?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc("MAE ratio")
+        .label_style((fonts::FAMILY, 16))
+        .axis_desc_style((fonts::FAMILY, 18))
+        .x_label_formatter(&|v| format!("{v:.0e}"))
+        .draw()
+        .map_err(|x| e(&x))?;
+    for (value, label) in guides {
+        let grey = RGBColor(120, 120, 120);
+        chart
+            .draw_series(DashedLineSeries::new(
+                [(x_lo, *value), (x_hi, *value)],
+                8,
+                6,
+                grey.stroke_width(1),
+            ))
+            .map_err(|x| e(&x))?;
+        chart
+            .draw_series(std::iter::once(Text::new(
+                label.clone(),
+                (x_lo * 1.05, *value + 0.01 * (y_hi - y_lo)),
+                (fonts::FAMILY, 14).into_font().color(&grey),
+            )))
+            .map_err(|x| e(&x))?;
+    }
+    let mut any = false;
+    for line in lines {
+        if line.points.is_empty() {
+            continue;
+        }
+        any = true;
+        let color = line.color;
+        chart
+            .draw_series(LineSeries::new(
+                line.points.iter().copied(),
+                color.stroke_width(2),
+            ))
+            .map_err(|x| e(&x))?
+            .label(line.label.as_str())
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 24, y)], color.stroke_width(2))
+            });
+        match line.marker {
+            0 => chart.draw_series(
+                line.points
+                    .iter()
+                    .map(|&p| Circle::new(p, 5, color.filled()).into_dyn()),
+            ),
+            1 => chart.draw_series(
+                line.points
+                    .iter()
+                    .map(|&p| TriangleMarker::new(p, 7, color.filled()).into_dyn()),
+            ),
+            _ => chart.draw_series(
+                line.points
+                    .iter()
+                    .map(|&p| Cross::new(p, 6, color.stroke_width(2)).into_dyn()),
+            ),
+        }
+        .map_err(|x| e(&x))?;
+    }
+    if any {
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerRight)
+            .label_font((fonts::FAMILY, 16))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|x| e(&x))?;
+    }
+    root.present().map_err(|x| e(&x))?;
+    Ok(())
+}

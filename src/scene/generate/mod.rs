@@ -4,13 +4,15 @@
 //! options and seed, so the same options give byte-identical files; each file records its
 //! kind, resolved options and any analytic parameters in `asset.extras.lanterna`.
 //!
-//! The kinds live one per file (`street`, `cornell`, `furnace`, `analytic`, `gap`,
-//! `alpha_test`); `writer` turns meshes, materials and nodes into glTF JSON + `.bin` +
+//! The kinds live one per file (`street`, `bistro_night`, `cornell`, `furnace`,
+//! `analytic`, `gap`, `alpha_test`, `conformance`); `writer` turns meshes, materials and nodes into glTF JSON + `.bin` +
 //! PNG, `mesh` builds geometry, `textures` paints the textures and `rng` is the seeded
 //! random stream they all draw from.
 
 mod alpha_test;
 mod analytic;
+mod bistro_lamps;
+mod bistro_night;
 mod conformance;
 mod cornell;
 mod furnace;
@@ -50,10 +52,13 @@ pub enum Kind {
     PunctualNear,
     /// A lantern: a lamp inside an alpha-masked lattice cage (the conformance suite).
     AlphaLights,
+    /// A night square with Bistro's character: lanterns, café interiors seen through
+    /// openings, an arcade with cove lights, string lights; most light arrives indirectly.
+    BistroNight,
 }
 
 impl Kind {
-    pub const ALL: [Kind; 10] = [
+    pub const ALL: [Kind; 11] = [
         Kind::Street,
         Kind::CornellLights,
         Kind::Furnace,
@@ -64,6 +69,7 @@ impl Kind {
         Kind::Sconces,
         Kind::PunctualNear,
         Kind::AlphaLights,
+        Kind::BistroNight,
     ];
 
     pub fn name(self) -> &'static str {
@@ -78,6 +84,7 @@ impl Kind {
             Kind::Sconces => "sconces",
             Kind::PunctualNear => "punctual-near",
             Kind::AlphaLights => "alpha-lights",
+            Kind::BistroNight => "bistro-night",
         }
     }
 
@@ -97,6 +104,7 @@ impl Kind {
             Kind::AlphaTest => &["emission"],
             Kind::Sconces | Kind::AlphaLights => &[],
             Kind::PunctualNear => &["intensity"],
+            Kind::BistroNight => &["detail"],
         }
     }
 }
@@ -125,6 +133,8 @@ pub struct Options {
     pub lamps: Option<u32>,
     /// `cornell-lights`: number of emissive quads.
     pub lights: Option<u32>,
+    /// `bistro-night`: scale of the square (its area grows N×; 1 is the shipped scene).
+    pub detail: Option<u32>,
     /// Lambertian albedo of the main surface.
     pub albedo: Option<f32>,
     /// Emitted radiance of the main emitter.
@@ -151,6 +161,7 @@ impl Default for Options {
             aspect: None,
             lamps: None,
             lights: None,
+            detail: None,
             albedo: None,
             emission: None,
             height: None,
@@ -169,6 +180,7 @@ impl Options {
         let flags = [
             ("lamps", self.lamps.is_some()),
             ("lights", self.lights.is_some()),
+            ("detail", self.detail.is_some()),
             ("albedo", self.albedo.is_some()),
             ("emission", self.emission.is_some()),
             ("height", self.height.is_some()),
@@ -307,6 +319,7 @@ pub fn generate(
         Kind::Sconces => conformance::build_sconces(options)?,
         Kind::PunctualNear => conformance::build_punctual_near(options)?,
         Kind::AlphaLights => conformance::build_alpha_lights(options)?,
+        Kind::BistroNight => bistro_night::build(options)?,
     };
     let mut built = built;
     if let Some(offset) = options.offset {

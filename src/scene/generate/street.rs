@@ -43,8 +43,8 @@ const SIDE_X: f32 = 30.0;
 const DEFAULT_LAMPS: u32 = 600;
 const MAX_LAMPS: u32 = 250_000;
 
-const WARM: [f32; 3] = [1.0, 0.7, 0.4];
-const SIGN_WORDS: [(&str, [f32; 3]); 8] = [
+pub(super) const WARM: [f32; 3] = [1.0, 0.7, 0.4];
+pub(super) const SIGN_WORDS: [(&str, [f32; 3]); 8] = [
     ("BISTRO", [1.0, 0.55, 0.15]),
     ("CAFE", [1.0, 0.25, 0.2]),
     ("BAR", [0.2, 0.6, 1.0]),
@@ -62,7 +62,7 @@ const GARLAND_COLOURS: [[f32; 3]; 5] = [
     [0.3, 0.45, 1.0],
     [1.0, 0.6, 0.1],
 ];
-const LEVELS: [f32; 3] = [0.6, 1.0, 1.6];
+pub(super) const LEVELS: [f32; 3] = [0.6, 1.0, 1.6];
 /// Garland power per metre of wire (W/m in radiometric units of the scene).
 const GARLAND_POWER_PER_M: f32 = 12.0;
 
@@ -76,22 +76,22 @@ fn bulb_spec(kind: BulbKind) -> (f32, f32, [f32; 3]) {
     }
 }
 
-struct Materials {
-    facade: FacadeMaterials,
-    cobbles: usize,
-    paving: usize,
-    curb: usize,
-    iron: usize,
-    aluminium: usize,
-    seat: usize,
-    glass_red: usize,
-    planter: usize,
-    foliage: usize,
-    wire: usize,
-    signs: Vec<usize>,
+pub(super) struct Materials {
+    pub facade: FacadeMaterials,
+    pub cobbles: usize,
+    pub paving: usize,
+    pub curb: usize,
+    pub iron: usize,
+    pub aluminium: usize,
+    pub seat: usize,
+    pub glass_red: usize,
+    pub planter: usize,
+    pub foliage: usize,
+    pub wire: usize,
+    pub signs: Vec<usize>,
 }
 
-fn materials(g: &mut Gltf, rng: &mut Rng) -> Result<Materials, GenerateError> {
+pub(super) fn materials(g: &mut Gltf, rng: &mut Rng) -> Result<Materials, GenerateError> {
     let tex_cobbles = g.texture(
         "cobbles",
         textures::cobbles(&mut rng.fork(1)).png()?,
@@ -487,6 +487,7 @@ pub fn build(o: &Options) -> Result<Built, GenerateError> {
         &mut grng,
         &garlands,
         garland_bulbs,
+        GARLAND_POWER_PER_M,
     );
 
     // All static geometry as one mesh, one primitive per material.
@@ -598,7 +599,7 @@ fn sidewalk_props(rng: &mut Rng, run: &mut Run, width: f32, index: usize) {
     }
 }
 
-fn prop_meshes(g: &mut Gltf, m: &Materials) -> Vec<usize> {
+pub(super) fn prop_meshes(g: &mut Gltf, m: &Materials) -> Vec<usize> {
     let (top, frame) = props::table();
     let (seat, chair_frame) = props::chair();
     let (pot, leaves) = props::planter();
@@ -615,13 +616,13 @@ fn prop_meshes(g: &mut Gltf, m: &Materials) -> Vec<usize> {
 
 /// Light meshes shared by many light models, created on first use.
 #[derive(Default)]
-struct LightMeshes {
+pub(super) struct LightMeshes {
     bulbs: BTreeMap<(BulbKind, usize), usize>,
     panes: BTreeMap<usize, usize>,
 }
 
 #[allow(clippy::too_many_arguments)]
-fn place_spot(
+pub(super) fn place_spot(
     g: &mut Gltf,
     sink: &mut Sink,
     m: &Materials,
@@ -691,14 +692,16 @@ fn place_spot(
     }
 }
 
-/// Spreads `count` bulbs evenly (by arc length) over all garlands and draws their wires.
-fn place_garlands(
+/// Spreads `count` bulbs evenly (by arc length) over all garlands and draws their wires;
+/// together they emit `power_per_m` per metre of wire.
+pub(super) fn place_garlands(
     g: &mut Gltf,
     sink: &mut Sink,
     m: &Materials,
     rng: &mut Rng,
     garlands: &[Vec<Vec3>],
     count: usize,
+    power_per_m: f32,
 ) {
     let lengths: Vec<f32> = garlands
         .iter()
@@ -727,7 +730,7 @@ fn place_garlands(
     let spacing = total / count as f32;
     let radius = (0.22 * spacing).clamp(0.003, 0.04);
     let area = 4.0 * 3f32.sqrt() * radius * radius;
-    let base_radiance = GARLAND_POWER_PER_M * spacing / (std::f32::consts::PI * area);
+    let base_radiance = power_per_m * spacing / (std::f32::consts::PI * area);
     let mut cache: BTreeMap<(usize, usize), usize> = BTreeMap::new();
     for (line, (&n, &len)) in garlands.iter().zip(counts.iter().zip(&lengths)) {
         let festive = rng.chance(0.35);

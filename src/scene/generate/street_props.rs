@@ -16,7 +16,7 @@ pub const CANDLE_FLAME: Vec3 = Vec3::new(0.0, 0.845, 0.0);
 
 /// A lantern cage: base plate, four corner bars and a pyramid cap, centred on x = z = 0
 /// with its plate at y = 0.
-fn lantern(metal: &mut MeshData, half: f32, height: f32) {
+pub fn lantern(metal: &mut MeshData, half: f32, height: f32) {
     let bar = 0.012;
     metal.cuboid(Vec3::new(-half, 0.0, -half), Vec3::new(half, 0.03, half));
     for (sx, sz) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
