@@ -415,7 +415,7 @@ impl SdTree {
                 training_weight,
                 lights: Arc::new(lights),
                 light_training: Vec::new(),
-                selection: super::SelectionState::new(g.bsdf_fraction),
+                selection: super::SelectionState::restored(g.bsdf_fraction),
             });
         }
         Ok(SdTree {

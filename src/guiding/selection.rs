@@ -59,6 +59,9 @@ pub struct SelectionState {
     steps: u32,
     batch_gradient: f32,
     batch_weight: f32,
+    /// The fraction read from a saved tree, used as it is until the next step: σ(logit(α))
+    /// is not α to the last bit in f32, and a loaded tree must render what it rendered.
+    restored: Option<f32>,
 }
 
 impl SelectionState {
@@ -73,11 +76,24 @@ impl SelectionState {
             steps: 0,
             batch_gradient: 0.0,
             batch_weight: 0.0,
+            restored: None,
+        }
+    }
+
+    /// The optimiser of a leaf read from a saved tree whose BSDF selection probability
+    /// was `fraction`: it samples with exactly that fraction until it learns again.
+    pub fn restored(fraction: f32) -> Self {
+        SelectionState {
+            restored: Some(fraction.clamp(MIN_FRACTION, MAX_FRACTION)),
+            ..SelectionState::new(fraction)
         }
     }
 
     /// α = σ(θ): the probability of sampling the BSDF.
     pub fn fraction(&self) -> f32 {
+        if let Some(f) = self.restored {
+            return f;
+        }
         sigmoid(self.theta).clamp(MIN_FRACTION, MAX_FRACTION)
     }
 
@@ -128,6 +144,7 @@ impl SelectionState {
     /// One Adam step (Kingma and Ba 2014) on gradient `g`, then θ is projected back into
     /// its bounds.
     pub fn step(&mut self, g: f32) {
+        self.restored = None;
         self.steps += 1;
         let t = self.steps as i32;
         self.first_moment = BETA1 * self.first_moment + (1.0 - BETA1) * g;
