@@ -51,7 +51,7 @@ pub fn theta_max() -> f32 {
 }
 
 /// One leaf's optimiser: the logit and Adam's moments.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug)]
 pub struct SelectionState {
     pub theta: f32,
     first_moment: f32,
@@ -62,6 +62,20 @@ pub struct SelectionState {
     /// The fraction read from a saved tree, used as it is until the next step: σ(logit(α))
     /// is not α to the last bit in f32, and a loaded tree must render what it rendered.
     restored: Option<f32>,
+}
+
+/// Equal when they sample alike and learn alike: the fraction they sample with (restored
+/// or σ(θ)) and the optimiser's state.
+impl PartialEq for SelectionState {
+    fn eq(&self, o: &Self) -> bool {
+        self.fraction() == o.fraction()
+            && self.theta == o.theta
+            && self.first_moment == o.first_moment
+            && self.second_moment == o.second_moment
+            && self.steps == o.steps
+            && self.batch_gradient == o.batch_gradient
+            && self.batch_weight == o.batch_weight
+    }
 }
 
 impl SelectionState {
