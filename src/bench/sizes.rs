@@ -63,7 +63,7 @@ pub struct Sizes {
     pub profile_depths: Vec<u32>,
     /// `trend`: scenes, image sizes and spp budgets (training paths ≈ 0.3 × pixels × spp).
     #[serde(default)]
-    pub trend: Vec<super::trend::TrendSize>,
+    pub trend: Vec<TrendSize>,
 }
 
 fn scene(name: &str, width: u32, height: Option<u32>, spp: u64) -> SceneSize {
@@ -75,8 +75,8 @@ fn scene(name: &str, width: u32, height: Option<u32>, spp: u64) -> SceneSize {
     }
 }
 
-fn trend(scene: &str, width: u32, spp: Vec<u64>, reference_spp: u64) -> super::trend::TrendSize {
-    super::trend::TrendSize {
+fn trend(scene: &str, width: u32, spp: Vec<u64>, reference_spp: u64) -> TrendSize {
+    TrendSize {
         scene: scene.into(),
         width,
         height: None,
@@ -187,4 +187,17 @@ impl Sizes {
             trend: vec![trend("bistro-night.gltf", 16, vec![4, 16], 32)],
         }
     }
+}
+
+/// One scene at one image size: the spp budgets measured there and its reference.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct TrendSize {
+    pub scene: String,
+    pub width: u32,
+    /// `None` follows the camera's aspect ratio.
+    pub height: Option<u32>,
+    /// Equal total spp budgets (training included for the guided methods).
+    pub spp: Vec<u64>,
+    /// spp of the `pt` reference at this size (two independent halves).
+    pub reference_spp: u64,
 }

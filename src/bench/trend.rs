@@ -16,6 +16,7 @@
 use super::harness::Session;
 use super::quality::{self, film_image};
 use super::sizes::QualitySize;
+pub use super::sizes::TrendSize;
 use super::spread::Spread;
 use super::{Bench, BenchError, Result};
 use crate::eval::metrics::{self, Named};
@@ -28,19 +29,6 @@ use std::path::Path;
 /// training paths): guided 0.69, guided-ris 0.41.
 pub const PAPER_GUIDED_PT: f64 = 0.69;
 pub const PAPER_GUIDED_RIS_PT: f64 = 0.41;
-
-/// One scene at one image size: the spp budgets measured there and its reference.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-pub struct TrendSize {
-    pub scene: String,
-    pub width: u32,
-    /// `None` follows the camera's aspect ratio.
-    pub height: Option<u32>,
-    /// Equal total spp budgets (training included for the guided methods).
-    pub spp: Vec<u64>,
-    /// spp of the `pt` reference at this size (two independent halves).
-    pub reference_spp: u64,
-}
 
 /// One method at one point, over the seeds.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
