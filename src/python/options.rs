@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 /// The keyword options `Renderer` accepts besides its named parameters.
-pub const OPTIONS: [&str; 18] = [
+pub const OPTIONS: [&str; 19] = [
     "rr_depth",
     "source",
     "ris_candidates",
