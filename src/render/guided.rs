@@ -150,58 +150,45 @@ pub fn train(
     let mut tree = SdTree::new(lo, hi, &config).map_err(guiding_error)?;
     let mut iterations = Vec::new();
     let mut sample = first;
+    // One pass: render `spp` samples while recording, then refit for `next_spp`. False
+    // when it was interrupted before it rendered anything.
+    let mut pass = |k: usize, spp: u64, next_spp: u32| -> Result<bool> {
+        let it = train_iteration(
+            renderer,
+            &mut tree,
+            k,
+            spp,
+            next_spp,
+            sample,
+            cancel,
+            &mut |d| progress(sample - first + d),
+            stats,
+            passes.as_deref_mut(),
+        )?;
+        let Some(it) = it else { return Ok(false) };
+        sample += it.spp;
+        progress(sample - first);
+        iterations.push(it);
+        Ok(true)
+    };
     match plan {
         TrainingPlan::Spp(schedule) => {
             for (k, &spp) in schedule.training.iter().enumerate() {
-                if cancel.load(Ordering::SeqCst) {
+                if cancel.load(Ordering::SeqCst) || !pass(k, spp as u64, schedule.spp_after(k))? {
                     break;
                 }
-                let it = train_iteration(
-                    renderer,
-                    &mut tree,
-                    k,
-                    spp as u64,
-                    schedule.spp_after(k),
-                    sample,
-                    cancel,
-                    &mut |d| progress(sample - first + d),
-                    stats,
-                    passes.as_deref_mut(),
-                )?;
-                // None: interrupted before it rendered anything.
-                let Some(it) = it else { break };
-                sample += it.spp;
-                progress(sample - first);
-                iterations.push(it);
             }
         }
         TrainingPlan::Seconds(mut schedule) => {
             let mut next = schedule.first();
             let mut k = 0;
             while let Some(spp) = next {
-                if cancel.load(Ordering::SeqCst) {
-                    break;
-                }
                 let t = Instant::now();
                 // The refit prepares the tree for twice the samples, as the schedule
                 // predicts; the final pass may render fewer.
-                let it = train_iteration(
-                    renderer,
-                    &mut tree,
-                    k,
-                    spp as u64,
-                    spp * 2,
-                    sample,
-                    cancel,
-                    &mut |d| progress(sample - first + d),
-                    stats,
-                    passes.as_deref_mut(),
-                )?;
-                // None: interrupted before it rendered anything.
-                let Some(it) = it else { break };
-                sample += it.spp;
-                progress(sample - first);
-                iterations.push(it);
+                if cancel.load(Ordering::SeqCst) || !pass(k, spp as u64, spp * 2)? {
+                    break;
+                }
                 next = schedule.next(t.elapsed().as_secs_f64());
                 k += 1;
             }
