@@ -85,7 +85,9 @@ fn saved_tree_renders_the_same_image() {
     let t = testing::generated(Kind::CornellLights, &Options::default());
     let lights = LightTable::build(&t.scene).unwrap();
     let cancel = AtomicBool::new(false);
-    let s = testing::settings(Method::GuidedRis, 16, 16);
+    let mut s = testing::settings(Method::GuidedRis, 16, 16);
+    // The film is the render phase alone, which the loaded tree renders again.
+    s.guiding.output = lanterna::render::GuidedOutput::RenderPhase;
     let mut r = Renderer::new(
         testing::device(),
         &t.scene,
@@ -133,6 +135,72 @@ fn saved_tree_renders_the_same_image() {
     );
     // Another scene's hash is refused.
     assert!(lanterna::guiding::SdTree::load(&file, hash ^ 1).is_err());
+    testing::assert_no_validation_errors();
+}
+
+/// The default output (`late-passes`) is the render phase and the last four training
+/// passes: its film is one contiguous range of sample indices ending where the budget
+/// ends, every sample counted once, and it agrees with pt (as the render phase alone
+/// does).
+#[test]
+fn late_passes_cover_the_last_training_passes_and_agree_with_pt() {
+    use lanterna::render::run::{run_method, Budget};
+    use lanterna::render::GuidedOutput;
+    use std::sync::atomic::AtomicBool;
+    let t = testing::generated(Kind::CornellLights, &Options::default());
+    let s = testing::settings(Method::Guided, 16, 16);
+    assert_eq!(s.guiding.output, GuidedOutput::LatePasses, "the default");
+    let mut r = testing::test_renderer_on(testing::device(), &t.scene, &t.camera, &s);
+    let (first, spp) = (1000, 256);
+    let out = run_method(
+        &mut r,
+        Budget::Spp(spp),
+        first,
+        &AtomicBool::new(false),
+        &mut |_| {},
+    )
+    .unwrap();
+    let its = out.guiding.as_ref().unwrap().iterations.clone();
+    let trained: u64 = its.iter().map(|i| i.spp).sum();
+    let late: u64 = its.iter().rev().take(4).map(|i| i.spp).sum();
+    assert_eq!(its.len(), 6, "1 + 2 + … + 32 spp train 256");
+    assert_eq!(
+        out.film.spp,
+        late + (spp - trained),
+        "late passes + render phase"
+    );
+    assert_eq!(out.film.sample_offset + out.film.spp, first + spp);
+    assert!(
+        out.combined.is_none(),
+        "the film's exact sums are the image"
+    );
+
+    let mut pt = testing::settings(Method::Pt, 16, 16);
+    pt.seed = 61;
+    let a = render_batches(&t.scene, &t.camera, pt, 12, 64);
+    for (i, output) in [GuidedOutput::LatePasses, GuidedOutput::RenderPhase]
+        .into_iter()
+        .enumerate()
+    {
+        let mut s = testing::settings(Method::Guided, 16, 16);
+        s.seed = 62 + i as u32;
+        s.guiding.output = output;
+        let b = run_batches(&t.scene, &t.camera, s, 12, 64);
+        testing::assert_same_expectation(&a, &b, 4, ALPHA);
+        // A weighting error scales the whole image: the image means are the sharpest test.
+        let (wa, wb) = (
+            a.region_estimates(0, 0, 16, 16),
+            b.region_estimates(0, 0, 16, 16),
+        );
+        for c in 0..3 {
+            let p = stats::welch(&wa[c], &wb[c]);
+            let (ma, mb) = (stats::mean_var(&wa[c]).0, stats::mean_var(&wb[c]).0);
+            assert!(
+                p > ALPHA,
+                "{output:?}: image means {ma} vs {mb} (channel {c}), p = {p:.2e}"
+            );
+        }
+    }
     testing::assert_no_validation_errors();
 }
 

@@ -132,7 +132,7 @@ class Renderer:
             ``strategy`` ("mis"/"nee"/"bsdf"), ``hide_emitters``, ``guiding_threshold``,
             ``guiding_memory`` (MiB), ``spatial_filter`` ("jitter"/"nearest"),
             ``directional_filter`` ("box"/"nearest"), ``guided_output``
-            ("render-phase"/"inverse-variance"), ``learn_lights`` (bool),
+            ("late-passes"/"render-phase"/"inverse-variance"), ``learn_lights`` (bool),
             ``light_mix``, ``traversal`` ("auto"/"ray-query"/"software"); and
             ``validation`` (Vulkan validation layers),
             ``shader_dir`` (compile the GLSL kernels from a directory).

@@ -25,7 +25,8 @@ pub struct RunSample {
     pub training_seconds: f64,
     /// Counters and GPU time over all passes (training included).
     pub stats: RenderStats,
-    /// Samples per pixel of the final image (the render phase for guided methods).
+    /// Samples per pixel of the final image (guided methods: the render phase with the
+    /// training passes their output keeps, see `GuidedOutput`).
     pub film_spp: u64,
     /// Guided methods: one entry per training iteration.
     pub iterations: Vec<IterationStats>,
@@ -39,6 +40,12 @@ impl RunSample {
     /// Samples per pixel over all passes.
     pub fn total_spp(&self) -> u64 {
         self.stats.samples
+    }
+
+    /// Samples per pixel rendered after training (all of them for unguided methods).
+    pub fn render_phase_spp(&self) -> u64 {
+        let trained: u64 = self.iterations.iter().map(|i| i.spp).sum();
+        self.total_spp().saturating_sub(trained)
     }
 
     /// GPU seconds of the training passes.

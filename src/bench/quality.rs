@@ -26,7 +26,8 @@ pub struct QualityRecord {
     /// `spp` or `time`.
     pub budget_kind: String,
     pub budget: f64,
-    /// spp reached (the render phase for guided methods).
+    /// spp of the image (guided methods: the render phase and the training passes their
+    /// output keeps).
     pub spp: Spread,
     pub render_seconds: Spread,
     pub mae: Spread,

@@ -118,7 +118,7 @@ pub fn lamps_for(target: u64, scratch: &Path) -> Result<u32> {
 
 fn summarise(method: Method, pixels: u64, runs: &[RunSample]) -> ScalingMethod {
     let guided = method.uses_guiding();
-    let spp = |r: &RunSample| if guided { r.film_spp } else { r.total_spp() }.max(1) as f64;
+    let spp = |r: &RunSample| r.render_phase_spp().max(1) as f64;
     let wall = |r: &RunSample| {
         if guided {
             r.render_phase_seconds()

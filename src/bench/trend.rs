@@ -34,7 +34,8 @@ pub const PAPER_GUIDED_RIS_PT: f64 = 0.41;
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct TrendMethod {
     pub method: String,
-    /// spp of the final image (the render phase for the guided methods).
+    /// spp of the final image (guided methods: the render phase and the kept training
+    /// passes).
     pub film_spp: u64,
     /// spp spent training (0 for `pt` and `ris`).
     pub training_spp: u64,

@@ -12,7 +12,8 @@
 //! implementation); the render phase alone is unbiased.
 
 use super::budget::{deadline_after, Budget, RunOutcome, SAMPLE_INDEX_END};
-use super::{Film, GuideBuffers, GuidedOutput, RenderError, RenderStats, Renderer, Result};
+use super::pass_output::KeptPasses;
+use super::{Film, GuideBuffers, RenderError, RenderStats, Renderer, Result};
 use crate::guiding::{GuidingConfig, SdTree, SppSchedule, TimeSchedule};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -142,7 +143,7 @@ pub fn train(
     cancel: &AtomicBool,
     progress: &mut dyn FnMut(u64),
     stats: &mut RenderStats,
-    mut passes: Option<&mut Vec<(Vec<f32>, f64)>>,
+    mut kept: Option<&mut KeptPasses>,
 ) -> Result<Training> {
     let config = guiding_config(renderer);
     config.validate().map_err(guiding_error)?;
@@ -163,7 +164,7 @@ pub fn train(
             cancel,
             &mut |d| progress(sample - first + d),
             stats,
-            passes.as_deref_mut(),
+            kept.as_deref_mut(),
         )?;
         let Some(it) = it else { return Ok(false) };
         sample += it.spp;
@@ -214,9 +215,9 @@ pub fn run_guided(
     let mut stats = RenderStats::default();
     let mut iterations = Vec::new();
     let mut sample = first;
-    let combine = renderer.settings.guiding.output == GuidedOutput::InverseVariance;
-    // (mean image, estimated mean pixel variance) of each pass, for the combination.
-    let mut passes: Vec<(Vec<f32>, f64)> = Vec::new();
+    // The training passes the output uses besides the render phase (see pass_output).
+    let mut kept = KeptPasses::for_output(renderer.settings.guiding.output);
+    let halves = kept.as_ref().is_some_and(|k| k.wants_halves());
 
     let tree = match renderer.preloaded_tree.take() {
         Some(mut t) => {
@@ -234,7 +235,7 @@ pub fn run_guided(
                 cancel,
                 progress,
                 &mut stats,
-                combine.then_some(&mut passes),
+                kept.as_mut(),
             )?;
             iterations = trained.iterations;
             sample = trained.next_sample;
@@ -248,8 +249,12 @@ pub fn run_guided(
         if iterations.is_empty() {
             renderer.clear_film()?;
         }
-        let film = renderer.film()?;
-        let combined = (combine && !passes.is_empty()).then(|| combine_passes(&passes));
+        // With `LatePasses`, the passes kept so far (the film's own, the last, among them).
+        let film = match kept.as_ref().and_then(|k| k.merged_so_far()) {
+            Some(f) => f,
+            None => renderer.film()?,
+        };
+        let combined = kept.as_ref().and_then(|k| k.combined_so_far());
         return Ok(RunOutcome {
             film,
             stats,
@@ -278,7 +283,7 @@ pub fn run_guided(
     match budget {
         Budget::Spp(n) => {
             let left = n.saturating_sub(trained).max(1);
-            let a = if combine && left >= 2 { left / 2 } else { left };
+            let a = if halves && left >= 2 { left / 2 } else { left };
             renderer.render_samples(
                 sample,
                 a,
@@ -302,7 +307,7 @@ pub fn run_guided(
         Budget::Seconds(total) => {
             let deadline = deadline_after(started, total);
             let mut a = 0;
-            if combine {
+            if halves {
                 let now = Instant::now();
                 let mid = deadline.map(|d| now + d.saturating_duration_since(now) / 2);
                 renderer.render_until(
@@ -344,15 +349,14 @@ pub fn run_guided(
             }
         }
     }
-    let film = renderer.film()?;
-    let combined = combine.then(|| {
-        let var = half
-            .as_ref()
-            .and_then(|h| split_variance(h, &film))
-            .unwrap_or(f64::INFINITY);
-        passes.push((film.mean(), var));
-        combine_passes(&passes)
-    });
+    let render_phase = renderer.film()?;
+    let combined = kept
+        .as_ref()
+        .and_then(|k| k.combined(&render_phase, half.as_ref()));
+    let film = match kept.as_ref() {
+        Some(k) => k.merged_film(render_phase),
+        None => render_phase,
+    };
     let out = RunOutcome {
         film,
         stats,
@@ -381,7 +385,7 @@ fn train_iteration(
     cancel: &AtomicBool,
     progress: &mut dyn FnMut(u64),
     stats: &mut RenderStats,
-    passes: Option<&mut Vec<(Vec<f32>, f64)>>,
+    kept: Option<&mut KeptPasses>,
 ) -> Result<Option<IterationStats>> {
     let t = Instant::now();
     let mut buffers = GuideBuffers::upload(&renderer.device, &tree.gpu_arrays())?;
@@ -410,8 +414,9 @@ fn train_iteration(
     renderer.clear_film()?;
     let gpu_before = stats.gpu_seconds;
     let t = Instant::now();
-    // For the combination, render two halves: their difference estimates the variance.
-    let split = if passes.is_some() && spp >= 2 {
+    // For the inverse-variance combination, render two halves: their difference
+    // estimates the variance.
+    let split = if kept.as_ref().is_some_and(|k| k.wants_halves()) && spp >= 2 {
         spp / 2
     } else {
         spp
@@ -443,13 +448,8 @@ fn train_iteration(
             stats,
         )?;
     }
-    if let Some(passes) = passes {
-        let film = renderer.film()?;
-        let var = half
-            .as_ref()
-            .and_then(|h| split_variance(h, &film))
-            .unwrap_or(f64::INFINITY);
-        passes.push((film.mean(), var));
+    if let Some(kept) = kept {
+        kept.add(renderer.film()?, half.as_ref());
     }
     let render_seconds = t.elapsed().as_secs_f64();
 
@@ -510,61 +510,4 @@ fn train_iteration(
         it.mean_bsdf_fraction
     );
     Ok(Some(it))
-}
-
-/// Mean pixel variance of the image of `total`, estimated from its first part `first`:
-/// with a and b the means of the two parts over n_a and n_b samples, E[(a − b)²] =
-/// σ²·(1/n_a + 1/n_b) for the per-sample variance σ², and the image's variance is σ²/n.
-fn split_variance(first: &Film, total: &Film) -> Option<f64> {
-    let (na, n) = (first.spp as f64, total.spp as f64);
-    let nb = n - na;
-    if na < 1.0 || nb < 1.0 {
-        return None;
-    }
-    let scale = crate::gpu::FILM_FIXED_SCALE as f64;
-    let sum_sq: f64 = first
-        .sums
-        .iter()
-        .zip(&total.sums)
-        .map(|(&a, &t)| {
-            let ma = a as f64 / scale / na;
-            let mb = (t - a) as f64 / scale / nb;
-            (ma - mb) * (ma - mb)
-        })
-        .sum();
-    let sigma2 = sum_sq / first.sums.len() as f64 / (1.0 / na + 1.0 / nb);
-    Some(sigma2 / n)
-}
-
-/// Average the passes' images with weights ∝ 1/variance (passes without an estimate get
-/// no weight; when none has one, the last pass alone).
-fn combine_passes(passes: &[(Vec<f32>, f64)]) -> Vec<f32> {
-    let weights: Vec<f64> = passes
-        .iter()
-        .map(|(_, v)| {
-            if v.is_finite() {
-                1.0 / v.max(1e-30)
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    let total: f64 = weights.iter().sum();
-    if total <= 0.0 {
-        return passes.last().map(|p| p.0.clone()).unwrap_or_default();
-    }
-    let mut out = vec![0.0f64; passes[0].0.len()];
-    for ((img, _), w) in passes.iter().zip(&weights) {
-        for (o, &x) in out.iter_mut().zip(img) {
-            *o += w / total * x as f64;
-        }
-    }
-    log::debug!(
-        "inverse-variance weights of the passes: {:?}",
-        weights
-            .iter()
-            .map(|w| (w / total * 1000.0).round() / 1000.0)
-            .collect::<Vec<_>>()
-    );
-    out.into_iter().map(|x| x as f32).collect()
 }

@@ -21,6 +21,7 @@ mod guided;
 mod kernel;
 mod limits;
 pub mod output;
+mod pass_output;
 mod readback;
 pub mod run;
 pub mod runner;

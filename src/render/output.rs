@@ -67,7 +67,7 @@ pub fn outcome_image(
     if interrupted_in_training {
         meta.extra.insert(
             "guiding.interrupted".into(),
-            "in training: the image is the last training pass".into(),
+            "in training: the image is the last training pass (with --guided-output late-passes, the last passes)".into(),
         );
     }
     match &out.combined {
