@@ -67,10 +67,27 @@ DirectionSampler direction_sampler(Surface s) {
     return d;
 }
 
-// Mixture pdf of wi, with the BSDF's and the quadtree's pdfs it mixes.
+// Guided directions are folded onto the upper hemisphere of the geometric normal. The
+// BSDFs are opaque (surface_bsdf_eval is zero below s.ng), and a leaf's quadtree covers
+// the whole sphere (a leaf holds surfaces of many orientations), so a quadtree sample
+// below the surface would be wasted; it is reflected about the tangent plane instead.
+// Reflection preserves solid angle, so the folded density is q(wi) + q(reflected wi)
+// above the surface and zero below: still normalised, and exact.
+vec3 fold_above(Surface s, vec3 w) {
+    float c = dot(w, s.ng);
+    return c < 0.0 ? w - 2.0 * c * s.ng : w;
+}
+
+float guide_pdf_folded(Surface s, uint leaf, vec3 wi) {
+    float c = dot(wi, s.ng);
+    if (c <= 0.0) return 0.0;
+    return guide_pdf(leaf, wi) + guide_pdf(leaf, wi - 2.0 * c * s.ng);
+}
+
+// Mixture pdf of wi, with the BSDF's and the (folded) quadtree's pdfs it mixes.
 float direction_pdfs(Surface s, DirectionSampler d, vec3 wi, out float bsdf_pdf, out float tree_pdf) {
     bsdf_pdf = surface_bsdf_pdf(s, wi);
-    tree_pdf = d.bsdf_fraction < 1.0 ? guide_pdf(d.leaf, wi) : 0.0;
+    tree_pdf = d.bsdf_fraction < 1.0 ? guide_pdf_folded(s, d.leaf, wi) : 0.0;
     float p = d.bsdf_fraction * bsdf_pdf;
     if (d.bsdf_fraction < 1.0) p += (1.0 - d.bsdf_fraction) * tree_pdf;
     return p;
@@ -82,13 +99,14 @@ float direction_pdf(Surface s, DirectionSampler d, vec3 wi) {
 }
 
 // The direction strategy's density as RIS's resampling weights see it: the BSDF part
-// exact, the guided part replaced by the uniform sphere density, so that the M light
+// exact, the guided part replaced by the uniform density over the upper hemisphere
+// (where the folded guided density lives), so that the M light
 // candidates do not each walk the leaf's quadtree. Balance-heuristic weights built from
 // any such stand-in still sum to one over the strategies, so RIS stays unbiased as long
 // as the direction candidate's weight divides by its true density (ris_denominator).
 float direction_pdf_for_ris(Surface s, DirectionSampler d, vec3 wi) {
     float p = d.bsdf_fraction * surface_bsdf_pdf(s, wi);
-    if (d.bsdf_fraction < 1.0) p += (1.0 - d.bsdf_fraction) * INV_FOUR_PI;
+    if (d.bsdf_fraction < 1.0 && dot(wi, s.ng) > 0.0) p += (1.0 - d.bsdf_fraction) * INV_TWO_PI;
     return p;
 }
 
@@ -110,7 +128,7 @@ DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
         }
     } else {
         float unused_pdf;
-        ds.wi = guide_sample(d.leaf, u.xy, unused_pdf);
+        ds.wi = fold_above(s, guide_sample(d.leaf, u.xy, unused_pdf));
     }
     ds.pdf = direction_pdfs(s, d, ds.wi, ds.bsdf_pdf, ds.guide_pdf);
     vec3 f = surface_bsdf_eval(s, ds.wi);
