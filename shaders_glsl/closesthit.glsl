@@ -165,7 +165,7 @@ bool shadow_test(Surface s, LightSample ls, inout uint shadow_rays) {
 NeeResult nee_single(Surface s, DirectionSampler d, inout Rng rng, inout uint shadow_rays) {
     NeeResult r = nee_none();
     if (params.strategy == STRATEGY_BSDF_ONLY) return r;
-    LightSample ls = sample_light(d.lights, rng_next4(rng));
+    LightSample ls = sample_light(d.lights, rng_next4(rng), true);
     r.chosen_model = light_model_of(ls);
     if (!(ls.pdf > 0.0) || max3(ls.Le_G) <= 0.0) return r;
     float bsdf_pdf;
@@ -198,26 +198,35 @@ struct RisContext {
 };
 
 struct RisCandidate {
-    LightSample ls;
-    vec3 value;        // f·Le_G, cached by ris_target
+    LightSample ls;    // Le_G: the target's emission (see ris_target)
+    vec3 f;            // BSDF f·cos toward ls.wi, cached by ris_target
     float bsdf_pdf;    // the BSDF's density of ls.wi, cached by ris_target
     bool from_direction;
 };
 
 RisCandidate ris_draw(RisContext ctx, inout Rng rng) {
     RisCandidate c;
-    c.ls = sample_light(ctx.d.lights, rng_next4(rng));
-    c.value = vec3(0.0);
+    c.ls = sample_light(ctx.d.lights, rng_next4(rng), false);
+    c.f = vec3(0.0);
     c.bsdf_pdf = 0.0;
     c.from_direction = false;
     return c;
 }
 
-// p̂ = luminance(f·Le·G). The BSDF's wo terms come from the vertex (ctx.d.bsdf), so a
-// candidate costs only its own direction's part; its pdf is kept for ris_denominator.
+// The target p̂ = luminance(f·Le·G), where Le is the emitted radiance, except on textured
+// emitters: there Le is the material's emission times the texture's mean luminance over
+// the triangle (LightCandidateTriangle.emission), so that no candidate samples a texture.
+// RIS is unbiased for any target that is positive wherever the integrand is (here: the
+// emission factor is positive wherever the textured emission is) as long as the
+// resampling weights and W use the same p̂ — both come from this function, for the light
+// candidates and the direction candidate alike — and the kept candidate's contribution
+// uses its true emission (nee_ris, light_sample_complete). For untextured emitters Le is
+// exact. The BSDF's wo terms come from the vertex (ctx.d.bsdf), so a candidate costs only
+// its own direction's part; f and its pdf are kept for the contribution and
+// ris_denominator.
 float ris_target(RisContext ctx, inout RisCandidate c) {
-    c.value = surface_bsdf_eval_pdf(ctx.s, ctx.d.bsdf, c.ls.wi, c.bsdf_pdf) * c.ls.Le_G;
-    return luminance(c.value);
+    c.f = surface_bsdf_eval_pdf(ctx.s, ctx.d.bsdf, c.ls.wi, c.bsdf_pdf);
+    return luminance(c.f * c.ls.Le_G);
 }
 
 // Source densities of all candidate slots at c, in the candidate's measure: area for
@@ -257,13 +266,16 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
         extra.ls.wi = ds.wi;
         extra.ls.dist = next_t;
         extra.ls.cos_y = abs(dot(next.ng, ds.wi));
-        extra.ls.Le_G = next.emission * extra.ls.cos_y / max(next_t * next_t, 1e-20);
+        // The target's emission, as sample_light(…, false) gives it for this point.
+        extra.ls.Le_G = light_candidates[next.light_tri].emission * extra.ls.cos_y / max(next_t * next_t, 1e-20);
         extra.ls.pdf = light_source_pdf(d.lights, next.light_tri);
         extra.ls.area = true;
         extra.ls.tri = next.light_tri;
         extra.ls.p = next.p;
         extra.ls.n = next.ng;  // on the side of this vertex, as sample_light's
-        extra.value = vec3(0.0);
+        extra.ls.bary = vec2(0.0);
+        extra.ls.textured = false;
+        extra.f = vec3(0.0);
         extra.bsdf_pdf = 0.0;
         extra.from_direction = true;
     }
@@ -275,14 +287,18 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
     r.ris_weight = res.W;
     // The extra candidate's visibility is known: its ray hit it.
     bool vis = res.extra_chosen || shadow_test(s, res.y.ls, shadow_rays);
-    TRACE6("  ris chosen model %u tri %u p_hat=%f W=%f visible=%u value=%v3f\n", r.chosen_model, res.y.ls.tri, res.p_hat,
-           res.W, uint(vis), res.y.value);
+    // The kept candidate's true emission (the target's differs on textured emitters).
+    LightSample y = res.y.ls;
+    if (res.extra_chosen) y.Le_G = next.emission * y.cos_y / max(next_t * next_t, 1e-20);
+    else light_sample_complete(y);
+    TRACE6("  ris chosen model %u tri %u p_hat=%f W=%f visible=%u Le_G=%v3f\n", r.chosen_model, y.tri, res.p_hat, res.W,
+           uint(vis), y.Le_G);
     if (!vis) return r;
     r.connected = true;
-    r.contribution = res.y.value * res.W;
-    if (res.y.ls.area) {
-        vec3 Li_over_pdf = res.y.ls.Le_G * res.W;
-        r.record_dir = res.y.ls.wi;
+    r.contribution = res.y.f * y.Le_G * res.W;
+    if (y.area) {
+        vec3 Li_over_pdf = y.Le_G * res.W;
+        r.record_dir = y.wi;
         r.record_value = (Li_over_pdf.x + Li_over_pdf.y + Li_over_pdf.z) / 3.0;
     }
     return r;
