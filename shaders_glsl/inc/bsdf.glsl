@@ -103,10 +103,10 @@ float bsdf_pdf(BsdfParams p, vec3 wo, vec3 wi) {
 // Visible GGX normal for wo (Dupuy & Benyoub 2023).
 vec3 ggx_sample_visible_normal(vec3 wo, float a, vec2 u) {
     vec3 v = normalize(vec3(wo.xy * a, wo.z));
-    float phi = TWO_PI * u.x;
+    vec2 cs = cos_sin_turn(u.x);  // of φ = 2π·u.x
     float z = (1.0 - u.y) * (1.0 + v.z) - v.z;
     float s = sqrt(clamp(1.0 - z * z, 0.0, 1.0));
-    vec3 h = vec3(s * cos(phi), s * sin(phi), z) + v;
+    vec3 h = vec3(s * cs.x, s * cs.y, z) + v;
     return normalize(vec3(h.xy * a, max(h.z, 0.0)));
 }
 
