@@ -32,6 +32,7 @@
 // ---- direction sampling: BSDF / guiding mixture -----------------------------------------
 
 struct DirectionSampler {
+    BsdfWo bsdf;           // the BSDF's terms that depend on wo alone
     float bsdf_fraction;   // probability of sampling the BSDF (1: no guiding here)
     uint leaf;             // SD-tree leaf of the vertex
     LightContext lights;   // light selection at the vertex (NEE, RIS, MIS weights)
@@ -49,12 +50,12 @@ struct DirectionSample {
 
 DirectionSampler direction_sampler(Surface s) {
     DirectionSampler d;
+    d.bsdf = surface_bsdf_at(s);
     d.bsdf_fraction = 1.0;
     d.leaf = INVALID_INDEX;
     if (GUIDING) {
         // Nearly specular lobes are not guided: the BSDF already samples them well.
-        bool nearly_specular = s.bsdf.alpha < GUIDING_MIN_ALPHA
-            && bsdf_specular_probability(s.bsdf, surface_to_local(s, s.wo)) >= 0.9;
+        bool nearly_specular = s.bsdf.alpha < GUIDING_MIN_ALPHA && d.bsdf.spec_prob >= 0.9;
         if (!nearly_specular) {
             d.leaf = guide_find_leaf(s.p);
             // Learned per leaf (Müller et al. 2019), or the fixed --bsdf-fraction.
@@ -84,9 +85,9 @@ float guide_pdf_folded(Surface s, uint leaf, vec3 wi) {
     return guide_pdf(leaf, wi) + guide_pdf(leaf, wi - 2.0 * c * s.ng);
 }
 
-// Mixture pdf of wi, with the BSDF's and the (folded) quadtree's pdfs it mixes.
-float direction_pdfs(Surface s, DirectionSampler d, vec3 wi, out float bsdf_pdf, out float tree_pdf) {
-    bsdf_pdf = surface_bsdf_pdf(s, wi);
+// Mixture pdf of wi given the BSDF's pdf of it, with the (folded) quadtree's pdf it
+// mixes in.
+float direction_pdf_mix(Surface s, DirectionSampler d, vec3 wi, float bsdf_pdf, out float tree_pdf) {
     tree_pdf = d.bsdf_fraction < 1.0 ? guide_pdf_folded(s, d.leaf, wi) : 0.0;
     float p = d.bsdf_fraction * bsdf_pdf;
     if (d.bsdf_fraction < 1.0) p += (1.0 - d.bsdf_fraction) * tree_pdf;
@@ -95,7 +96,8 @@ float direction_pdfs(Surface s, DirectionSampler d, vec3 wi, out float bsdf_pdf,
 
 float direction_pdf(Surface s, DirectionSampler d, vec3 wi) {
     float bsdf_pdf, tree_pdf;
-    return direction_pdfs(s, d, wi, bsdf_pdf, tree_pdf);
+    surface_bsdf_eval_pdf(s, d.bsdf, wi, bsdf_pdf);
+    return direction_pdf_mix(s, d, wi, bsdf_pdf, tree_pdf);
 }
 
 // The direction strategy's density as RIS's resampling weights see it: the BSDF part
@@ -104,8 +106,9 @@ float direction_pdf(Surface s, DirectionSampler d, vec3 wi) {
 // candidates do not each walk the leaf's quadtree. Balance-heuristic weights built from
 // any such stand-in still sum to one over the strategies, so RIS stays unbiased as long
 // as the direction candidate's weight divides by its true density (ris_denominator).
-float direction_pdf_for_ris(Surface s, DirectionSampler d, vec3 wi) {
-    float p = d.bsdf_fraction * surface_bsdf_pdf(s, wi);
+// `bsdf_pdf` is the BSDF's density of the candidate's direction `wi`.
+float direction_pdf_for_ris(Surface s, DirectionSampler d, vec3 wi, float bsdf_pdf) {
+    float p = d.bsdf_fraction * bsdf_pdf;
     if (d.bsdf_fraction < 1.0 && dot(wi, s.ng) > 0.0) p += (1.0 - d.bsdf_fraction) * INV_TWO_PI;
     return p;
 }
@@ -116,7 +119,7 @@ DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
     ds.guided = u.w >= d.bsdf_fraction;
     if (!ds.guided) {
         vec3 wi_local;
-        bool ok = bsdf_sample(s.bsdf, surface_to_local(s, s.wo), u.xyz, wi_local);
+        bool ok = bsdf_sample(s.bsdf, d.bsdf, u.xyz, wi_local);
         ds.wi = ok ? surface_to_world(s, wi_local) : s.n;
         if (!ok) {
             ds.valid = false;
@@ -130,12 +133,12 @@ DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
         float unused_pdf;
         ds.wi = fold_above(s, guide_sample(d.leaf, u.xy, unused_pdf));
     }
-    ds.pdf = direction_pdfs(s, d, ds.wi, ds.bsdf_pdf, ds.guide_pdf);
-    vec3 f = surface_bsdf_eval(s, ds.wi);
+    vec3 f = surface_bsdf_eval_pdf(s, d.bsdf, ds.wi, ds.bsdf_pdf);
+    ds.pdf = direction_pdf_mix(s, d, ds.wi, ds.bsdf_pdf, ds.guide_pdf);
     ds.valid = ds.pdf > 0.0 && max3(f) > 0.0;
     ds.weight = ds.valid ? f / ds.pdf : vec3(0.0);
     TRACE6("  direction (guided=%u) wi=%v3f pdf=%f (bsdf pdf %f, guide share %f) weight=%v3f\n", uint(ds.guided),
-           ds.wi, ds.pdf, surface_bsdf_pdf(s, ds.wi), 1.0 - d.bsdf_fraction, ds.weight);
+           ds.wi, ds.pdf, ds.bsdf_pdf, 1.0 - d.bsdf_fraction, ds.weight);
     return ds;
 }
 
@@ -181,15 +184,17 @@ bool shadow_test(Surface s, LightSample ls, inout uint shadow_rays) {
 NeeResult nee_single(Surface s, DirectionSampler d, inout Rng rng, inout uint shadow_rays) {
     NeeResult r = nee_none();
     if (params.strategy == STRATEGY_BSDF_ONLY) return r;
-    LightSample ls = sample_light(d.lights, rng_next4(rng));
+    LightSample ls = sample_light(d.lights, rng_next4(rng), true);
     r.chosen_model = light_model_of(ls);
     if (!(ls.pdf > 0.0) || max3(ls.Le_G) <= 0.0) return r;
-    vec3 f = surface_bsdf_eval(s, ls.wi);
+    float bsdf_pdf;
+    vec3 f = surface_bsdf_eval_pdf(s, d.bsdf, ls.wi, bsdf_pdf);
     if (max3(f) <= 0.0) return r;
     float w = 1.0;
     if (ls.area && params.strategy == STRATEGY_MIS) {
         float p_light = ls.pdf * ls.dist * ls.dist / max(ls.cos_y, 1e-12);
-        w = power_heuristic(p_light, direction_pdf(s, d, ls.wi));
+        float tree_pdf;
+        w = power_heuristic(p_light, direction_pdf_mix(s, d, ls.wi, bsdf_pdf, tree_pdf));
     }
     bool vis = shadow_test(s, ls, shadow_rays);
     TRACE6("  nee light model %u tri %u pdf=%f mis=%f visible=%u f=%v3f\n", r.chosen_model, ls.tri, ls.pdf, w, uint(vis), f);
@@ -212,23 +217,35 @@ struct RisContext {
 };
 
 struct RisCandidate {
-    LightSample ls;
-    vec3 value;        // f·Le_G, cached by ris_target
+    LightSample ls;    // Le_G: the target's emission (see ris_target)
+    vec3 f;            // BSDF f·cos toward ls.wi, cached by ris_target
+    float bsdf_pdf;    // the BSDF's density of ls.wi, cached by ris_target
     bool from_direction;
 };
 
 RisCandidate ris_draw(RisContext ctx, inout Rng rng) {
     RisCandidate c;
-    c.ls = sample_light(ctx.d.lights, rng_next4(rng));
-    c.value = vec3(0.0);
+    c.ls = sample_light(ctx.d.lights, rng_next4(rng), false);
+    c.f = vec3(0.0);
+    c.bsdf_pdf = 0.0;
     c.from_direction = false;
     return c;
 }
 
+// The target p̂ = luminance(f·Le·G), where Le is the emitted radiance, except on textured
+// emitters: there Le is the material's emission times the texture's mean luminance over
+// the triangle (LightCandidateTriangle.emission), so that no candidate samples a texture.
+// RIS is unbiased for any target that is positive wherever the integrand is (here: the
+// emission factor is positive wherever the textured emission is) as long as the
+// resampling weights and W use the same p̂ — both come from this function, for the light
+// candidates and the direction candidate alike — and the kept candidate's contribution
+// uses its true emission (nee_ris, light_sample_complete). For untextured emitters Le is
+// exact. The BSDF's wo terms come from the vertex (ctx.d.bsdf), so a candidate costs only
+// its own direction's part; f and its pdf are kept for the contribution and
+// ris_denominator.
 float ris_target(RisContext ctx, inout RisCandidate c) {
-    if (max3(c.ls.Le_G) <= 0.0) return 0.0;
-    c.value = surface_bsdf_eval(ctx.s, c.ls.wi) * c.ls.Le_G;
-    return luminance(c.value);
+    c.f = surface_bsdf_eval_pdf(ctx.s, ctx.d.bsdf, c.ls.wi, c.bsdf_pdf);
+    return luminance(c.f * c.ls.Le_G);
 }
 
 // Source densities of all candidate slots at c, in the candidate's measure: area for
@@ -241,10 +258,12 @@ float ris_denominator(RisContext ctx, RisCandidate c, uint M) {
     float denominator = float(M) * q_light;
     // The direction candidate only exists for area lights under MIS.
     if (c.ls.area && params.strategy == STRATEGY_MIS) {
-        float stand_in = direction_pdf_for_ris(ctx.s, ctx.d, c.ls.wi);
+        float stand_in = direction_pdf_for_ris(ctx.s, ctx.d, c.ls.wi, c.bsdf_pdf);
         denominator += stand_in * c.ls.cos_y / max(c.ls.dist * c.ls.dist, 1e-20);
-        if (c.from_direction && ctx.d.bsdf_fraction < 1.0 && stand_in > 0.0)
-            denominator *= direction_pdf(ctx.s, ctx.d, c.ls.wi) / stand_in;
+        if (c.from_direction && ctx.d.bsdf_fraction < 1.0 && stand_in > 0.0) {
+            float tree_pdf;
+            denominator *= direction_pdf_mix(ctx.s, ctx.d, c.ls.wi, c.bsdf_pdf, tree_pdf) / stand_in;
+        }
     }
     return denominator;
 }
@@ -266,13 +285,17 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
         extra.ls.wi = ds.wi;
         extra.ls.dist = next_t;
         extra.ls.cos_y = abs(dot(next.ng, ds.wi));
-        extra.ls.Le_G = next.emission * extra.ls.cos_y / max(next_t * next_t, 1e-20);
+        // The target's emission, as sample_light(…, false) gives it for this point.
+        extra.ls.Le_G = light_candidates[next.light_tri].emission * extra.ls.cos_y / max(next_t * next_t, 1e-20);
         extra.ls.pdf = light_source_pdf(d.lights, next.light_tri);
         extra.ls.area = true;
         extra.ls.tri = next.light_tri;
         extra.ls.p = next.p;
         extra.ls.n = next.ng;  // on the side of this vertex, as sample_light's
-        extra.value = vec3(0.0);
+        extra.ls.bary = vec2(0.0);
+        extra.ls.textured = false;
+        extra.f = vec3(0.0);
+        extra.bsdf_pdf = 0.0;
         extra.from_direction = true;
     }
     RisResult res = ris_resample(ctx, params.ris_candidates, rng, has_extra, extra);
@@ -283,14 +306,18 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
     r.ris_weight = res.W;
     // The extra candidate's visibility is known: its ray hit it.
     bool vis = res.extra_chosen || shadow_test(s, res.y.ls, shadow_rays);
-    TRACE6("  ris chosen model %u tri %u p_hat=%f W=%f visible=%u value=%v3f\n", r.chosen_model, res.y.ls.tri, res.p_hat,
-           res.W, uint(vis), res.y.value);
+    // The kept candidate's true emission (the target's differs on textured emitters).
+    LightSample y = res.y.ls;
+    if (res.extra_chosen) y.Le_G = next.emission * y.cos_y / max(next_t * next_t, 1e-20);
+    else light_sample_complete(y);
+    TRACE6("  ris chosen model %u tri %u p_hat=%f W=%f visible=%u Le_G=%v3f\n", r.chosen_model, y.tri, res.p_hat, res.W,
+           uint(vis), y.Le_G);
     if (!vis) return r;
     r.connected = true;
-    r.contribution = res.y.value * res.W;
-    if (res.y.ls.area) {
-        vec3 Li_over_pdf = res.y.ls.Le_G * res.W;
-        r.record_dir = res.y.ls.wi;
+    r.contribution = res.y.f * y.Le_G * res.W;
+    if (y.area) {
+        vec3 Li_over_pdf = y.Le_G * res.W;
+        r.record_dir = y.wi;
         r.record_value = (Li_over_pdf.x + Li_over_pdf.y + Li_over_pdf.z) / 3.0;
     }
     return r;

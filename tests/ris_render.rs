@@ -2,7 +2,9 @@
 
 use lanterna::render::{LightSource, Method};
 use lanterna::scene::generate::{Kind, Options};
+use lanterna::scene::TextureData;
 use lanterna::testing::{self, render_batches};
+use lanterna::vk::{SamplerDesc, TextureFormat, WrapMode};
 
 const ALPHA: f64 = 1e-3;
 
@@ -14,7 +16,16 @@ fn agree(
     spp: u64,
     tweak: impl Fn(&mut lanterna::render::RenderSettings),
 ) {
-    let t = testing::generated(kind, &options);
+    agree_on(&testing::generated(kind, &options), w, h, spp, tweak);
+}
+
+fn agree_on(
+    t: &testing::TestScene,
+    w: u32,
+    h: u32,
+    spp: u64,
+    tweak: impl Fn(&mut lanterna::render::RenderSettings),
+) {
     let mut pt = testing::settings(Method::Pt, w, h);
     pt.seed = 11;
     let mut ris = testing::settings(Method::Ris, w, h);
@@ -59,4 +70,59 @@ fn ris_with_one_candidate_equals_pt_in_expectation() {
     agree(Kind::CornellLights, Options::default(), 16, 16, 64, |s| {
         s.ris_candidates = 1
     });
+}
+
+/// RIS's target takes a textured emitter's emission as the material's times the texture's
+/// mean luminance over the triangle (no texture lookups for the 32 candidates); the kept
+/// candidate's contribution must still carry the texture's colour. The plane-quad emitter
+/// gets a checkerboard of saturated red, blue and black cells, whose mean is a grey that
+/// is far from every cell. Seen to fail with the target's emission left in the
+/// contribution (light_sample_complete and the direction candidate's true emission
+/// skipped in nee_ris).
+#[test]
+fn ris_agrees_with_pt_under_a_textured_emitter() {
+    let mut t = testing::generated(
+        Kind::PlaneQuad,
+        &Options {
+            size: Some(1.0),
+            height: Some(0.6),
+            ..Options::default()
+        },
+    );
+    let cells: [[u8; 4]; 4] = [
+        [255, 0, 0, 255],
+        [0, 0, 255, 255],
+        [0, 0, 0, 255],
+        [255, 0, 0, 255],
+    ];
+    let n = 4u32;
+    let mut rgba = Vec::new();
+    for y in 0..n {
+        for x in 0..n {
+            rgba.extend_from_slice(&cells[((x + y) % 4) as usize]);
+        }
+    }
+    let index = t.scene.textures.len() as i32;
+    t.scene.textures.push(TextureData {
+        name: "checker".into(),
+        width: n,
+        height: n,
+        rgba,
+        format: TextureFormat::Srgb,
+        sampler: SamplerDesc {
+            wrap_u: WrapMode::Repeat,
+            wrap_v: WrapMode::Repeat,
+            nearest: true,
+        },
+    });
+    let mut textured = 0;
+    for m in &mut t.scene.materials {
+        if m.emission.iter().any(|&c| c > 0.0) {
+            m.emissive_tex.index = index;
+            m.emissive_tex.uv_set = 0;
+            textured += 1;
+        }
+    }
+    assert_eq!(textured, 1, "plane-quad has one emissive material");
+    agree_on(&t, 16, 16, 64, |_| {});
 }

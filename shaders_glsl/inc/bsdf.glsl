@@ -31,9 +31,17 @@ float ggx_lambda(vec3 v, float a) {
     return 0.5 * (-1.0 + sqrt(1.0 + a * a * t2));
 }
 
+// (1 − c)⁵ of Schlick's Fresnel, by multiplication: pow() is exp2(5·log2(x)) on CPU
+// devices (lavapipe), several times the cost.
+float schlick_weight(float c) {
+    float m = 1.0 - clamp(c, 0.0, 1.0);
+    float m2 = m * m;
+    return m2 * m2 * m;
+}
+
 // Probability of sampling the specular lobe for outgoing direction wo.
 float bsdf_specular_probability(BsdfParams p, vec3 wo) {
-    float w = pow(1.0 - clamp(wo.z, 0.0, 1.0), 5.0);
+    float w = schlick_weight(wo.z);
     vec3 fd = p.f0_dielectric + (vec3(p.specular) - p.f0_dielectric) * w;
     vec3 fm = p.base_color + (1.0 - p.base_color) * w;
     float spec = (1.0 - p.metallic) * max3(fd) + p.metallic * luminance(fm);
@@ -43,48 +51,72 @@ float bsdf_specular_probability(BsdfParams p, vec3 wo) {
     return clamp(spec / (spec + diff), 0.1, 0.9);
 }
 
-// f(wo, wi)·cosθi.
-vec3 bsdf_eval(BsdfParams p, vec3 wo, vec3 wi) {
+// What eval() and pdf() need of wo alone, computed once per shading point so that each
+// further direction wi (RIS evaluates 32 light candidates per vertex) costs only its own
+// part: the half vector, D, Λ(wi) and the Fresnel weight.
+struct BsdfWo {
+    vec3 wo;            // local outgoing direction
+    float lambda_wo;    // Smith Λ(wo)
+    float spec_prob;    // bsdf_specular_probability(wo)
+};
+
+BsdfWo bsdf_at(BsdfParams p, vec3 wo) {
+    BsdfWo c;
+    c.wo = wo;
+    c.lambda_wo = ggx_lambda(wo, p.alpha);
+    c.spec_prob = bsdf_specular_probability(p, wo);
+    return c;
+}
+
+// f(wo, wi)·cosθi and, in `pdf`, the density of sampling wi (solid angle): both share
+// the half vector and D. The single definition of the BSDF: eval() and pdf() call it.
+vec3 bsdf_eval_pdf(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
+    vec3 wo = c.wo;
+    pdf = 0.0;
     if (wo.z <= 0.0 || wi.z <= 0.0) return vec3(0.0);
     vec3 h = normalize(wo + wi);
-    float w = pow(1.0 - clamp(dot(wo, h), 0.0, 1.0), 5.0);
-    float spec = ggx_d(h, p.alpha) / (1.0 + ggx_lambda(wo, p.alpha) + ggx_lambda(wi, p.alpha)) / (4.0 * wo.z * wi.z);
+    float d = ggx_d(h, p.alpha);
+    float w = schlick_weight(dot(wo, h));
+    float spec = d / (1.0 + c.lambda_wo + ggx_lambda(wi, p.alpha)) / (4.0 * wo.z * wi.z);
     vec3 fd = p.f0_dielectric + (vec3(p.specular) - p.f0_dielectric) * w;
     vec3 dielectric = p.base_color * INV_PI * (1.0 - max3(fd)) + spec * fd;
     vec3 metal = spec * (p.base_color + (1.0 - p.base_color) * w);
+    // Specular lobe: visible normals, g1·D/(4 cosθo) (reflection of the sampled normal).
+    float ps = c.spec_prob;
+    pdf = (1.0 - ps) * wi.z * INV_PI;
+    if (ps > 0.0) pdf += ps * d / ((1.0 + c.lambda_wo) * 4.0 * wo.z);
     return mix(dielectric, metal, p.metallic) * wi.z;
 }
 
-float ggx_reflection_pdf(BsdfParams p, vec3 wo, vec3 wi) {
-    vec3 h = normalize(wo + wi);
-    float g1 = 1.0 / (1.0 + ggx_lambda(wo, p.alpha));
-    return g1 * ggx_d(h, p.alpha) / (4.0 * wo.z);
+// f(wo, wi)·cosθi.
+vec3 bsdf_eval(BsdfParams p, vec3 wo, vec3 wi) {
+    float unused_pdf;
+    return bsdf_eval_pdf(p, bsdf_at(p, wo), wi, unused_pdf);
 }
 
 float bsdf_pdf(BsdfParams p, vec3 wo, vec3 wi) {
-    if (wo.z <= 0.0 || wi.z <= 0.0) return 0.0;
-    float ps = bsdf_specular_probability(p, wo);
-    float pdf = (1.0 - ps) * wi.z * INV_PI;
-    if (ps > 0.0) pdf += ps * ggx_reflection_pdf(p, wo, wi);
+    float pdf;
+    bsdf_eval_pdf(p, bsdf_at(p, wo), wi, pdf);
     return pdf;
 }
 
 // Visible GGX normal for wo (Dupuy & Benyoub 2023).
 vec3 ggx_sample_visible_normal(vec3 wo, float a, vec2 u) {
     vec3 v = normalize(vec3(wo.xy * a, wo.z));
-    float phi = TWO_PI * u.x;
+    vec2 cs = cos_sin_turn(u.x);  // of φ = 2π·u.x
     float z = (1.0 - u.y) * (1.0 + v.z) - v.z;
     float s = sqrt(clamp(1.0 - z * z, 0.0, 1.0));
-    vec3 h = vec3(s * cos(phi), s * sin(phi), z) + v;
+    vec3 h = vec3(s * cs.x, s * cs.y, z) + v;
     return normalize(vec3(h.xy * a, max(h.z, 0.0)));
 }
 
 // Sample wi; returns false when the sample is invalid (below the surface).
 // u.x chooses the lobe, u.yz warps.
-bool bsdf_sample(BsdfParams p, vec3 wo, vec3 u, out vec3 wi) {
+bool bsdf_sample(BsdfParams p, BsdfWo c, vec3 u, out vec3 wi) {
     wi = vec3(0.0);
+    vec3 wo = c.wo;
     if (wo.z <= 0.0) return false;
-    float ps = bsdf_specular_probability(p, wo);
+    float ps = c.spec_prob;
     if (u.x < ps) {
         vec3 h = ggx_sample_visible_normal(wo, p.alpha, u.yz);
         wi = reflect(-wo, h);

@@ -17,11 +17,16 @@ vec2 interpolate_uv(uvec3 v, vec3 w, uint set) {
 }
 
 // KHR_texture_transform: offset · rotation · scale applied to a UV.
+// The rotation (rare) is skipped when it is zero: sin() and cos() are costly on CPU
+// devices, and with c = 1, s = 0 the rotation is the identity anyway.
 vec2 texture_uv(TextureRef t, vec2 uv) {
-    float s = sin(t.rotation);
-    float c = cos(t.rotation);
     vec2 p = uv * t.scale;
-    return vec2(c * p.x + s * p.y, -s * p.x + c * p.y) + t.offset;
+    if (t.rotation != 0.0) {
+        float s = sin(t.rotation);
+        float c = cos(t.rotation);
+        p = vec2(c * p.x + s * p.y, -s * p.x + c * p.y);
+    }
+    return p + t.offset;
 }
 
 vec4 sample_texture(TextureRef t, vec2 uv) {

@@ -27,6 +27,9 @@ struct LightSample {
     vec3 p;         // the light point (area and positional lights)
     vec3 n;         // geometric normal at the light point, on the side facing x (area
                     // lights; shadow rays start their far end off the light along it)
+    vec2 bary;      // barycentrics of the point on triangle `tri` (of its corners 1, 2)
+    bool textured;  // Le_G holds the untextured stand-in of a textured emitter
+                    // (sample_light without exact emission; light_sample_complete)
 };
 
 uint alias_sample(uint begin, uint count, float u, bool models) {
@@ -89,8 +92,8 @@ float triangle_pmf(uint tri, LightModel m) {
 // Source density (per unit area) of a point on light triangle `tri`, seen from ctx.p.
 float light_source_pdf(LightContext ctx, uint tri) {
     if (tri == INVALID_INDEX) return 0.0;
-    LightTriangle lt = light_triangles[tri];
-    return model_pmf(ctx, lt.model) * triangle_pmf(tri, light_models[lt.model]) / lt.area;
+    uint model = light_triangles[tri].model;
+    return model_pmf(ctx, model) * triangle_pmf(tri, light_models[model]) * light_candidates[tri].inv_area;
 }
 
 // Radiance leaving light triangle `lt` at barycentrics (b1, b2) in direction `dir`.
@@ -112,6 +115,8 @@ LightSample sample_punctual(uint index, vec3 x) {
     s.tri = INVALID_INDEX;
     s.cos_y = 1.0;
     s.n = vec3(0.0);
+    s.bary = vec2(0.0);
+    s.textured = false;
     if (l.kind == PUNCTUAL_DIRECTIONAL) {
         s.wi = -l.direction;
         s.dist = FLT_MAX;
@@ -134,8 +139,12 @@ LightSample sample_punctual(uint index, vec3 x) {
     return s;
 }
 
-// Draw a light point for shading point ctx.p with four uniform numbers.
-LightSample sample_light(LightContext ctx, vec4 u) {
+// Draw a light point for shading point ctx.p with four uniform numbers. A point on an
+// emissive triangle reads the triangle's compact record alone (LightCandidateTriangle).
+// With `exact_emission` false the emission of a textured emitter is left at the record's
+// untextured stand-in and `textured` is set (RIS evaluates its 32 candidates that way and
+// the texture for the one it keeps: light_sample_complete); with it true, Le_G is exact.
+LightSample sample_light(LightContext ctx, vec4 u, const bool exact_emission) {
     vec3 x = ctx.p;
     uint count = params.light_model_count;
     float um = u.x;
@@ -163,23 +172,45 @@ LightSample sample_light(LightContext ctx, vec4 u) {
     uint local = params.ris_source == RIS_SOURCE_POWER ? alias_sample(m.first_triangle, m.triangle_count, u.y, false)
                                                        : min(uint(u.y * float(m.triangle_count)), m.triangle_count - 1u);
     uint tri = m.first_triangle + local;
-    LightTriangle lt = light_triangles[tri];
+    LightCandidateTriangle lt = light_candidates[tri];
     vec2 b = square_to_triangle(u.zw);
-    vec3 p = (1.0 - b.x - b.y) * lt.p0 + b.x * lt.p1 + b.y * lt.p2;
+    vec3 p = lt.p0 + b.x * lt.e1 + b.y * lt.e2;
+    // |e1 × e2| = 2·area.
+    vec3 normal = cross(lt.e1, lt.e2) * (0.5 * lt.inv_area);
+    if ((lt.flags & LIGHT_CANDIDATE_FLIPPED) != 0u) normal = -normal;
     LightSample s;
     s.area = true;
     s.tri = tri;
     s.p = p;
+    s.bary = b;
     vec3 d = p - x;
     float d2 = dot(d, d);
     s.dist = sqrt(d2);
     s.wi = d / max(s.dist, 1e-20);
-    float cos_signed = dot(lt.normal, s.wi);
+    float cos_signed = dot(normal, s.wi);
     s.cos_y = abs(cos_signed);
-    s.n = cos_signed > 0.0 ? -lt.normal : lt.normal;
-    s.Le_G = d2 > 0.0 ? light_triangle_radiance(lt, b, -s.wi) * s.cos_y / d2 : vec3(0.0);
-    s.pdf = pm * triangle_pmf(tri, m) / lt.area;
+    s.n = cos_signed > 0.0 ? -normal : normal;
+    // One-sided emitters emit on the front face only (toward x: cos_signed < 0).
+    bool emits = (lt.flags & LIGHT_CANDIDATE_TWO_SIDED) != 0u || cos_signed < 0.0;
+    vec3 Le = emits ? lt.emission : vec3(0.0);
+    s.textured = (lt.flags & LIGHT_CANDIDATE_TEXTURED) != 0u;
+    if (exact_emission && s.textured && emits) {
+        Le = light_triangle_radiance(light_triangles[tri], b, -s.wi);
+        s.textured = false;
+    }
+    s.Le_G = d2 > 0.0 ? Le * s.cos_y / d2 : vec3(0.0);
+    s.pdf = pm * triangle_pmf(tri, m) * lt.inv_area;
     return s;
+}
+
+// Replace the stand-in emission of a textured emitter's sample (sample_light without
+// exact emission) by the radiance the texture gives at its point.
+void light_sample_complete(inout LightSample s) {
+    if (!s.textured) return;
+    s.textured = false;
+    if (max3(s.Le_G) <= 0.0) return;
+    vec3 Le = light_triangle_radiance(light_triangles[s.tri], s.bary, -s.wi);
+    s.Le_G = Le * s.cos_y / max(s.dist * s.dist, 1e-20);
 }
 
 #endif

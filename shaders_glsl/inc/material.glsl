@@ -138,15 +138,26 @@ Surface make_surface(Hit h, vec3 ray_dir) {
 vec3 surface_to_local(Surface s, vec3 v) { return to_local(v, s.t, s.b, s.n); }
 vec3 surface_to_world(Surface s, vec3 v) { return to_world(v, s.t, s.b, s.n); }
 
-// f·cos for world directions, zero when wi is below the geometric surface.
-vec3 surface_bsdf_eval(Surface s, vec3 wi) {
+// What the BSDF needs of the surface's wo, once per shading point (see BsdfWo).
+BsdfWo surface_bsdf_at(Surface s) { return bsdf_at(s.bsdf, surface_to_local(s, s.wo)); }
+
+// f·cos for world directions and the BSDF's sampling density of wi, zero when wi is
+// below the geometric surface. `c` is surface_bsdf_at(s).
+vec3 surface_bsdf_eval_pdf(Surface s, BsdfWo c, vec3 wi, out float pdf) {
+    pdf = 0.0;
     if (dot(wi, s.ng) <= 0.0) return vec3(0.0);
-    return bsdf_eval(s.bsdf, surface_to_local(s, s.wo), surface_to_local(s, wi));
+    return bsdf_eval_pdf(s.bsdf, c, surface_to_local(s, wi), pdf);
+}
+
+vec3 surface_bsdf_eval(Surface s, vec3 wi) {
+    float unused_pdf;
+    return surface_bsdf_eval_pdf(s, surface_bsdf_at(s), wi, unused_pdf);
 }
 
 float surface_bsdf_pdf(Surface s, vec3 wi) {
-    if (dot(wi, s.ng) <= 0.0) return 0.0;
-    return bsdf_pdf(s.bsdf, surface_to_local(s, s.wo), surface_to_local(s, wi));
+    float pdf;
+    surface_bsdf_eval_pdf(s, surface_bsdf_at(s), wi, pdf);
+    return pdf;
 }
 
 #endif

@@ -10,6 +10,8 @@
 //   float ris_denominator(RisContext ctx, RisCandidate c, uint M);
 //        Σ over candidate slots of their source densities at c: M·q(c) for M light
 //        candidates, plus q_extra(c) when an extra candidate takes part.
+// ris_target is called on a candidate before ris_denominator, which may use what the
+// former cached in it.
 // A candidate's resampling weight is w = p̂ / denominator; the selected y gets the
 // contribution weight W = Σw / p̂(y), so f(y)·W is an unbiased estimate of ∫f. With no
 // extra candidate this is the paper's w = p̂/q and W = (Σw/M)/p̂(y).

@@ -21,6 +21,7 @@ layout(set = 0, binding = BINDING_INSTANCES, scalar) readonly buffer InstanceBuf
 layout(set = 0, binding = BINDING_MATERIALS, scalar) readonly buffer MaterialBuffer { Material materials[]; };
 layout(set = 0, binding = BINDING_TEXTURES) uniform sampler2D textures[];
 layout(set = 0, binding = BINDING_LIGHT_TRIANGLES, scalar) readonly buffer LightTriangleBuffer { LightTriangle light_triangles[]; };
+layout(set = 0, binding = BINDING_LIGHT_CANDIDATES, scalar) readonly buffer LightCandidateBuffer { LightCandidateTriangle light_candidates[]; };
 layout(set = 0, binding = BINDING_LIGHT_MODELS, scalar) readonly buffer LightModelBuffer { LightModel light_models[]; };
 layout(set = 0, binding = BINDING_MODEL_ALIAS, scalar) readonly buffer ModelAliasBuffer { AliasEntry model_alias[]; };
 layout(set = 0, binding = BINDING_TRIANGLE_ALIAS, scalar) readonly buffer TriangleAliasBuffer { AliasEntry triangle_alias[]; };

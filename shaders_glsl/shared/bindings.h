@@ -34,7 +34,9 @@
 // The trace kernel's rays and hits (tests/trace.comp).
 #define BINDING_TRACE_RAYS 26
 #define BINDING_TRACE_HITS 27
-#define BINDING_COUNT 28
+// Compact light-triangle records for light sampling (LightCandidateTriangle).
+#define BINDING_LIGHT_CANDIDATES 28
+#define BINDING_COUNT 29
 
 // Upper bound on bindless textures in one scene.
 #define MAX_TEXTURES 8192

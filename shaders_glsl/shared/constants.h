@@ -16,6 +16,11 @@
 // Material flags.
 #define MATERIAL_FLAG_DOUBLE_SIDED 1u
 
+// LightCandidateTriangle flags.
+#define LIGHT_CANDIDATE_TWO_SIDED 1u
+#define LIGHT_CANDIDATE_TEXTURED 2u
+#define LIGHT_CANDIDATE_FLIPPED 4u
+
 // Camera projections.
 #define CAMERA_PERSPECTIVE 0u
 #define CAMERA_ORTHOGRAPHIC 1u

@@ -74,6 +74,22 @@ struct LightTriangle {
     float power;       // emitted flux (luminance), for the power source
 };
 
+// What drawing a point on an emissive triangle reads (light sampling for NEE and every
+// RIS candidate): one 56-byte record instead of LightTriangle's corners and normal plus
+// the material's emission behind a second, dependent load. Same index as
+// light_triangles. The emission of a textured emitter needs the full LightTriangle and a
+// texture lookup; RIS does that for the candidate it keeps only (see nee_ris).
+struct LightCandidateTriangle {
+    vec3 p0;
+    float inv_area;    // 1 / area
+    vec3 e1;           // p1 − p0
+    uint flags;        // LIGHT_CANDIDATE_*; the front-face normal is cross(e1, e2)
+                       // normalised, negated with LIGHT_CANDIDATE_FLIPPED
+    vec3 e2;           // p2 − p0
+    vec3 emission;     // the material's emission; for a textured one, times the texture's
+                       // mean luminance over the triangle (RIS's target uses it)
+};
+
 // A light model: one emissive mesh instance, or one punctual light.
 struct LightModel {
     uint first_triangle;   // into the light triangle buffer

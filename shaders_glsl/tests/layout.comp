@@ -21,11 +21,13 @@ layout(set = 0, binding = 12, scalar) buffer B12 { GuideHeader guide_header; Gui
 layout(set = 0, binding = 13, scalar) buffer B13 { GuideTestSample guide_test_samples[]; };
 layout(set = 0, binding = 14, scalar) buffer B14 { GuideTestResult guide_test_results[]; };
 layout(set = 0, binding = 15, scalar) buffer B15 { GuideTestRecord guide_test_records[]; };
+layout(set = 0, binding = 16, scalar) buffer B16 { LightCandidateTriangle light_candidates[]; };
 layout(push_constant, scalar) uniform Push { PushConstants pc; };
 layout(set = 0, binding = 11, scalar) buffer Out { float result[]; };
 void main() {
     result[0] = vertices[0].uv1.y + float(instances[0].flags) + materials[0].emissive_tex.rotation
-        + light_triangles[0].power + light_models[0].power + alias[0].pmf + punctual[0].cos_outer
+        + light_triangles[0].power + light_candidates[0].emission.z + light_models[0].power + alias[0].pmf
+        + punctual[0].cos_outer
         + params.scene_radius + float(spatial[0].child) + leaves[0].box_size.z + quads[0].sum.w
         + float(pc.sample_count) + guide_header.bsdf_fraction + guide_records[0].weight
         + float(guide_test_samples[0].mode) + guide_test_results[0].pdf_eval

@@ -19,6 +19,8 @@ use glam::Vec3;
 #[derive(Debug)]
 pub struct LightTable {
     pub triangles: Vec<gpu::LightTriangle>,
+    /// The compact records light sampling reads, one per entry of `triangles`.
+    pub candidates: Vec<gpu::LightCandidateTriangle>,
     pub models: Vec<gpu::LightModel>,
     /// Alias table over models by power.
     pub model_alias: Vec<gpu::AliasEntry>,
@@ -50,6 +52,7 @@ pub fn transform_uv(t: &gpu::TextureRef, uv: [f32; 2]) -> [f32; 2] {
 impl LightTable {
     pub fn build(scene: &Scene) -> Result<LightTable, SceneError> {
         let mut triangles = Vec::new();
+        let mut candidates = Vec::new();
         let mut models = Vec::new();
         let mut triangle_light_index = Vec::new();
         let mut instance_lights = Vec::with_capacity(scene.instances.len());
@@ -113,6 +116,27 @@ impl LightTable {
                     normal = -normal;
                 }
                 triangle_light_index.push(triangles.len() as u32);
+                let flags = if two_sided {
+                    gpu::LIGHT_CANDIDATE_TWO_SIDED
+                } else {
+                    0
+                } | if texture.is_some() {
+                    gpu::LIGHT_CANDIDATE_TEXTURED
+                } else {
+                    0
+                } | if flipped {
+                    gpu::LIGHT_CANDIDATE_FLIPPED
+                } else {
+                    0
+                };
+                candidates.push(gpu::LightCandidateTriangle {
+                    p0: p0.into(),
+                    inv_area: 1.0 / area,
+                    e1: (p1 - p0).into(),
+                    flags,
+                    e2: (p2 - p0).into(),
+                    emission: factor.map(|c| c * mean_texture),
+                });
                 triangles.push(gpu::LightTriangle {
                     p0: p0.into(),
                     p1: p1.into(),
@@ -198,6 +222,7 @@ impl LightTable {
         let total_power = model_weights.iter().sum();
         Ok(LightTable {
             triangles,
+            candidates,
             models,
             model_alias,
             triangle_alias,

@@ -24,6 +24,7 @@ pub struct GpuScene {
     pub instances: Buffer,
     pub materials: Buffer,
     pub light_triangles: Buffer,
+    pub light_candidates: Buffer,
     pub light_models: Buffer,
     pub model_alias: Buffer,
     pub triangle_alias: Buffer,
@@ -119,6 +120,12 @@ impl GpuScene {
         let materials = Buffer::from_slice(device, &scene.materials, STORAGE, "materials")?;
         let light_triangles =
             Buffer::from_slice(device, &lights.triangles, STORAGE, "light triangles")?;
+        let light_candidates = Buffer::from_slice(
+            device,
+            &lights.candidates,
+            STORAGE,
+            "light candidate triangles",
+        )?;
         let light_models = Buffer::from_slice(device, &lights.models, STORAGE, "light models")?;
         let model_alias = Buffer::from_slice(
             device,
@@ -199,6 +206,7 @@ impl GpuScene {
             &instances,
             &materials,
             &light_triangles,
+            &light_candidates,
             &light_models,
             &model_alias,
             &triangle_alias,
@@ -233,6 +241,7 @@ impl GpuScene {
             instances,
             materials,
             light_triangles,
+            light_candidates,
             light_models,
             model_alias,
             triangle_alias,

@@ -38,6 +38,7 @@ impl Renderer {
             (gpu::BINDING_INSTANCES, &g.instances),
             (gpu::BINDING_MATERIALS, &g.materials),
             (gpu::BINDING_LIGHT_TRIANGLES, &g.light_triangles),
+            (gpu::BINDING_LIGHT_CANDIDATES, &g.light_candidates),
             (gpu::BINDING_LIGHT_MODELS, &g.light_models),
             (gpu::BINDING_MODEL_ALIAS, &g.model_alias),
             (gpu::BINDING_TRIANGLE_ALIAS, &g.triangle_alias),

@@ -48,7 +48,9 @@ impl SceneStats {
             )
             + size(
                 lights.triangles.len(),
-                std::mem::size_of::<crate::gpu::LightTriangle>() + 12,
+                std::mem::size_of::<crate::gpu::LightTriangle>()
+                    + std::mem::size_of::<crate::gpu::LightCandidateTriangle>()
+                    + 12,
             )
             + size(lights.triangle_light_index.len(), 4);
         let textures: u64 = scene.textures.iter().map(|t| t.rgba.len() as u64).sum();
