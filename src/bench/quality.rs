@@ -26,8 +26,7 @@ pub struct QualityRecord {
     /// `spp` or `time`.
     pub budget_kind: String,
     pub budget: f64,
-    /// spp of the image (guided methods: the render phase and the training passes their
-    /// output keeps).
+    /// spp rendered within the budget (guided methods: training included).
     pub spp: Spread,
     pub render_seconds: Spread,
     pub mae: Spread,
@@ -77,10 +76,11 @@ impl MethodRunner for Runner<'_> {
             Budget::Seconds(s) => run::Budget::Seconds(s),
         };
         let out = self.session.run(budget, 0, true)?;
+        let spp = out.total_spp();
         let film = out.image.expect("kept");
         let image = film_image(&film, method, self.seed, self.max_depth, out.seconds)?;
         Ok(MethodResult {
-            spp: film.spp,
+            spp,
             render_seconds: out.seconds,
             setup_seconds: self.session.setup_seconds,
             gpu_seconds: Some(out.stats.gpu_seconds),

@@ -19,7 +19,9 @@ pub const METHODS: [&str; 4] = ["pt", "ris", "guided", "guided-ris"];
 /// What a runner returns for one render.
 #[derive(Clone, Debug)]
 pub struct MethodResult {
-    /// Samples per pixel in `image` (for time budgets, how many the time allowed).
+    /// Samples per pixel the method rendered within the budget (for time budgets, how
+    /// many the time allowed); guided methods count their training passes, of which
+    /// the image may keep only some (`GuidedOutput`).
     pub spp: u64,
     /// Wall-clock seconds of rendering only, including guided training passes.
     pub render_seconds: f64,

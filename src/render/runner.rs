@@ -59,7 +59,7 @@ impl MethodRunner for CompareRunner<'_> {
             out.seconds
         );
         Ok(MethodResult {
-            spp: out.film.spp,
+            spp: out.stats.samples,
             render_seconds: out.seconds,
             setup_seconds: self.setup_seconds,
             gpu_seconds: Some(out.stats.gpu_seconds),
