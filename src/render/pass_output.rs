@@ -74,24 +74,22 @@ impl KeptPasses {
         if self.output != GuidedOutput::LatePasses {
             return last;
         }
-        let mut out = last;
-        for f in &self.films {
-            // Passes are contiguous: together they are one range of sample indices.
-            debug_assert!(f.sample_offset + f.spp <= out.sample_offset || out.spp == 0);
+        // The kept passes and `last` are contiguous: one range of sample indices.
+        self.films.iter().fold(last, |mut out, f| {
             out.merge(f);
-        }
-        out
+            out
+        })
     }
 
     /// `LatePasses`: the kept training films merged (after an interruption in training,
     /// when there is no render phase); None for the other outputs or before any pass.
     pub fn merged_so_far(&self) -> Option<Film> {
         let mut films = self.films.iter().rev();
-        let mut out = films.next()?.clone();
-        for f in films {
+        let last = films.next()?.clone();
+        Some(films.fold(last, |mut out, f| {
             out.merge(f);
-        }
-        Some(out)
+            out
+        }))
     }
 
     /// `InverseVariance`: the combination with the render phase `last` (rendered with
@@ -103,12 +101,8 @@ impl KeptPasses {
         let var = half
             .and_then(|h| split_variance(h, last))
             .unwrap_or(f64::INFINITY);
-        let mut passes: Vec<(&[f32], f64)> = self
-            .estimates
-            .iter()
-            .map(|(img, v)| (img.as_slice(), *v))
-            .collect();
         let mean = last.mean();
+        let mut passes = self.estimate_refs();
         passes.push((&mean, var));
         Some(combine_inverse_variance(&passes))
     }
@@ -118,12 +112,15 @@ impl KeptPasses {
         if self.output != GuidedOutput::InverseVariance || self.estimates.is_empty() {
             return None;
         }
-        let passes: Vec<(&[f32], f64)> = self
-            .estimates
+        Some(combine_inverse_variance(&self.estimate_refs()))
+    }
+
+    /// The training passes' (image, variance) estimates, borrowed.
+    fn estimate_refs(&self) -> Vec<(&[f32], f64)> {
+        self.estimates
             .iter()
             .map(|(img, v)| (img.as_slice(), *v))
-            .collect();
-        Some(combine_inverse_variance(&passes))
+            .collect()
     }
 }
 
