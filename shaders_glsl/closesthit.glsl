@@ -149,6 +149,7 @@ struct NeeResult {
     vec3 contribution;   // radiance toward wo (not multiplied by the path throughput)
     vec3 record_dir;     // direction of the light sample
     float record_value;  // mean-RGB incident radiance / pdf along record_dir (0: none)
+    float record_pdf;    // solid-angle pdf of record_dir, as the record's value divides by
     uint chosen_model;   // light model NEE picked (AOV), INVALID_INDEX if none
     bool connected;      // the shadow ray found the light visible
     float ris_weight;    // RIS contribution weight W (0 without RIS)
@@ -159,6 +160,7 @@ NeeResult nee_none() {
     r.contribution = vec3(0.0);
     r.record_dir = vec3(0.0);
     r.record_value = 0.0;
+    r.record_pdf = 0.0;
     r.chosen_model = INVALID_INDEX;
     r.connected = false;
     r.ris_weight = 0.0;
@@ -206,6 +208,7 @@ NeeResult nee_single(Surface s, DirectionSampler d, inout Rng rng, inout uint sh
     if (ls.area) {
         r.record_dir = ls.wi;
         r.record_value = (Li_over_pdf.x + Li_over_pdf.y + Li_over_pdf.z) / 3.0;
+        r.record_pdf = ls.pdf * ls.dist * ls.dist / max(ls.cos_y, 1e-12);
     }
     return r;
 }
@@ -319,6 +322,8 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
         vec3 Li_over_pdf = y.Le_G * res.W;
         r.record_dir = y.wi;
         r.record_value = (Li_over_pdf.x + Li_over_pdf.y + Li_over_pdf.z) / 3.0;
+        // W stands for 1/pdf in area measure.
+        r.record_pdf = y.dist * y.dist / max(y.cos_y * res.W, 1e-20);
     }
     return r;
 }

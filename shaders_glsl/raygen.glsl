@@ -41,6 +41,7 @@ struct VertexRecord {
     float guide_pdf;
     vec3 nee_dir;
     float nee_value;  // NEE record value (0: none)
+    float nee_pdf;    // solid-angle pdf of nee_dir (for second-moment records)
     uint nee_model;   // light model NEE picked, for learned light selection
     float nee_lum;    // luminance of the NEE contribution
 };
@@ -68,6 +69,7 @@ void record_path(VertexRecord rec[GUIDE_MAX_RECORDED_VERTICES], uint count, inou
     // emission (what the direction sample contributes to the image).
     uint target = guide_header.flags & (GUIDE_FLAG_TARGET_INDIRECT | GUIDE_FLAG_TARGET_CONTRIBUTION);
     bool learn_selection = (guide_header.flags & GUIDE_FLAG_LEARN_SELECTION) != 0u;
+    bool second_moment = (guide_header.flags & GUIDE_FLAG_SECOND_MOMENT) != 0u;
     vec3 l_rec = vec3(0.0);
     vec3 l_act = vec3(0.0);
     for (int k = int(count) - 1; k >= 0; --k) {
@@ -88,6 +90,8 @@ void record_path(VertexRecord rec[GUIDE_MAX_RECORDED_VERTICES], uint count, inou
         dir_rec.pos = rec[k].p;
         dir_rec.dir = rec[k].wi;
         dir_rec.value = rec[k].pdf > 0.0 ? max(l.x + l.y + l.z, 0.0) / (3.0 * rec[k].pdf) : 0.0;
+        // Second moment: (L/p)²·p = L²/p, an estimate of ∫ L² over the cell.
+        if (second_moment) dir_rec.value *= dir_rec.value * rec[k].pdf;
         dir_rec.weight = 1.0;
         guide_record(dir_rec, vec3(rng_next2(rng), rng_next(rng)));
         if (target == 0u && (guide_header.flags & GUIDE_FLAG_RECORD_NEE) != 0u && rec[k].nee_value > 0.0) {
@@ -95,6 +99,7 @@ void record_path(VertexRecord rec[GUIDE_MAX_RECORDED_VERTICES], uint count, inou
             nee_rec.pos = rec[k].p;
             nee_rec.dir = rec[k].nee_dir;
             nee_rec.value = rec[k].nee_value;
+            if (second_moment) nee_rec.value *= nee_rec.value * rec[k].nee_pdf;
             nee_rec.weight = 0.0;
             guide_record(nee_rec, vec3(rng_next2(rng), rng_next(rng)));
         }
@@ -212,6 +217,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
             r.guide_pdf = ds.guide_pdf;
             r.nee_dir = nee.record_dir;
             r.nee_value = nee.record_value;
+            r.nee_pdf = nee.record_pdf;
             r.nee_model = nee.connected ? nee.chosen_model : INVALID_INDEX;
             r.nee_lum = luminance(nee.contribution);
             rec[recorded++] = r;

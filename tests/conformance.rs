@@ -39,7 +39,7 @@
 //! - `sconces_far_from_origin`: no rebasing of the scene toward the origin (256-ulp ray
 //!   offsets are 0.24 m at 10⁴): block (8, 8) 0.147 vs 0.368, p = 7e-32.
 
-use lanterna::guiding::GuideTarget;
+use lanterna::guiding::{GuideDensity, GuideTarget};
 use lanterna::lights::LightTable;
 use lanterna::render::{Method, RenderSettings, Strategy};
 use lanterna::scene::export_mitsuba::{self, ExportOptions};
@@ -67,6 +67,7 @@ struct Config {
     /// fixed (`--bsdf-fraction x`).
     bsdf_fraction: Option<f32>,
     target: GuideTarget,
+    density: GuideDensity,
 }
 
 const fn config(name: &'static str, method: Method, strategy: Strategy) -> Config {
@@ -77,6 +78,7 @@ const fn config(name: &'static str, method: Method, strategy: Strategy) -> Confi
         learn_lights: false,
         bsdf_fraction: None,
         target: GuideTarget::All,
+        density: GuideDensity::Radiance,
     }
 }
 
@@ -111,6 +113,17 @@ const GUIDED_CONTRIBUTION: Config = Config {
     name: "guided --guide-target contribution",
     target: GuideTarget::Contribution,
     ..GUIDED
+};
+// With the paper's target, so that NEE's second-moment records (their pdfs) are used.
+const GUIDED_VARIANCE_AWARE: Config = Config {
+    name: "guided --guide-density variance-aware --guide-target all",
+    density: GuideDensity::VarianceAware,
+    ..GUIDED
+};
+const GUIDED_RIS_VARIANCE_AWARE: Config = Config {
+    name: "guided-ris --guide-density variance-aware --guide-target all",
+    density: GuideDensity::VarianceAware,
+    ..GUIDED_RIS
 };
 
 /// The reference: block and image means with their standard errors.
@@ -267,6 +280,7 @@ fn render(ts: &TestScene, c: Config, max_depth: u32, batches: u32, spp: u64) -> 
             learn_selection: c.bsdf_fraction.is_none(),
             bsdf_fraction: c.bsdf_fraction.unwrap_or(0.5),
             target: c.target,
+            density: c.density,
             ..Default::default()
         },
         ..testing::settings(c.method, WIDTH, HEIGHT)
@@ -443,7 +457,8 @@ fn sconces_global_illumination() {
     run_suite("sconces-d4", &ts, 4, &[PT, RIS, GUIDED_RIS], 16, 128);
 }
 
-/// The guiding options (learned or fixed selection probability, what the tree learns)
+/// The guiding options (learned or fixed selection probability, what the tree learns,
+/// which statistic of it)
 /// with indirect light, where the guide samples more than direct light.
 #[test]
 fn sconces_guiding_options() {
@@ -458,6 +473,8 @@ fn sconces_guiding_options() {
             GUIDED_INDIRECT,
             GUIDED_RIS_INDIRECT,
             GUIDED_CONTRIBUTION,
+            GUIDED_VARIANCE_AWARE,
+            GUIDED_RIS_VARIANCE_AWARE,
         ],
         16,
         128,

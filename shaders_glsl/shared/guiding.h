@@ -26,6 +26,10 @@
 // reflected light, no NEE records.
 #define GUIDE_FLAG_TARGET_INDIRECT 32u
 #define GUIDE_FLAG_TARGET_CONTRIBUTION 64u
+// Variance-aware density (Rath et al. 2020): records carry the second moment of the
+// target, L²/pdf instead of L/pdf, and the refit takes the square root of each cell's
+// mean (the density then follows √E[L²] rather than E[L]).
+#define GUIDE_FLAG_SECOND_MOMENT 128u
 
 // Learned light selection: per spatial leaf, a table of GUIDE_LIGHT_SLOTS light models
 // (open addressing, GUIDE_LIGHT_PROBES probes) with the NEE contribution each delivered.

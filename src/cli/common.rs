@@ -143,6 +143,10 @@ pub struct EstimatorArgs {
     /// direction estimator carries (MIS-weighted emission plus indirect).
     #[arg(long, value_enum, default_value = "indirect")]
     pub guide_target: lanterna::guiding::GuideTarget,
+    /// Guiding: the quadtrees follow the target's mean (radiance, Müller et al.) or
+    /// the square root of its second moment (variance-aware, Rath et al. 2020).
+    #[arg(long, value_enum, default_value = "radiance")]
+    pub guide_density: lanterna::guiding::GuideDensity,
     /// Guiding: share of the budget (spp, or time with --time) spent training.
     #[arg(long, default_value_t = 0.3)]
     pub train_fraction: f32,
@@ -230,6 +234,7 @@ impl EstimatorArgs {
                 bsdf_fraction: self.bsdf_fraction.unwrap_or(0.5),
                 learn_selection: self.bsdf_fraction.is_none(),
                 target: self.guide_target,
+                density: self.guide_density,
                 train_fraction: self.train_fraction,
                 record_nee: !self.no_record_nee,
                 spatial_filter: match self.spatial_filter {

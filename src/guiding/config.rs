@@ -58,6 +58,29 @@ pub enum GuideTarget {
     Contribution,
 }
 
+/// Which statistic of the target the directional quadtrees follow (`--guide-density`).
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum GuideDensity {
+    /// The mean: density ∝ E[L] (Müller et al. 2017; the paper's).
+    #[default]
+    Radiance,
+    /// The square root of the second moment: density ∝ √E[L²] (Rath et al. 2020,
+    /// "Variance-aware path guiding"), which accounts for the noise of the estimates
+    /// that follow the sampled direction.
+    VarianceAware,
+}
+
 /// SD-tree options.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GuidingConfig {
@@ -87,6 +110,8 @@ pub struct GuidingConfig {
     pub learn_selection: bool,
     /// What the training records measure.
     pub target: GuideTarget,
+    /// Which statistic of it the quadtrees follow.
+    pub density: GuideDensity,
 }
 
 /// Default `--guiding-memory`: 256 MiB of GPU arrays is thousands of well-resolved leaves.
@@ -108,6 +133,7 @@ impl Default for GuidingConfig {
             light_mix: 0.5,
             learn_selection: false,
             target: GuideTarget::All,
+            density: GuideDensity::Radiance,
         }
     }
 }
@@ -181,6 +207,9 @@ impl GuidingConfig {
             GuideTarget::All => {}
             GuideTarget::Indirect => f |= crate::gpu::GUIDE_FLAG_TARGET_INDIRECT,
             GuideTarget::Contribution => f |= crate::gpu::GUIDE_FLAG_TARGET_CONTRIBUTION,
+        }
+        if self.density == GuideDensity::VarianceAware {
+            f |= crate::gpu::GUIDE_FLAG_SECOND_MOMENT;
         }
         if self.spatial_filter == SpatialFilter::StochasticBox {
             f |= GUIDE_FLAG_SPATIAL_JITTER;

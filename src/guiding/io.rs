@@ -286,6 +286,11 @@ fn parse(path: &Path, data: &[u8]) -> Result<(SdTree, SavedTreeInfo), GuidingErr
         } else {
             super::GuideTarget::All
         };
+        config.density = if header.flags & crate::gpu::GUIDE_FLAG_SECOND_MOMENT != 0 {
+            super::GuideDensity::VarianceAware
+        } else {
+            super::GuideDensity::Radiance
+        };
         let arrays = GuideArrays {
             header,
             spatial: r.words::<GuideSpatialNode>(counts[0])?,

@@ -18,6 +18,7 @@ mod config;
 mod flat;
 mod io;
 pub mod kernel_checks;
+mod parallel;
 mod probe;
 mod quadtree;
 mod refit;
@@ -32,7 +33,8 @@ pub use chi2::{
     chi2_survival, chi2_test, square_histogram, Chi2, GuideSample, SampleCheck, CHI2_SIGNIFICANCE,
 };
 pub use config::{
-    DirectionalFilter, GuideTarget, GuidingConfig, SpatialFilter, DEFAULT_MEMORY_CAP_BYTES,
+    DirectionalFilter, GuideDensity, GuideTarget, GuidingConfig, SpatialFilter,
+    DEFAULT_MEMORY_CAP_BYTES,
 };
 pub use flat::GuideArrays;
 pub use io::{scene_hash_number, SavedTreeInfo, SceneHasher, FORMAT_VERSION};

@@ -477,6 +477,32 @@ impl QuadTree {
         dropped
     }
 
+    /// `build` for sums of second moments (records of L²/pdf): each leaf cell's S
+    /// estimates ∫ L² over the cell, and becomes √(S·area), the integral of √E[L²] if
+    /// it is constant over the cell; interior quadrants get their subtree's total. The
+    /// density then follows √E[L²] (Rath et al. 2020) down to the tree's resolution.
+    pub(crate) fn build_second_moment(&mut self) -> u32 {
+        let dropped = self.build();
+        self.root_of_areas(0, 1);
+        dropped
+    }
+
+    /// Replace each leaf cell's sum under node `n` (at `level`; the root is 1) by
+    /// √(sum·area) and each interior quadrant's by its subtree's total; returns the total.
+    fn root_of_areas(&mut self, n: usize, level: u32) -> f64 {
+        let area = 0.25f64.powi(level as i32);
+        let mut total = 0.0;
+        for q in 0..4 {
+            let value = match self.nodes[n].child[q] {
+                0 => (f64::from(self.nodes[n].sum[q]) * area).sqrt(),
+                c => self.root_of_areas(c as usize, level + 1),
+            };
+            self.nodes[n].sum[q] = value as f32;
+            total += value;
+        }
+        total
+    }
+
     /// Settle node `n`, which also receives `inherited` spread uniformly over it; returns
     /// its total.
     fn settle(&mut self, n: usize, inherited: f64) -> f64 {
@@ -614,6 +640,35 @@ mod tests {
         }
         assert_eq!(tree.build(), 0);
         assert!((f64::from(tree.total()) - expected).abs() < 1e-4 * expected);
+    }
+
+    #[test]
+    fn second_moment_build_takes_the_root_per_cell_area() {
+        // Root split once more in quadrant 0: cells of area 1/16 there, 1/4 elsewhere.
+        let mut tree = QuadTree::from_nodes(vec![
+            QuadNode {
+                sum: [0.0; 4],
+                child: [1, 0, 0, 0],
+            },
+            QuadNode::default(),
+        ])
+        .unwrap();
+        // Constant second moment m over the square: S = m·area in every cell, so each
+        // cell becomes √m·area and the density is uniform, as √m is.
+        let m = 9.0f32;
+        tree.set_sums([[0.0, m / 4.0, m / 4.0, m / 4.0], [m / 16.0; 4]].into_iter());
+        assert_eq!(tree.build_second_moment(), 0);
+        tree.check_sums_consistent().unwrap();
+        assert!((tree.total() - 3.0).abs() < 1e-6);
+        for p in [[0.1, 0.1], [0.3, 0.2], [0.7, 0.3], [0.6, 0.9]] {
+            assert!((tree.density(p) - 1.0).abs() < 1e-5, "{p:?}");
+        }
+        // A cell with 4× the second moment gets 2× the density, not 4×.
+        let mut tree = QuadTree::from_nodes(vec![QuadNode::default()]).unwrap();
+        tree.set_sums([[4.0, 1.0, 1.0, 1.0]].into_iter());
+        tree.build_second_moment();
+        let d = |p| tree.density(p);
+        assert!((d([0.2, 0.2]) / d([0.7, 0.7]) - 2.0).abs() < 1e-5);
     }
 
     #[test]

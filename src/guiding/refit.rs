@@ -7,6 +7,7 @@
 //! go to the heaviest leaves first and stop before the GPU arrays would exceed the
 //! memory cap; the two halves share the parent's sampling tree.
 
+use super::config::GuideDensity;
 use super::flat::{LEAF_TOTAL_BYTES, QUAD_NODE_BYTES, SPATIAL_NODE_BYTES};
 use super::sdtree::{SdTree, SpatialNode};
 use std::collections::BinaryHeap;
@@ -45,10 +46,14 @@ impl SdTree {
 
         // Sampling trees := the finished iteration's statistics; training trees start
         // over with the refined topology.
-        for leaf in &mut self.leaves {
+        let density = self.config.density;
+        let per_leaf = super::parallel::map_mut(&mut self.leaves, |_, leaf| {
             let mut built = std::mem::take(&mut leaf.training);
-            stats.dropped_sums += built.build();
-            stats.recorded_weight += f64::from(leaf.training_weight);
+            let dropped = match density {
+                GuideDensity::Radiance => built.build(),
+                GuideDensity::VarianceAware => built.build_second_moment(),
+            };
+            let weight = leaf.training_weight;
             leaf.training = built.refined(rho, max_depth);
             leaf.sampling = std::sync::Arc::new(built);
             leaf.sampling_weight = leaf.training_weight;
@@ -60,6 +65,12 @@ impl SdTree {
             recorded.iter_mut().for_each(|e| e.1 /= total);
             recorded.sort_by(|a, b| b.1.total_cmp(&a.1));
             leaf.lights = std::sync::Arc::new(recorded);
+            (dropped, weight)
+        });
+        // Summed in leaf order, as one thread would.
+        for (dropped, weight) in per_leaf {
+            stats.dropped_sums += dropped;
+            stats.recorded_weight += f64::from(weight);
         }
 
         let threshold = self.config.split_threshold(next_spp);

@@ -185,19 +185,43 @@ impl super::SdTree {
     /// i.e. before `refit`) through their leaves' optimisers, in order.
     pub fn learn_selection(&mut self, records: &[GuideSelectionRecord]) -> SelectionStats {
         let mut stats = SelectionStats::default();
-        let mut per_leaf = vec![0u64; self.leaves.len()];
+        // Each leaf's records in the order the GPU appended them (a counting sort), so
+        // the leaves can learn on separate threads with the result of one.
+        let leaves = self.leaves.len();
+        let mut start = vec![0usize; leaves + 1];
         for r in records {
-            let Some(leaf) = self.leaves.get_mut(r.leaf as usize) else {
-                stats.dropped += 1;
-                continue;
-            };
-            if leaf.selection.gradient(r).is_none() {
-                stats.dropped += 1;
-                continue;
+            match r.leaf as usize {
+                l if l < leaves => start[l + 1] += 1,
+                _ => stats.dropped += 1,
             }
-            leaf.selection.append(r);
-            per_leaf[r.leaf as usize] += 1;
-            stats.records += 1;
+        }
+        for l in 0..leaves {
+            start[l + 1] += start[l];
+        }
+        let mut fill = start.clone();
+        let mut order = vec![0u32; start[leaves]];
+        for (i, r) in records.iter().enumerate() {
+            let l = r.leaf as usize;
+            if l < leaves {
+                order[fill[l]] = i as u32;
+                fill[l] += 1;
+            }
+        }
+        let learned = super::parallel::map_mut(&mut self.leaves, |l, leaf| {
+            let mut used = 0u64;
+            for &i in &order[start[l]..start[l + 1]] {
+                let r = &records[i as usize];
+                if leaf.selection.gradient(r).is_some() {
+                    leaf.selection.append(r);
+                    used += 1;
+                }
+            }
+            (used, start[l + 1] - start[l])
+        });
+        let per_leaf: Vec<u64> = learned.iter().map(|&(used, _)| used).collect();
+        for &(used, total) in &learned {
+            stats.records += used;
+            stats.dropped += total as u64 - used;
         }
         if stats.records > 0 {
             let sum: f64 = per_leaf

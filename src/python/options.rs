@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 /// The keyword options `Renderer` accepts besides its named parameters.
-pub const OPTIONS: [&str; 19] = [
+pub const OPTIONS: [&str; 20] = [
     "rr_depth",
     "source",
     "ris_candidates",
@@ -19,6 +19,7 @@ pub const OPTIONS: [&str; 19] = [
     "train_fraction",
     "record_nee",
     "guide_target",
+    "guide_density",
     "strategy",
     "hide_emitters",
     "guiding_threshold",
@@ -92,6 +93,10 @@ pub fn apply(
             "guide_target" => {
                 settings.guiding.target =
                     value_enum::<crate::guiding::GuideTarget>(&flag, &v.extract::<String>()?)?
+            }
+            "guide_density" => {
+                settings.guiding.density =
+                    value_enum::<crate::guiding::GuideDensity>(&flag, &v.extract::<String>()?)?
             }
             "train_fraction" => settings.guiding.train_fraction = v.extract()?,
             "record_nee" => settings.guiding.record_nee = v.extract()?,

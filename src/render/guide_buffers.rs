@@ -19,7 +19,7 @@ pub struct GuideBuffers {
     pub light_training: Buffer,
     pub light_slots: usize,
     /// Records of the learned selection probability (GuideSelectionHead, then records);
-    /// a head with capacity 0 unless `with_selection_records` made room.
+    /// a head with capacity 0 unless `add_selection_records` made room.
     pub selection: Buffer,
     pub selection_capacity: u32,
 }
@@ -94,12 +94,12 @@ impl GuideBuffers {
 
     /// Make room for `capacity` selection records, each guided direction sample being
     /// recorded with probability `rate` (a training pass of the learned selection).
-    pub fn with_selection_records(
-        mut self,
+    pub fn add_selection_records(
+        &mut self,
         device: &Arc<Device>,
         capacity: u32,
         rate: f32,
-    ) -> vk::Result<GuideBuffers> {
+    ) -> vk::Result<()> {
         let head = gpu::GuideSelectionHead {
             count: 0,
             capacity,
@@ -116,7 +116,7 @@ impl GuideBuffers {
         )?;
         self.selection.upload(0, bytemuck::bytes_of(&head))?;
         self.selection_capacity = capacity;
-        Ok(self)
+        Ok(())
     }
 
     /// Read the selection records a pass appended (at most the capacity).

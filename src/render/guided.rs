@@ -83,6 +83,7 @@ pub fn guiding_config(renderer: &Renderer) -> GuidingConfig {
         light_mix: g.light_mix,
         learn_selection: g.learn_selection,
         target: g.target,
+        density: g.density,
         ..GuidingConfig::default()
     }
 }
@@ -388,7 +389,11 @@ fn train_iteration(
     kept: Option<&mut KeptPasses>,
 ) -> Result<Option<IterationStats>> {
     let t = Instant::now();
-    let mut buffers = GuideBuffers::upload(&renderer.device, &tree.gpu_arrays())?;
+    // Pass k > 0 renders with what the previous pass uploaded after its refit (the same
+    // arrays, training sums zero); only the first uploads here.
+    if k == 0 {
+        renderer.set_guide_buffers(GuideBuffers::upload(&renderer.device, &tree.gpu_arrays())?);
+    }
     // As in the reference implementation, the selection probability only learns once
     // the leaves have sampling trees: against the first pass's uniform stand-in every
     // leaf would learn to prefer the BSDF.
@@ -402,9 +407,9 @@ fn train_iteration(
             * f64::from(s.max_depth.saturating_sub(1).max(1));
         let capacity = crate::guiding::SELECTION_RECORD_CAPACITY;
         let rate = (f64::from(capacity) / vertices).min(1.0) as f32;
-        buffers = buffers.with_selection_records(&renderer.device, capacity, rate)?;
+        renderer
+            .update_guide_buffers(|b, device| b.add_selection_records(device, capacity, rate))?;
     }
-    renderer.set_guide_buffers(buffers);
     let mut upload_seconds = t.elapsed().as_secs_f64();
 
     // Interrupted already: keep the film of the previous pass (clearing would lose it).

@@ -291,4 +291,13 @@ impl Renderer {
     pub fn guide_buffers(&self) -> &GuideBuffers {
         &self.guide
     }
+
+    /// Change the bound guiding buffers in place (the descriptor set is rebuilt).
+    pub fn update_guide_buffers(
+        &mut self,
+        f: impl FnOnce(&mut GuideBuffers, &Arc<Device>) -> crate::vk::Result<()>,
+    ) -> crate::vk::Result<()> {
+        self.set = None;
+        f(&mut self.guide, &self.device)
+    }
 }

@@ -6,7 +6,7 @@
 //! EXR metadata records ([`RenderSettings::metadata_pairs`]), so no list of keys is kept
 //! by hand.
 
-use crate::guiding::{DirectionalFilter, GuideTarget, SpatialFilter};
+use crate::guiding::{DirectionalFilter, GuideDensity, GuideTarget, SpatialFilter};
 use std::fmt;
 use std::str::FromStr;
 
@@ -136,6 +136,9 @@ pub struct GuidingSettings {
     /// What radiance the SD-tree learns (`--guide-target`).
     #[serde(default)]
     pub target: GuideTarget,
+    /// Which statistic of the target the quadtrees follow (`--guide-density`).
+    #[serde(default)]
+    pub density: GuideDensity,
 }
 
 impl Default for GuidingSettings {
@@ -156,6 +159,7 @@ impl Default for GuidingSettings {
             learn_selection: true,
             // Measured better than or equal to `All` on gap and cornell-lights (README).
             target: GuideTarget::Indirect,
+            density: GuideDensity::Radiance,
         }
     }
 }
