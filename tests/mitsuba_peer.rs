@@ -268,6 +268,39 @@ fn lanterna_agrees_with_mitsuba_on_a_lambertian_scene() {
     }
 }
 
+/// The shipped many-light scene that exports exactly (`street --matte`: 600 light
+/// models, 4,020 emissive triangles, textured Lambertian surfaces): `pt` and `ris`
+/// against Mitsuba's `path`.
+#[test]
+fn lanterna_agrees_with_mitsuba_on_the_matte_street() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/street-matte.gltf");
+    let loaded = session::load_scene(&path).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("export");
+    let options = export_loaded(&loaded.scene, None, 48, 27, &dir);
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join(export_mitsuba::MANIFEST)).unwrap())
+            .unwrap();
+    assert_eq!(manifest["exact"], true, "{}", manifest["approximations"]);
+    if !mitsuba_available() {
+        println!("skipped the renders: python3 cannot import mitsuba (pip install mitsuba)");
+        return;
+    }
+    let spp = 32;
+    for method in [Method::Pt, Method::Ris] {
+        let exrs = lanterna_batches(&loaded.scene, method, &options, 8, spp, tmp.path());
+        let report = compare(&dir, &exrs, spp, &tmp.path().join("report.json"));
+        println!("{method}: mean {}", report["mean"]);
+        assert!(
+            report["agree"].as_bool().unwrap(),
+            "{method}: lanterna and Mitsuba disagree:\nmean {}\nblocks {}\npixels {}",
+            report["mean"],
+            report["blocks"],
+            report["pixels"]
+        );
+    }
+}
+
 /// KHR_texture_transform on base colour and emissive textures: the transforms are set on
 /// the loaded scene (the loader does not read them from files yet), the exporter maps
 /// them to Mitsuba's `to_uv` and bakes the emissive one into the texture coordinates.

@@ -595,7 +595,7 @@ fn shipped_scenes_match_their_recorded_options() {
     let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let dir = tempfile::tempdir().unwrap();
     let mut total = 0;
-    for name in ["street", "cornell-lights", "bistro-night"] {
+    for name in ["street", "street-matte", "cornell-lights", "bistro-night"] {
         let shipped = scenes.join(format!("{name}.gltf"));
         let x = extras(&load(&shipped));
         let o = &x["options"];
@@ -605,6 +605,7 @@ fn shipped_scenes_match_their_recorded_options() {
             lamps: o["lamps"].as_u64().map(|v| v as u32),
             lights: o["lights"].as_u64().map(|v| v as u32),
             detail: o["detail"].as_u64().map(|v| v as u32),
+            matte: o["matte"].as_bool().unwrap_or(false),
             ..Options::default()
         };
         let kind = Kind::from_name(x["kind"].as_str().unwrap()).unwrap();

@@ -134,6 +134,16 @@ impl Sizes {
                     runs: 8,
                     reference_spp: 2048,
                 },
+                // The many-light scene that exports exactly (600 light models).
+                PeerSize {
+                    scene: "street-matte.gltf".into(),
+                    width: 64,
+                    height: None,
+                    batches: 8,
+                    spp: 16,
+                    runs: 8,
+                    reference_spp: 2048,
+                },
             ],
             profile: scene("street.gltf", 128, None, 4),
             profile_ris_candidates: vec![1, 8, 32],

@@ -99,6 +99,11 @@ pub struct GenerateArgs {
     /// precision far from the origin.
     #[arg(long, value_parser = parse_offset, allow_hyphen_values = true)]
     offset: Option<[f32; 3]>,
+    /// Any kind: every material Lambertian and opaque (glossy, metal and dielectric
+    /// materials become matte, alpha masks are dropped), so that `scene export-mitsuba`
+    /// is exact and Mitsuba can check or race lanterna on the scene.
+    #[arg(long)]
+    matte: bool,
 }
 
 fn parse_offset(s: &str) -> Result<[f32; 3], String> {
@@ -148,6 +153,7 @@ fn run_generate(a: GenerateArgs) -> anyhow::Result<()> {
             ShapeArg::Sphere => Shape::Sphere,
         }),
         offset: a.offset,
+        matte: a.matte,
     };
     let start = std::time::Instant::now();
     if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {

@@ -152,6 +152,8 @@ pub struct Options {
     /// Every kind: translate the whole scene, cameras and lights included (precision
     /// tests far from the origin).
     pub offset: Option<[f32; 3]>,
+    /// Every kind: every material Lambertian and opaque (an exactly exportable variant).
+    pub matte: bool,
 }
 
 impl Default for Options {
@@ -170,6 +172,7 @@ impl Default for Options {
             spot: false,
             shape: None,
             offset: None,
+            matte: false,
         }
     }
 }
@@ -277,7 +280,7 @@ pub fn generate(
 ) -> Result<GenerateSummary, GenerateError> {
     for option in options.given() {
         if !kind.accepted().contains(&option) {
-            let accepted = ["seed", "aspect", "offset"]
+            let accepted = ["seed", "aspect", "offset", "matte"]
                 .iter()
                 .chain(kind.accepted())
                 .map(|s| format!("--{s}"))
@@ -335,6 +338,10 @@ pub fn generate(
             "offset".into(),
             Value::String(offset.map(|x| x.to_string()).join(",")),
         );
+    }
+    if options.matte {
+        built.gltf.make_matte();
+        built.options.insert("matte".into(), Value::Bool(true));
     }
     let stats = built.gltf.stats().clone();
     let mut lanterna = Map::new();

@@ -222,6 +222,24 @@ impl Gltf {
         }
     }
 
+    /// Make every material Lambertian and opaque (`--matte`): metals and glossy or
+    /// glass-like panels become matte with their base colour, alpha masks are dropped.
+    /// Textures, emission and geometry are kept.
+    pub fn make_matte(&mut self) {
+        for handle in 0..self.material_defs.len() {
+            let m = &mut self.material_defs[handle];
+            m.metallic = 0.0;
+            m.roughness = 1.0;
+            m.lambertian = true;
+            m.alpha_cutoff = None;
+            // Materials the meshes already use are written again.
+            if let Some(i) = self.material_index[handle] {
+                let m = m.clone();
+                self.materials[i] = self.material_json(&m);
+            }
+        }
+    }
+
     /// Move the whole scene by `offset` (written as one root node holding all others).
     pub fn set_offset(&mut self, offset: Vec3) {
         self.offset = offset;
@@ -296,6 +314,15 @@ impl Gltf {
             return i;
         }
         let m = self.material_defs[handle].clone();
+        let v = self.material_json(&m);
+        self.materials.push(v);
+        let i = self.materials.len() - 1;
+        self.material_index[handle] = Some(i);
+        i
+    }
+
+    /// The glTF material of `m` (its textures are emitted on first use).
+    fn material_json(&mut self, m: &Material) -> Value {
         let mut pbr = Map::new();
         pbr.insert("baseColorFactor".into(), nums(&m.base_color));
         if let Some(t) = m.base_color_texture {
@@ -345,9 +372,7 @@ impl Gltf {
         if !ext.is_empty() {
             v.insert("extensions".into(), Value::Object(ext));
         }
-        self.materials.push(Value::Object(v));
-        self.material_index[handle] = Some(self.materials.len() - 1);
-        self.materials.len() - 1
+        Value::Object(v)
     }
 
     /// Declares a PNG texture (already encoded) with a repeating sampler; returns its handle.
