@@ -366,9 +366,11 @@ void guide_record(GuideRecord r, vec3 u) {
 // Probability of light model `model` in leaf `leaf`'s table (0 when absent).
 float guide_light_pmf(uint leaf, uint model) {
     uint base = leaf * GUIDE_LIGHT_SLOTS;
+    // The CPU packs a table's entries first, largest first: the first empty slot ends it.
     [[dont_unroll]] for (uint i = 0u; i < GUIDE_LIGHT_SLOTS; ++i) {
         GuideLightSlot s = guide_lights[base + i];
         if (s.model == model) return s.value;
+        if (s.model == GUIDE_LIGHT_EMPTY) break;
     }
     return 0.0;
 }
@@ -382,7 +384,8 @@ uint guide_light_sample(uint leaf, float u, out float pmf) {
     pmf = 0.0;
     [[dont_unroll]] for (uint i = 0u; i < GUIDE_LIGHT_SLOTS; ++i) {
         GuideLightSlot s = guide_lights[base + i];
-        if (s.model == GUIDE_LIGHT_EMPTY || s.value <= 0.0) continue;
+        if (s.model == GUIDE_LIGHT_EMPTY) break;  // packed: no entries after it
+        if (s.value <= 0.0) continue;
         cdf += s.value;
         last = s.model;
         pmf = s.value;

@@ -149,21 +149,27 @@ LightSample sample_light(LightContext ctx, vec4 u, const bool exact_emission) {
     uint count = params.light_model_count;
     float um = u.x;
     uint model = INVALID_INDEX;
+    float table_pmf = -1.0;  // the table's probability of `model`, when it chose it
     if (GUIDING && ctx.mix > 0.0) {
         // Reuse u.x: the first `mix` of its range picks from the table, the rest, rescaled,
         // from the source.
         if (um < ctx.mix) {
-            float unused;
-            model = guide_light_sample(ctx.leaf, um / ctx.mix, unused);
+            model = guide_light_sample(ctx.leaf, um / ctx.mix, table_pmf);
         } else {
             um = (um - ctx.mix) / (1.0 - ctx.mix);
         }
     }
-    if (model == INVALID_INDEX)
+    if (model == INVALID_INDEX) {
         model = params.ris_source == RIS_SOURCE_POWER ? alias_sample(0u, count, um, true)
                                                        : min(uint(um * float(count)), count - 1u);
+        table_pmf = -1.0;
+    }
     LightModel m = light_models[model];
-    float pm = model_pmf(ctx, model);
+    // A model the table chose needs no second walk of the table for its mixture pmf
+    // (the same value model_pmf finds: a table holds each model once).
+    float pm = GUIDING && table_pmf >= 0.0
+        ? (1.0 - ctx.mix) * source_model_pmf(model) + ctx.mix * table_pmf
+        : model_pmf(ctx, model);
     if (m.punctual != INVALID_INDEX) {
         LightSample s = sample_punctual(m.punctual, x);
         s.pdf = pm;
