@@ -138,10 +138,10 @@ pub struct EstimatorArgs {
     /// al. 2019).
     #[arg(long)]
     pub bsdf_fraction: Option<f32>,
-    /// Guiding: what radiance the SD-tree learns: indirect light only (the default),
-    /// all incident light (with NEE's light samples, the paper's), or what the
-    /// direction estimator carries (MIS-weighted emission plus indirect).
-    #[arg(long, value_enum, default_value = "indirect")]
+    /// Guiding: what radiance the SD-tree learns: all incident light (with NEE's light
+    /// samples, the paper's; the default), indirect light only, or what the direction
+    /// estimator carries (MIS-weighted emission plus indirect).
+    #[arg(long, value_enum, default_value = "all")]
     pub guide_target: lanterna::guiding::GuideTarget,
     /// Guiding: the quadtrees follow the target's mean (radiance, Müller et al.) or
     /// the square root of its second moment (variance-aware, Rath et al. 2020).
@@ -183,12 +183,16 @@ pub struct EstimatorArgs {
     /// the EXR then has no exact film sums).
     #[arg(long, value_enum, default_value = "late-passes")]
     pub guided_output: GuidedOutput,
-    /// Guiding: learn, per SD-tree leaf, which lights deliver NEE contributions (and so
-    /// are visible and bright there), and choose lights from a mixture of the source
-    /// distribution and the learned table (visibility-aware light selection).
-    #[arg(long)]
+    /// Guiding (the default): learn, per SD-tree leaf, which lights deliver NEE
+    /// contributions (and so are visible and bright there), and choose lights from a
+    /// mixture of the source distribution and the learned table (visibility-aware light
+    /// selection). Kept for scripts; `--no-learn-lights` turns it off.
+    #[arg(long, overrides_with = "no_learn_lights")]
     pub learn_lights: bool,
-    /// Guiding with --learn-lights: probability of choosing from the learned table.
+    /// Guiding: choose lights from the source distribution alone, as the paper does.
+    #[arg(long, overrides_with = "learn_lights")]
+    pub no_learn_lights: bool,
+    /// Guiding with learned light selection: probability of choosing from the table.
     #[arg(long, default_value_t = 0.5)]
     pub light_mix: f32,
     /// Ray traversal: the device's ray queries, or the kernels' own traversal of a BVH
@@ -247,7 +251,8 @@ impl EstimatorArgs {
                 },
                 spatial_threshold: self.guiding_threshold,
                 memory_cap_bytes: self.guiding_memory.saturating_mul(1 << 20),
-                learn_lights: self.learn_lights,
+                // The last of --learn-lights / --no-learn-lights wins; neither: on.
+                learn_lights: self.learn_lights || !self.no_learn_lights,
                 light_mix: self.light_mix,
                 output: self.guided_output,
             },

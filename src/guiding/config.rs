@@ -45,12 +45,12 @@ pub enum DirectionalFilter {
 #[serde(rename_all = "kebab-case")]
 pub enum GuideTarget {
     /// All incident radiance: direction samples' full incident light and NEE's light
-    /// samples (Müller et al.; Sugita and Fujishiro's NEE records).
+    /// samples (Müller et al.; Sugita and Fujishiro's NEE records; the renderer's
+    /// default, see `GuidingSettings`).
     #[default]
     All,
     /// Indirect light only: what the next vertex reflects; no NEE records, and emission
-    /// reached by the sampled direction is not recorded (Müller's suggestion for NEE;
-    /// the renderer's default, see `GuidingSettings`).
+    /// reached by the sampled direction is not recorded (Müller's suggestion for NEE).
     Indirect,
     /// What the direction estimator carries: its MIS-weighted emission plus the
     /// reflected light; no NEE records (with RIS NEE the same as `indirect` for
