@@ -25,12 +25,32 @@ fn data(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// A Python that imports mitsuba, as the conformance suite finds it: `LANTERNA_PYTHON`,
+/// the project's `.cache/venv` (where `scripts/setup --mitsuba` installs it), or
+/// `python3`.
+fn mitsuba_python() -> Option<&'static Path> {
+    static FOUND: std::sync::OnceLock<Option<PathBuf>> = std::sync::OnceLock::new();
+    FOUND
+        .get_or_init(|| {
+            let mut candidates = Vec::new();
+            if let Ok(p) = std::env::var("LANTERNA_PYTHON") {
+                candidates.push(PathBuf::from(p));
+            }
+            candidates.push(Path::new(env!("CARGO_MANIFEST_DIR")).join(".cache/venv/bin/python"));
+            candidates.push(PathBuf::from("python3"));
+            candidates.into_iter().find(|p| {
+                Command::new(p)
+                    .args(["-c", "import mitsuba"])
+                    .output()
+                    .map(|o| o.status.success())
+                    .unwrap_or(false)
+            })
+        })
+        .as_deref()
+}
+
 fn mitsuba_available() -> bool {
-    Command::new("python3")
-        .args(["-c", "import mitsuba"])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false)
+    mitsuba_python().is_some()
 }
 
 fn export(scene: &str, camera: Option<&str>, w: u32, h: u32, dir: &Path) -> ExportOptions {
@@ -167,6 +187,7 @@ fn lanterna_batches(
         width: options.width,
         height: options.height,
         max_depth: options.max_depth,
+        hide_emitters: options.hide_emitters,
         ..RenderSettings::default()
     };
     let b = lanterna::testing::render_batches(scene, &cam, settings, batches, spp);
@@ -195,7 +216,8 @@ fn lanterna_batches(
 
 fn compare(export_dir: &Path, exrs: &[PathBuf], spp: u64, json: &Path) -> serde_json::Value {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/mitsuba_compare.py");
-    let out = Command::new("python3")
+    let python = mitsuba_python().expect("a Python that imports mitsuba");
+    let out = Command::new(python)
         .arg(&script)
         .arg(export_dir)
         .args(exrs)
@@ -203,7 +225,7 @@ fn compare(export_dir: &Path, exrs: &[PathBuf], spp: u64, json: &Path) -> serde_
         .args(["--alpha", &ALPHA.to_string(), "--json"])
         .arg(json)
         .output()
-        .expect("python3");
+        .expect("run the comparison script");
     assert!(
         out.status.success(),
         "mitsuba_compare.py failed:\n{}",
@@ -215,7 +237,7 @@ fn compare(export_dir: &Path, exrs: &[PathBuf], spp: u64, json: &Path) -> serde_
 #[test]
 fn lanterna_agrees_with_mitsuba_on_a_lambertian_scene() {
     if !mitsuba_available() {
-        println!("skipped: python3 cannot import mitsuba (pip install mitsuba)");
+        println!("skipped: no Python here imports mitsuba (scripts/setup --mitsuba)");
         return;
     }
     let tmp = tempfile::tempdir().unwrap();
@@ -270,33 +292,57 @@ fn lanterna_agrees_with_mitsuba_on_a_lambertian_scene() {
 
 /// The shipped many-light scene that exports exactly (`street --matte`: 600 light
 /// models, 4,020 emissive triangles, textured Lambertian surfaces): `pt` and `ris`
-/// against Mitsuba's `path`.
+/// against Mitsuba's `path` (8 × 128 spp each), by the image mean and 8×8 blocks. Pixels
+/// are reported, not asserted: sub-pixel bulbs make some pixels rare-event estimates (at
+/// (42, 15) the true green is 0.22 — `pt` and `ris` at 4,096 spp agree — while
+/// Mitsuba's 8 runs can all miss it and show 0.007 with a tiny spread), which
+/// Welch's test per pixel rejects although nothing is wrong. Seen to fail with RIS's
+/// NEE contribution scaled by 0.8 (image mean p ≈ 3·10⁻⁶); a 5 % loss gives p ≈ 0.007,
+/// below this budget's power. Emitters seen directly are hidden on both sides.
 #[test]
 fn lanterna_agrees_with_mitsuba_on_the_matte_street() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/street-matte.gltf");
     let loaded = session::load_scene(&path).unwrap();
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("export");
-    let options = export_loaded(&loaded.scene, None, 48, 27, &dir);
+    // Emitters seen directly hidden on both sides: the sub-pixel bulbs the camera sees
+    // would otherwise dominate the noise and hide errors in the light they cast.
+    let lights = LightTable::build(&loaded.scene).expect("light table");
+    let cam = session::choose_camera(&loaded.scene, None, &CameraOverride::default()).unwrap();
+    let options = ExportOptions {
+        width: 48,
+        height: 27,
+        max_depth: 4,
+        spp: 16,
+        seed: 0,
+        hide_emitters: true,
+    };
+    export_mitsuba::export(&loaded.scene, &lights, &cam, &options, &dir).expect("export");
     let manifest: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join(export_mitsuba::MANIFEST)).unwrap())
             .unwrap();
     assert_eq!(manifest["exact"], true, "{}", manifest["approximations"]);
     if !mitsuba_available() {
-        println!("skipped the renders: python3 cannot import mitsuba (pip install mitsuba)");
+        println!("skipped the renders: no Python here imports mitsuba (scripts/setup --mitsuba)");
         return;
     }
-    let spp = 32;
+    let spp = 128;
     for method in [Method::Pt, Method::Ris] {
         let exrs = lanterna_batches(&loaded.scene, method, &options, 8, spp, tmp.path());
         let report = compare(&dir, &exrs, spp, &tmp.path().join("report.json"));
-        println!("{method}: mean {}", report["mean"]);
+        let mean_p = report["mean"]["p"].as_array().unwrap();
+        println!(
+            "{method}: mean p {mean_p:?}, blocks min p {}, pixels min p {}",
+            report["blocks"]["min_p"], report["pixels"]["min_p"]
+        );
+        // Šidák over the three channels, as the script's image-mean family.
+        let channel_alpha = 1.0 - (1.0 - ALPHA).powf(1.0 / 3.0);
         assert!(
-            report["agree"].as_bool().unwrap(),
-            "{method}: lanterna and Mitsuba disagree:\nmean {}\nblocks {}\npixels {}",
+            mean_p.iter().all(|p| p.as_f64().unwrap() >= channel_alpha)
+                && report["blocks"]["agree"].as_bool().unwrap(),
+            "{method}: lanterna and Mitsuba disagree:\nmean {}\nblocks {}",
             report["mean"],
-            report["blocks"],
-            report["pixels"]
+            report["blocks"]
         );
     }
 }
@@ -308,7 +354,7 @@ fn lanterna_agrees_with_mitsuba_on_the_matte_street() {
 #[test]
 fn texture_transforms_agree_with_mitsuba() {
     if !mitsuba_available() {
-        println!("skipped: python3 cannot import mitsuba (pip install mitsuba)");
+        println!("skipped: no Python here imports mitsuba (scripts/setup --mitsuba)");
         return;
     }
     let tmp = tempfile::tempdir().unwrap();

@@ -129,10 +129,13 @@ class Renderer:
         **options: the command line's other estimator flags with ``_`` for ``-``:
             ``rr_depth``, ``source`` ("uniform"/"power"), ``ris_candidates``,
             ``bsdf_fraction``, ``train_fraction``, ``record_nee`` (bool),
+            ``guide_target`` ("all"/"indirect"/"contribution"), ``guide_density``
+            ("radiance"/"variance-aware"),
             ``strategy`` ("mis"/"nee"/"bsdf"), ``hide_emitters``, ``guiding_threshold``,
             ``guiding_memory`` (MiB), ``spatial_filter`` ("jitter"/"nearest"),
             ``directional_filter`` ("box"/"nearest"), ``guided_output``
-            ("late-passes"/"render-phase"/"inverse-variance"), ``learn_lights`` (bool),
+            ("late-passes"/"render-phase"/"inverse-variance"), ``learn_lights`` (bool,
+            default True; False: the paper's light selection),
             ``light_mix``, ``traversal`` ("auto"/"ray-query"/"software"); and
             ``validation`` (Vulkan validation layers),
             ``shader_dir`` (compile the GLSL kernels from a directory).
