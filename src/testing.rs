@@ -27,6 +27,31 @@ pub fn device() -> Arc<Device> {
         .clone()
 }
 
+/// A Python that imports mitsuba, for the peer checks against Mitsuba 3: the first of
+/// `LANTERNA_PYTHON`, the project's `.cache/venv` (where `scripts/setup --mitsuba`
+/// installs it) and `python3` that can; None when none can. Looked up once per process.
+pub fn mitsuba_python() -> Option<&'static std::path::Path> {
+    static FOUND: OnceLock<Option<std::path::PathBuf>> = OnceLock::new();
+    FOUND
+        .get_or_init(|| {
+            let mut candidates = Vec::new();
+            if let Ok(p) = std::env::var("LANTERNA_PYTHON") {
+                candidates.push(std::path::PathBuf::from(p));
+            }
+            candidates.push(
+                std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(".cache/venv/bin/python"),
+            );
+            candidates.push(std::path::PathBuf::from("python3"));
+            candidates.into_iter().find(|p| {
+                std::process::Command::new(p)
+                    .args(["-c", "import mitsuba"])
+                    .output()
+                    .is_ok_and(|o| o.status.success())
+            })
+        })
+        .as_deref()
+}
+
 /// Fail if the validation layer reported any error so far in this process.
 pub fn assert_no_validation_errors() {
     let n = vk::validation_error_count();

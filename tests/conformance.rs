@@ -139,23 +139,6 @@ fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// A Python that imports mitsuba: `LANTERNA_PYTHON`, the project's `.cache/venv`, or
-/// `python3`.
-fn mitsuba_python() -> Option<PathBuf> {
-    let mut candidates = Vec::new();
-    if let Ok(p) = std::env::var("LANTERNA_PYTHON") {
-        candidates.push(PathBuf::from(p));
-    }
-    candidates.push(root().join(".cache/venv/bin/python"));
-    candidates.push(PathBuf::from("python3"));
-    candidates.into_iter().find(|p| {
-        Command::new(p)
-            .args(["-c", "import mitsuba"])
-            .output()
-            .is_ok_and(|o| o.status.success())
-    })
-}
-
 fn parse_reference(v: &serde_json::Value) -> Reference {
     let triple = |x: &serde_json::Value| -> [f64; 3] {
         let a = x.as_array().expect("three channels");
@@ -209,9 +192,9 @@ fn reference(name: &str, ts: &TestScene, max_depth: u32) -> Reference {
     .unwrap();
     let hash = manifest["scene_hash"].as_str().unwrap().to_string();
     let committed = root().join(format!("tests/data/conformance/{name}.json"));
-    if let Some(python) = mitsuba_python() {
+    if let Some(python) = testing::mitsuba_python() {
         let out = ts.dir.0.join("reference.json");
-        let status = Command::new(&python)
+        let status = Command::new(python)
             .arg(root().join("scripts/conformance_reference.py"))
             .arg(&export_dir)
             .arg("-o")

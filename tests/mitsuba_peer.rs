@@ -25,32 +25,8 @@ fn data(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// A Python that imports mitsuba, as the conformance suite finds it: `LANTERNA_PYTHON`,
-/// the project's `.cache/venv` (where `scripts/setup --mitsuba` installs it), or
-/// `python3`.
-fn mitsuba_python() -> Option<&'static Path> {
-    static FOUND: std::sync::OnceLock<Option<PathBuf>> = std::sync::OnceLock::new();
-    FOUND
-        .get_or_init(|| {
-            let mut candidates = Vec::new();
-            if let Ok(p) = std::env::var("LANTERNA_PYTHON") {
-                candidates.push(PathBuf::from(p));
-            }
-            candidates.push(Path::new(env!("CARGO_MANIFEST_DIR")).join(".cache/venv/bin/python"));
-            candidates.push(PathBuf::from("python3"));
-            candidates.into_iter().find(|p| {
-                Command::new(p)
-                    .args(["-c", "import mitsuba"])
-                    .output()
-                    .map(|o| o.status.success())
-                    .unwrap_or(false)
-            })
-        })
-        .as_deref()
-}
-
 fn mitsuba_available() -> bool {
-    mitsuba_python().is_some()
+    lanterna::testing::mitsuba_python().is_some()
 }
 
 fn export(scene: &str, camera: Option<&str>, w: u32, h: u32, dir: &Path) -> ExportOptions {
@@ -216,7 +192,7 @@ fn lanterna_batches(
 
 fn compare(export_dir: &Path, exrs: &[PathBuf], spp: u64, json: &Path) -> serde_json::Value {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/mitsuba_compare.py");
-    let python = mitsuba_python().expect("a Python that imports mitsuba");
+    let python = lanterna::testing::mitsuba_python().expect("a Python that imports mitsuba");
     let out = Command::new(python)
         .arg(&script)
         .arg(export_dir)
