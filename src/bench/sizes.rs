@@ -85,6 +85,19 @@ fn trend(scene: &str, width: u32, spp: Vec<u64>, reference_spp: u64) -> TrendSiz
     }
 }
 
+/// A peer comparison of `batches` lanterna batches and as many Mitsuba runs.
+fn peer(scene: &str, width: u32, batches: u32, spp: u64, reference_spp: u64) -> PeerSize {
+    PeerSize {
+        scene: scene.into(),
+        width,
+        height: None,
+        batches,
+        spp,
+        runs: batches,
+        reference_spp,
+    }
+}
+
 impl Sizes {
     pub fn full() -> Sizes {
         Sizes {
@@ -116,34 +129,10 @@ impl Sizes {
                 },
             ],
             mitsuba: vec![
-                PeerSize {
-                    scene: "cornell-lights.gltf".into(),
-                    width: 64,
-                    height: None,
-                    batches: 8,
-                    spp: 64,
-                    runs: 8,
-                    reference_spp: 4096,
-                },
-                PeerSize {
-                    scene: "street.gltf".into(),
-                    width: 64,
-                    height: None,
-                    batches: 8,
-                    spp: 16,
-                    runs: 8,
-                    reference_spp: 2048,
-                },
+                peer("cornell-lights.gltf", 64, 8, 64, 4096),
+                peer("street.gltf", 64, 8, 16, 2048),
                 // The many-light scene that exports exactly (600 light models).
-                PeerSize {
-                    scene: "street-matte.gltf".into(),
-                    width: 64,
-                    height: None,
-                    batches: 8,
-                    spp: 16,
-                    runs: 8,
-                    reference_spp: 2048,
-                },
+                peer("street-matte.gltf", 64, 8, 16, 2048),
             ],
             profile: scene("street.gltf", 128, None, 4),
             profile_ris_candidates: vec![1, 8, 32],
