@@ -25,8 +25,15 @@ fn data(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// Whether the Mitsuba renders can run; with `LANTERNA_REQUIRE_MITSUBA=1` (CI) their
+/// absence is a failure rather than a skip, as in the conformance suite.
 fn mitsuba_available() -> bool {
-    lanterna::testing::mitsuba_python().is_some()
+    let found = lanterna::testing::mitsuba_python().is_some();
+    assert!(
+        found || std::env::var("LANTERNA_REQUIRE_MITSUBA").map_or(true, |v| v != "1"),
+        "LANTERNA_REQUIRE_MITSUBA=1 but no Python here imports mitsuba"
+    );
+    found
 }
 
 fn export(scene: &str, camera: Option<&str>, w: u32, h: u32, dir: &Path) -> ExportOptions {
