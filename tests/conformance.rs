@@ -93,6 +93,12 @@ const GUIDED_RIS_LEARN: Config = Config {
     learn_lights: true,
     ..GUIDED_RIS
 };
+// Learned light tables with each leaf's learned mix (`guided`'s defaults).
+const GUIDED_LEARN: Config = Config {
+    name: "guided --learn-lights",
+    learn_lights: true,
+    ..GUIDED
+};
 const GUIDED_FIXED: Config = Config {
     name: "guided --bsdf-fraction 0.5",
     bsdf_fraction: Some(0.5),
@@ -451,6 +457,7 @@ fn sconces_guiding_options() {
         4,
         &[
             GUIDED,
+            GUIDED_LEARN,
             GUIDED_FIXED,
             GUIDED_INDIRECT,
             GUIDED_RIS_INDIRECT,

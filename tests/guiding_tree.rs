@@ -168,15 +168,15 @@ fn load_refuses_bad_files() {
     .unwrap_err();
     assert!(matches!(err, GuidingError::NotAnSdTree { .. }), "{err}");
 
-    let mut v4 = bytes.clone();
-    v4[16] = 4;
-    let err = SdTree::load(&write("v4.sdt", &v4), scene_hash()).unwrap_err();
+    let mut v3 = bytes.clone();
+    v3[16] = 3;
+    let err = SdTree::load(&write("v3.sdt", &v3), scene_hash()).unwrap_err();
     assert!(
         matches!(
             err,
             GuidingError::Version {
-                found: 4,
-                supported: 3,
+                found: 3,
+                supported: 4,
                 ..
             }
         ),
@@ -217,7 +217,7 @@ fn leaf_view_shows_the_leaf() {
 
 #[test]
 fn light_tables_normalise_and_follow_splits() {
-    use lanterna::gpu::{GuideLightSlot, GUIDE_LIGHT_EMPTY, GUIDE_LIGHT_SLOTS};
+    use lanterna::gpu::{GUIDE_LIGHT_EMPTY, GUIDE_LIGHT_SLOTS};
     let config = GuidingConfig {
         learn_lights: true,
         spatial_threshold: 1.0,
@@ -225,26 +225,12 @@ fn light_tables_normalise_and_follow_splits() {
     };
     let mut tree = SdTree::new(Vec3::ZERO, Vec3::ONE, &config).unwrap();
     // Leaf 0 delivered light from models 7 (3 units) and 2 (1 unit), and one bad slot.
-    let mut slots = vec![
-        GuideLightSlot {
-            model: GUIDE_LIGHT_EMPTY,
-            value: 0.0
-        };
-        GUIDE_LIGHT_SLOTS as usize
-    ];
-    slots[3] = GuideLightSlot {
-        model: 7,
-        value: 3.0,
-    };
-    slots[9] = GuideLightSlot {
-        model: 2,
-        value: 1.0,
-    };
-    slots[5] = GuideLightSlot {
-        model: 4,
-        value: f32::NAN,
-    };
-    tree.load_light_readback(&slots).unwrap();
+    let mut slots = light_slots(&[]);
+    slots[3] = light_slot(7, 3.0, 9.0);
+    slots[9] = light_slot(2, 1.0, 1.0);
+    slots[5] = light_slot(4, f32::NAN, f32::NAN);
+    let source = [0.1; 10];
+    tree.load_light_readback(&slots, &source).unwrap();
     for _ in 0..100 {
         tree.record(
             &GuideRecord::new(Vec3::splat(0.25), Vec3::Z, 1.0, 1.0),
@@ -274,9 +260,94 @@ fn light_tables_normalise_and_follow_splits() {
         .iter()
         .all(|s| s.model == GUIDE_LIGHT_EMPTY));
     assert!(
-        tree.load_light_readback(&slots).is_err(),
+        tree.load_light_readback(&slots, &source).is_err(),
         "wrong slot count is refused"
     );
+    let mut bad = light_slots(&[]);
+    bad.resize(tree.leaves().len() * GUIDE_LIGHT_SLOTS as usize, bad[0]);
+    bad[0] = light_slot(10, 1.0, 1.0);
+    assert!(
+        tree.load_light_readback(&bad, &source).is_err(),
+        "a light model the scene does not have is refused"
+    );
+}
+
+fn light_slot(model: u32, value: f32, second: f32) -> lanterna::gpu::GuideLightTrainingSlot {
+    lanterna::gpu::GuideLightTrainingSlot {
+        model,
+        value,
+        second,
+    }
+}
+
+/// One leaf's light training slots with the given (model, Σv, Σv²), hashed anywhere.
+fn light_slots(entries: &[(u32, f32, f32)]) -> Vec<lanterna::gpu::GuideLightTrainingSlot> {
+    use lanterna::gpu::{GUIDE_LIGHT_EMPTY, GUIDE_LIGHT_SLOTS};
+    let mut slots = vec![light_slot(GUIDE_LIGHT_EMPTY, 0.0, 0.0); GUIDE_LIGHT_SLOTS as usize];
+    for (slot, &(model, value, second)) in slots.iter_mut().zip(entries) {
+        *slot = light_slot(model, value, second);
+    }
+    slots
+}
+
+/// One pass of learned light selection on a one-leaf tree, as the renderer runs it:
+/// training read-back (the leaf's Σv² in its header node), light read-back, refit.
+/// Returns the light mix the leaf's next pass samples with.
+fn light_pass(tree: &mut SdTree, entries: &[(u32, f32, f32)], source: &[f32]) -> f32 {
+    let mut arrays = tree.gpu_arrays();
+    let header = arrays.leaves[0].training_root as usize - 1;
+    arrays.training[header].sum[1] = entries.iter().map(|e| e.2).sum();
+    tree.load_training_readback(&arrays.training).unwrap();
+    tree.load_light_readback(&light_slots(entries), source)
+        .unwrap();
+    tree.refit(4);
+    assert_eq!(tree.leaves().len(), 1);
+    tree.gpu_arrays().leaves[0].light_mix
+}
+
+/// Each leaf chooses its light mix from the pass's NEE estimates, judged with the table
+/// the pass sampled with (src/guiding/light_mix.rs): all the light through the table's
+/// model → the largest mix; all of it through a model the table lacks → 0; and back
+/// once the table follows. Injected once: with each table judged by the estimates it
+/// was learned from instead, the first table got 0.9 at once and this failed.
+#[test]
+fn each_leaf_learns_its_light_mix_from_its_estimates() {
+    let config = GuidingConfig {
+        learn_lights: true,
+        learn_light_mix: true,
+        ..GuidingConfig::default()
+    };
+    let source = vec![0.01; 100];
+    let mut tree = SdTree::new(Vec3::ZERO, Vec3::ONE, &config).unwrap();
+    assert_eq!(
+        tree.gpu_arrays().leaves[0].light_mix,
+        0.0,
+        "no table: source only"
+    );
+    // First table: nothing judged it yet, it starts at the configured mix.
+    assert_eq!(light_pass(&mut tree, &[(7, 3.0, 9.0)], &source), 0.5);
+    // All the light came through model 7, which the table holds.
+    assert_eq!(
+        light_pass(&mut tree, &[(7, 3.0, 9.0)], &source),
+        lanterna::guiding::MAX_LEARNED_MIX
+    );
+    // The light now comes from model 40, which the table lacks: the table only takes
+    // samples from it.
+    assert_eq!(light_pass(&mut tree, &[(40, 2.0, 4.0)], &source), 0.0);
+    // With mix 0 the table (now model 40) still learns and is judged again.
+    assert_eq!(
+        light_pass(&mut tree, &[(40, 2.0, 4.0)], &source),
+        lanterna::guiding::MAX_LEARNED_MIX
+    );
+    // Fixed mix (--light-mix 0.3): every leaf with a table samples with it.
+    let fixed = GuidingConfig {
+        learn_light_mix: false,
+        light_mix: 0.3,
+        ..config
+    };
+    tree.set_config(&fixed).unwrap();
+    assert_eq!(tree.gpu_arrays().leaves[0].light_mix, 0.3);
+    assert_eq!(light_pass(&mut tree, &[(40, 2.0, 4.0)], &source), 0.3);
 }
 
 /// A crafted tree file whose checksum is recomputed after the edit: the checksum cannot

@@ -136,7 +136,7 @@ class Renderer:
             ``directional_filter`` ("box"/"nearest"), ``guided_output``
             ("late-passes"/"render-phase"/"inverse-variance"), ``learn_lights`` (bool,
             default True; False: the paper's light selection),
-            ``light_mix``, ``traversal`` ("auto"/"ray-query"/"software"); and
+            ``light_mix`` (a probability, "learned", or "auto"/None), ``traversal`` ("auto"/"ray-query"/"software"); and
             ``validation`` (Vulkan validation layers),
             ``shader_dir`` (compile the GLSL kernels from a directory).
 

@@ -52,7 +52,7 @@ layout(set = GUIDE_SET, binding = GUIDE_BINDING_LIGHTS, scalar) readonly buffer 
     GuideLightSlot guide_lights[];
 };
 layout(set = GUIDE_SET, binding = GUIDE_BINDING_LIGHT_TRAINING, scalar) buffer GuideLightTrainingBuffer {
-    GuideLightSlot guide_light_training[];
+    GuideLightTrainingSlot guide_light_training[];
 };
 #endif
 

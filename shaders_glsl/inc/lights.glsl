@@ -56,8 +56,10 @@ float source_model_pmf(uint model) {
 
 // Learned light selection (guided methods with GUIDE_FLAG_LEARN_LIGHTS): at a shading
 // point whose SD-tree leaf has a learned table, light models are chosen from the
-// defensive mixture (1 − mix)·source + mix·table. The source term keeps every light
-// samplable, and every pdf below is the mixture's, so NEE, RIS and MIS stay unbiased.
+// defensive mixture (1 − mix)·source + mix·table, with the leaf's mix (chosen per leaf
+// between passes, src/guiding/light_mix.rs, or fixed by --light-mix). The source term
+// keeps every light samplable (mix ≤ 0.95), and every pdf below is the mixture's, so
+// NEE, RIS and MIS stay unbiased.
 //
 // What light sampling depends on at a shading point, passed explicitly to every
 // sampling and pdf function (pbrt's LightSampleContext).
@@ -73,8 +75,7 @@ LightContext light_context(vec3 p, uint leaf) {
     if (!GUIDING || (guide_header.flags & GUIDE_FLAG_LEARN_LIGHTS) == 0u) return c;
     if (leaf == INVALID_INDEX) leaf = guide_find_leaf(p);
     c.leaf = leaf;
-    if (guide_lights[leaf * GUIDE_LIGHT_SLOTS].model == GUIDE_LIGHT_EMPTY) return c;  // CPU puts entries first
-    c.mix = guide_header.light_mix;
+    c.mix = guide_leaves[leaf].light_mix;  // the CPU writes 0 for an empty table
     return c;
 }
 

@@ -5,7 +5,8 @@
 //   BINDING_GUIDE_SAMPLING  GuideQuadNode[]: every leaf's sampling quadtree (read-only)
 //   BINDING_GUIDE_TRAINING  GuideQuadNode[]: every leaf's training quadtree, each preceded
 //                           by one header node whose sum.x collects the leaf's statistical
-//                           weight (atomic float adds); read back by the CPU after a pass.
+//                           weight and sum.y the squared NEE estimates of learned light
+//                           selection (atomic float adds); read back after a pass.
 // Directions live on the square ((cosθ+1)/2, φ/2π) with z the polar axis; the map is
 // area-preserving, so pdf(ω) = quadtree density / 4π.
 #ifndef LANTERNA_GUIDING_H
@@ -57,15 +58,24 @@ struct GuideHeader {
     uint flags;           // GUIDE_FLAG_*
     uint leaf_count;
     float bsdf_fraction;  // probability of sampling the BSDF instead of the quadtree
-    float light_mix;      // probability of choosing a light model from the leaf's table
 };
 
-// One slot of a leaf's light table (BINDING_GUIDE_LIGHTS: value = the model's selection
-// probability, slots of a leaf sum to 1 or are all empty; BINDING_GUIDE_LIGHT_TRAINING:
-// value = summed luminance of the NEE contributions the model delivered in the leaf).
+// One slot of a leaf's light table (BINDING_GUIDE_LIGHTS): value = the model's selection
+// probability; the slots of a leaf sum to 1 or are all empty.
 struct GuideLightSlot {
     uint model;
     float value;
+};
+
+// One slot of a leaf's light training table (BINDING_GUIDE_LIGHT_TRAINING): the NEE
+// estimates v (luminance) that chose `model` in the leaf, summed (`value`, the model's
+// contribution) and squared and summed (`second`, for choosing the leaf's light_mix:
+// src/guiding/light_mix.rs). The leaf's training header node sums v² over all its NEE
+// estimates in sum.y, those whose model found no slot included.
+struct GuideLightTrainingSlot {
+    uint model;
+    float value;
+    float second;
 };
 
 // Spatial binary tree node. Interior: `axis` (0 x, 1 y, 2 z) splits the node's box in
@@ -85,6 +95,8 @@ struct GuideLeaf {
     vec3 box_size;
     float sampling_weight;  // statistical weight the sampling quadtree was learned from
     float bsdf_fraction;    // learned probability of sampling the BSDF (GUIDE_FLAG_LEARN_SELECTION)
+    float light_mix;        // probability of choosing a light model from the leaf's table
+                            // (GUIDE_FLAG_LEARN_LIGHTS; 0 when the table is empty)
 };
 
 // Directional quadtree node. Child order: 0 = (lo u, lo v), 1 = (hi u, lo v),

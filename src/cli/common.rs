@@ -47,6 +47,25 @@ impl SceneArgs {
     }
 }
 
+/// `--light-mix`: see its help.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightMixArg {
+    Auto,
+    Learned,
+    Fixed(f32),
+}
+
+fn parse_light_mix(s: &str) -> Result<LightMixArg, String> {
+    match s {
+        "auto" => Ok(LightMixArg::Auto),
+        "learned" => Ok(LightMixArg::Learned),
+        _ => s
+            .parse::<f32>()
+            .map(LightMixArg::Fixed)
+            .map_err(|_| format!("`{s}`: expected auto, learned or a probability")),
+    }
+}
+
 fn parse_look_at(s: &str) -> Result<[f32; 6], String> {
     let v: Vec<f32> = s
         .split(',')
@@ -192,9 +211,13 @@ pub struct EstimatorArgs {
     /// Guiding: choose lights from the source distribution alone, as the paper does.
     #[arg(long, overrides_with = "learn_lights")]
     pub no_learn_lights: bool,
-    /// Guiding with learned light selection: probability of choosing from the table.
-    #[arg(long, default_value_t = 0.5)]
-    pub light_mix: f32,
+    /// Guiding with learned light selection: probability of choosing the light from the
+    /// leaf's table instead of the source distribution. A number: that, everywhere;
+    /// `learned`: each SD-tree leaf chooses its own between passes (from 0.5), the one
+    /// that minimises the predicted variance of its one-sample NEE; `auto`: learned for
+    /// `guided`, 0.5 for `guided-ris` (measured better there).
+    #[arg(long, value_name = "auto|learned|P", default_value = "auto", value_parser = parse_light_mix)]
+    pub light_mix: LightMixArg,
     /// Ray traversal: the device's ray queries, or the kernels' own traversal of a BVH
     /// built on the CPU; auto takes software on CPU devices (lavapipe, where it is
     /// faster) and on devices without ray queries, ray queries on GPUs.
@@ -253,7 +276,15 @@ impl EstimatorArgs {
                 memory_cap_bytes: self.guiding_memory.saturating_mul(1 << 20),
                 // The last of --learn-lights / --no-learn-lights wins; neither: on.
                 learn_lights: self.learn_lights || !self.no_learn_lights,
-                light_mix: self.light_mix,
+                light_mix: match self.light_mix {
+                    LightMixArg::Fixed(m) => m,
+                    _ => 0.5,
+                },
+                learn_light_mix: match self.light_mix {
+                    LightMixArg::Auto => None,
+                    LightMixArg::Learned => Some(true),
+                    LightMixArg::Fixed(_) => Some(false),
+                },
                 output: self.guided_output,
             },
             traversal: self.traversal,

@@ -105,6 +105,9 @@ pub struct GuidingConfig {
     /// models from (1 − light_mix)·source + light_mix·learned table.
     pub learn_lights: bool,
     pub light_mix: f32,
+    /// Choose the mix per leaf between passes (`light_mix` is then each leaf's starting
+    /// value; src/guiding/light_mix.rs).
+    pub learn_light_mix: bool,
     /// Learn the BSDF selection probability per leaf (`bsdf_fraction` is then each
     /// leaf's starting value).
     pub learn_selection: bool,
@@ -113,6 +116,10 @@ pub struct GuidingConfig {
     /// Which statistic of it the quadtrees follow.
     pub density: GuideDensity,
 }
+
+/// Largest light mix: the source distribution keeps 5 % of the selection, so every
+/// light stays samplable.
+pub const MAX_LIGHT_MIX: f32 = 0.95;
 
 /// Default `--guiding-memory`: 256 MiB of GPU arrays is thousands of well-resolved leaves.
 pub const DEFAULT_MEMORY_CAP_BYTES: u64 = 256 << 20;
@@ -131,6 +138,7 @@ impl Default for GuidingConfig {
             bsdf_fraction: 0.5,
             learn_lights: false,
             light_mix: 0.5,
+            learn_light_mix: false,
             learn_selection: false,
             target: GuideTarget::All,
             density: GuideDensity::Radiance,
@@ -171,9 +179,9 @@ impl GuidingConfig {
                 self.bsdf_fraction
             ));
         }
-        if !(0.0..=0.95).contains(&self.light_mix) {
+        if !(0.0..=MAX_LIGHT_MIX).contains(&self.light_mix) {
             return bad(format!(
-                "light mix must be in [0, 0.95], got {}",
+                "light mix must be in [0, {MAX_LIGHT_MIX}], got {}",
                 self.light_mix
             ));
         }

@@ -8,12 +8,13 @@
 //! leaf in order, one header node (sum.x = statistical weight) and then its training
 //! tree, root first. Child indices are absolute indices into their own array.
 
+use super::light_mix::{choose_mix, LightSums};
 use super::quadtree::{QuadNode, QuadTree};
 use super::sdtree::{Leaf, SdTree, SpatialNode};
 use super::{GuidingConfig, GuidingError};
 use crate::gpu::{
-    GuideHeader, GuideLeaf, GuideLightSlot, GuideQuadNode, GuideSpatialNode, GUIDE_LIGHT_EMPTY,
-    GUIDE_LIGHT_SLOTS, GUIDE_SPATIAL_LEAF,
+    GuideHeader, GuideLeaf, GuideLightSlot, GuideLightTrainingSlot, GuideQuadNode,
+    GuideSpatialNode, GUIDE_LIGHT_EMPTY, GUIDE_LIGHT_SLOTS, GUIDE_SPATIAL_LEAF,
 };
 use glam::Vec3;
 use std::collections::{HashMap, HashSet};
@@ -24,9 +25,12 @@ pub(crate) const SPATIAL_NODE_BYTES: u64 = std::mem::size_of::<GuideSpatialNode>
 pub(crate) const LEAF_BYTES: u64 = std::mem::size_of::<GuideLeaf>() as u64;
 pub(crate) const QUAD_NODE_BYTES: u64 = std::mem::size_of::<GuideQuadNode>() as u64;
 pub(crate) const LIGHT_SLOT_BYTES: u64 = std::mem::size_of::<GuideLightSlot>() as u64;
+pub(crate) const LIGHT_TRAINING_SLOT_BYTES: u64 =
+    std::mem::size_of::<GuideLightTrainingSlot>() as u64;
 const SLOTS: usize = GUIDE_LIGHT_SLOTS as usize;
 /// GPU bytes one leaf adds besides its quadtrees: its record and its two light tables.
-pub(crate) const LEAF_TOTAL_BYTES: u64 = LEAF_BYTES + LIGHT_SLOT_BYTES * 2 * SLOTS as u64;
+pub(crate) const LEAF_TOTAL_BYTES: u64 =
+    LEAF_BYTES + (LIGHT_SLOT_BYTES + LIGHT_TRAINING_SLOT_BYTES) * SLOTS as u64;
 
 /// The contents of the four guiding buffers.
 #[derive(Clone, Debug, PartialEq)]
@@ -42,12 +46,18 @@ pub struct GuideArrays {
     /// first, then empty slots.
     pub lights: Vec<GuideLightSlot>,
     /// Initial contents of the light training buffer: all slots empty.
-    pub light_training: Vec<GuideLightSlot>,
+    pub light_training: Vec<GuideLightTrainingSlot>,
 }
 
 const EMPTY_SLOT: GuideLightSlot = GuideLightSlot {
     model: GUIDE_LIGHT_EMPTY,
     value: 0.0,
+};
+
+const EMPTY_TRAINING_SLOT: GuideLightTrainingSlot = GuideLightTrainingSlot {
+    model: GUIDE_LIGHT_EMPTY,
+    value: 0.0,
+    second: 0.0,
 };
 
 impl GuideArrays {
@@ -68,7 +78,8 @@ impl GuideArrays {
         self.spatial_buffer_len()
             + LEAF_BYTES * self.leaves.len() as u64
             + QUAD_NODE_BYTES * (self.sampling.len() + self.training.len()) as u64
-            + LIGHT_SLOT_BYTES * (self.lights.len() + self.light_training.len()) as u64
+            + LIGHT_SLOT_BYTES * self.lights.len() as u64
+            + LIGHT_TRAINING_SLOT_BYTES * self.light_training.len() as u64
     }
 }
 
@@ -163,7 +174,7 @@ impl SdTree {
             + SPATIAL_NODE_BYTES * self.nodes.len() as u64
             + LEAF_BYTES * self.leaves.len() as u64
             + QUAD_NODE_BYTES * (sampling + training) as u64
-            + LIGHT_SLOT_BYTES * (2 * SLOTS * self.leaves.len()) as u64
+            + (LIGHT_SLOT_BYTES + LIGHT_TRAINING_SLOT_BYTES) * (SLOTS * self.leaves.len()) as u64
     }
 
     /// The GPU buffers' contents.
@@ -175,11 +186,6 @@ impl SdTree {
             flags: self.config.flags(),
             leaf_count: self.leaves.len() as u32,
             bsdf_fraction: self.config.bsdf_fraction,
-            light_mix: if self.config.learn_lights {
-                self.config.light_mix
-            } else {
-                0.0
-            },
         };
         let spatial = self
             .nodes
@@ -213,6 +219,11 @@ impl SdTree {
                 box_size: leaf.box_size.to_array(),
                 sampling_weight: leaf.sampling_weight,
                 bsdf_fraction: leaf.selection.fraction(),
+                light_mix: match self.config.learn_lights && !leaf.lights.is_empty() {
+                    false => 0.0,
+                    true if self.config.learn_light_mix => leaf.light_mix,
+                    true => self.config.light_mix,
+                },
             });
         }
         let mut lights = vec![EMPTY_SLOT; self.leaves.len() * SLOTS];
@@ -227,14 +238,21 @@ impl SdTree {
             leaves,
             sampling,
             training,
-            light_training: vec![EMPTY_SLOT; lights.len()],
+            light_training: vec![EMPTY_TRAINING_SLOT; lights.len()],
             lights,
         }
     }
 
     /// Take in the light training buffer read back after a pass (learned light
-    /// selection): each leaf's recorded (light model, contribution) pairs.
-    pub fn load_light_readback(&mut self, slots: &[GuideLightSlot]) -> Result<(), GuidingError> {
+    /// selection): each leaf's recorded sums per light model, and, with a learned mix,
+    /// the mix its next table is sampled with (`light_mix::choose_mix`; `source_pmf`:
+    /// the source distribution's probability of each light model). Call it after
+    /// `load_training_readback`, which brings each leaf's Σ v².
+    pub fn load_light_readback(
+        &mut self,
+        slots: &[GuideLightTrainingSlot],
+        source_pmf: &[f32],
+    ) -> Result<(), GuidingError> {
         if slots.len() != self.leaves.len() * SLOTS {
             return Err(GuidingError::TrainingMismatch(format!(
                 "{} light slots read back, {} uploaded",
@@ -242,13 +260,46 @@ impl SdTree {
                 self.leaves.len() * SLOTS
             )));
         }
-        for (leaf, table) in self.leaves.iter_mut().zip(slots.chunks_exact(SLOTS)) {
+        if let Some(s) = slots
+            .iter()
+            .find(|s| s.model != GUIDE_LIGHT_EMPTY && s.model as usize >= source_pmf.len())
+        {
+            return Err(GuidingError::TrainingMismatch(format!(
+                "light model {} read back, the scene has {}",
+                s.model,
+                source_pmf.len()
+            )));
+        }
+        let (learn, initial) = (self.config.learn_light_mix, self.config.light_mix);
+        super::parallel::map_mut(&mut self.leaves, |i, leaf| {
+            let table = &slots[i * SLOTS..(i + 1) * SLOTS];
             leaf.light_training = table
                 .iter()
                 .filter(|s| s.model != GUIDE_LIGHT_EMPTY)
-                .map(|s| (s.model, s.value))
+                .map(|s| LightSums {
+                    model: s.model,
+                    value: s.value,
+                    second: s.second,
+                })
                 .collect();
-        }
+            if !learn {
+                return;
+            }
+            let judged = choose_mix(
+                &leaf.lights,
+                leaf.light_mix,
+                &leaf.light_training,
+                leaf.light_second,
+                |m| source_pmf[m as usize],
+            );
+            leaf.light_mix = match judged {
+                Some(m) => m,
+                // A first table starts at the configured mix; a table no estimate
+                // judged keeps the mix it had.
+                None if leaf.lights.is_empty() => initial,
+                None => leaf.light_mix,
+            };
+        });
         Ok(())
     }
 
@@ -280,6 +331,7 @@ impl SdTree {
         }
         for (leaf, &root) in self.leaves.iter_mut().zip(&roots) {
             leaf.training_weight = training[root as usize - 1].sum[0];
+            leaf.light_second = training[root as usize - 1].sum[1];
             let nodes = &training[root as usize..root as usize + leaf.training.node_count()];
             leaf.training.set_sums(nodes.iter().map(|n| n.sum));
         }
@@ -405,6 +457,19 @@ impl SdTree {
             if lights.iter().any(|&(_, p)| !(p.is_finite() && p >= 0.0)) {
                 return bad(format!("{what}: bad light table"));
             }
+            if !(0.0..=super::config::MAX_LIGHT_MIX).contains(&g.light_mix) {
+                return bad(format!(
+                    "{what}: light mix {} not in [0, {}]",
+                    g.light_mix,
+                    super::config::MAX_LIGHT_MIX
+                ));
+            }
+            // What an empty table's leaf holds (`SdTree::refit`); the arrays say 0.
+            let light_mix = if lights.is_empty() {
+                config.light_mix
+            } else {
+                g.light_mix
+            };
             leaves.push(Leaf {
                 box_min,
                 box_size,
@@ -414,7 +479,9 @@ impl SdTree {
                 training,
                 training_weight,
                 lights: Arc::new(lights),
+                light_mix,
                 light_training: Vec::new(),
+                light_second: 0.0,
                 selection: super::SelectionState::restored(g.bsdf_fraction),
             });
         }

@@ -6,16 +6,17 @@
 //! file, anything that is not such a file, another version, a corrupt file, or a tree
 //! trained on another scene. Files are written to a temporary name and renamed.
 //!
-//! Format version 3, all integers little-endian:
+//! Format version 4, all integers little-endian:
 //! `magic[16] version:u32 scene_hash:u64 iterations:u32 bbox_min:f32×3 bbox_max:f32×3`
 //! `spatial_threshold:f32 rho:f32 max_quad_depth:u32 max_spatial_depth:u32`
 //! `memory_cap:u64 spatial_filter:u32 directional_filter:u32 record_nee:u32`
-//! `bsdf_fraction:f32 learn_lights:u32 light_mix:f32`
+//! `bsdf_fraction:f32 learn_lights:u32 light_mix:f32 learn_light_mix:u32`
 //! `n_spatial:u32 n_leaves:u32 n_sampling:u32 n_training:u32 n_lights:u32`
 //! `GuideHeader GuideSpatialNode[n_spatial] GuideLeaf[n_leaves]`
 //! `GuideQuadNode[n_sampling] GuideQuadNode[n_training] GuideLightSlot[n_lights] checksum:u64`
 //! (version 2 added the learned light tables, version 3 the learned BSDF selection
-//! probability of each leaf, `GuideLeaf.bsdf_fraction`).
+//! probability of each leaf, `GuideLeaf.bsdf_fraction`, version 4 each leaf's light mix,
+//! `GuideLeaf.light_mix`, in place of the header's).
 
 use super::flat::GuideArrays;
 use super::{DirectionalFilter, GuidingConfig, GuidingError, SdTree, SpatialFilter};
@@ -24,7 +25,7 @@ use std::path::Path;
 
 const MAGIC: &[u8; 16] = b"lanterna-sdtree\0";
 /// The SD-tree file format version this build writes and reads.
-pub const FORMAT_VERSION: u32 = 3;
+pub const FORMAT_VERSION: u32 = 4;
 
 /// FNV-1a, 64 bit: the file checksum, and a scene hash the renderer can feed with the
 /// scene's geometry and materials (`--load-guiding` refuses a tree from another scene).
@@ -154,6 +155,7 @@ impl SdTree {
         w.f32(c.bsdf_fraction);
         w.u32(u32::from(c.learn_lights));
         w.f32(c.light_mix);
+        w.u32(u32::from(c.learn_light_mix));
         w.u32(arrays.spatial.len() as u32);
         w.u32(arrays.leaves.len() as u32);
         w.u32(arrays.sampling.len() as u32);
@@ -272,6 +274,7 @@ fn parse(path: &Path, data: &[u8]) -> Result<(SdTree, SavedTreeInfo), GuidingErr
             bsdf_fraction: r.f32()?,
             learn_lights: r.u32()? != 0,
             light_mix: r.f32()?,
+            learn_light_mix: r.u32()? != 0,
             ..GuidingConfig::default()
         };
         let counts = [r.u32()?, r.u32()?, r.u32()?, r.u32()?, r.u32()?];

@@ -18,6 +18,7 @@ mod config;
 mod flat;
 mod io;
 pub mod kernel_checks;
+mod light_mix;
 mod parallel;
 mod probe;
 mod quadtree;
@@ -34,10 +35,11 @@ pub use chi2::{
 };
 pub use config::{
     DirectionalFilter, GuideDensity, GuideTarget, GuidingConfig, SpatialFilter,
-    DEFAULT_MEMORY_CAP_BYTES,
+    DEFAULT_MEMORY_CAP_BYTES, MAX_LIGHT_MIX,
 };
 pub use flat::GuideArrays;
 pub use io::{scene_hash_number, SavedTreeInfo, SceneHasher, FORMAT_VERSION};
+pub use light_mix::{LightSums, MAX_LEARNED_MIX};
 pub use quadtree::{Cell, QuadNode, QuadTree};
 pub use refit::RefitStats;
 pub use schedule::{SppSchedule, TimeSchedule, DEFAULT_TRAIN_FRACTION};

@@ -47,6 +47,7 @@ impl SdTree {
         // Sampling trees := the finished iteration's statistics; training trees start
         // over with the refined topology.
         let density = self.config.density;
+        let initial_mix = self.config.light_mix;
         let per_leaf = super::parallel::map_mut(&mut self.leaves, |_, leaf| {
             let mut built = std::mem::take(&mut leaf.training);
             let dropped = match density {
@@ -60,11 +61,21 @@ impl SdTree {
             leaf.training_weight = 0.0;
             // Light tables := this iteration's contributions, normalised.
             let mut recorded = std::mem::take(&mut leaf.light_training);
-            recorded.retain(|&(_, v)| v.is_finite() && v > 0.0);
-            let total: f32 = recorded.iter().map(|&(_, v)| v).sum();
-            recorded.iter_mut().for_each(|e| e.1 /= total);
-            recorded.sort_by(|a, b| b.1.total_cmp(&a.1));
-            leaf.lights = std::sync::Arc::new(recorded);
+            let mut table: Vec<(u32, f32)> = recorded
+                .drain(..)
+                .filter(|s| s.value.is_finite() && s.value > 0.0)
+                .map(|s| (s.model, s.value))
+                .collect();
+            let total: f32 = table.iter().map(|&(_, v)| v).sum();
+            table.iter_mut().for_each(|e| e.1 /= total);
+            table.sort_by(|a, b| b.1.total_cmp(&a.1));
+            // A leaf without a table samples the source alone; its next table starts
+            // at the configured mix.
+            if table.is_empty() {
+                leaf.light_mix = initial_mix;
+            }
+            leaf.lights = std::sync::Arc::new(table);
+            leaf.light_second = 0.0;
             (dropped, weight)
         });
         // Summed in leaf order, as one thread would.

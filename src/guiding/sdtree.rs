@@ -5,6 +5,7 @@
 //! `guide_find_leaf` / `guide_record` in shaders_glsl/inc/guiding.glsl, so the CPU can
 //! stand in for the GPU in tests and accumulate appended records (the records mode).
 
+use super::light_mix::LightSums;
 use super::quadtree::QuadTree;
 use super::selection::SelectionState;
 use super::sphere::dir_to_square;
@@ -39,8 +40,13 @@ pub struct Leaf {
     /// Learned light selection: (light model, probability), probabilities summing to 1,
     /// or empty; shared with the parent after a split until the next refit.
     pub lights: Arc<Vec<(u32, f32)>>,
-    /// (light model, summed NEE contribution luminance) recorded this iteration.
-    pub light_training: Vec<(u32, f32)>,
+    /// Probability of choosing the light model from `lights` rather than from the source
+    /// distribution (per leaf: `light_mix::choose_mix`, or the configured one).
+    pub light_mix: f32,
+    /// Per light model, the NEE estimates recorded this iteration (sum and square sum).
+    pub light_training: Vec<LightSums>,
+    /// Σ v² over all of this iteration's NEE estimates in the leaf.
+    pub light_second: f32,
     /// Learned BSDF selection probability (its optimiser; copied to both halves on a
     /// split, as the reference does).
     pub selection: SelectionState,
@@ -83,7 +89,9 @@ impl SdTree {
             training: QuadTree::initial(config.rho, config.max_quad_depth),
             training_weight: 0.0,
             lights: Arc::new(Vec::new()),
+            light_mix: config.light_mix,
             light_training: Vec::new(),
+            light_second: 0.0,
             selection: SelectionState::new(config.bsdf_fraction),
         };
         Ok(Self {
@@ -124,6 +132,22 @@ impl SdTree {
 
     pub fn leaf(&self, index: u32) -> &Leaf {
         &self.leaves[index as usize]
+    }
+
+    /// Mean light mix of the leaves with a learned light table, weighted by the records
+    /// their sampling trees were learned from (0 when no leaf has a table).
+    pub fn mean_light_mix(&self) -> f32 {
+        let (mut sum, mut weight) = (0.0f64, 0.0f64);
+        for l in self.leaves.iter().filter(|l| !l.lights.is_empty()) {
+            let w = f64::from(l.sampling_weight.max(1.0));
+            sum += w * f64::from(l.light_mix);
+            weight += w;
+        }
+        if weight > 0.0 {
+            (sum / weight) as f32
+        } else {
+            0.0
+        }
     }
 
     pub fn spatial_node_count(&self) -> usize {

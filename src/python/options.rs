@@ -130,7 +130,25 @@ pub fn apply(
                     value_enum::<GuidedOutput>(&flag, &v.extract::<String>()?)?
             }
             "learn_lights" => settings.guiding.learn_lights = v.extract()?,
-            "light_mix" => settings.guiding.light_mix = v.extract()?,
+            "light_mix" => {
+                // As on the command line: a number (fixed), "learned", or "auto"/None.
+                let g = &mut settings.guiding;
+                if let Ok(m) = v.extract::<Option<f32>>() {
+                    g.learn_light_mix = m.map(|_| false);
+                    g.light_mix = m.unwrap_or(0.5);
+                } else {
+                    match v.extract::<String>()?.as_str() {
+                        "auto" => g.learn_light_mix = None,
+                        "learned" => g.learn_light_mix = Some(true),
+                        other => {
+                            return Err(PyValueError::new_err(format!(
+                                "light_mix: `{other}`: expected auto, learned or a probability"
+                            )))
+                        }
+                    }
+                    g.light_mix = 0.5;
+                }
+            }
             "traversal" => {
                 settings.traversal = value_enum::<Traversal>(&flag, &v.extract::<String>()?)?
             }

@@ -135,7 +135,7 @@ impl GuideBuffers {
     }
 
     /// Read the light training tables back after a pass.
-    pub fn read_light_training(&self) -> vk::Result<Vec<gpu::GuideLightSlot>> {
+    pub fn read_light_training(&self) -> vk::Result<Vec<gpu::GuideLightTrainingSlot>> {
         self.light_training.read(self.light_slots)
     }
 

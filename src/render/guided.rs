@@ -43,6 +43,9 @@ pub struct IterationStats {
     /// selection probability afterwards (weighted by records).
     pub selection_records: u64,
     pub mean_bsdf_fraction: f32,
+    /// Learned light selection: the leaves' mean light mix for the next pass
+    /// (`SdTree::mean_light_mix`).
+    pub mean_light_mix: f32,
 }
 
 /// The guiding side of a run.
@@ -81,6 +84,7 @@ pub fn guiding_config(renderer: &Renderer) -> GuidingConfig {
         bsdf_fraction: g.bsdf_fraction,
         learn_lights: g.learn_lights,
         light_mix: g.light_mix,
+        learn_light_mix: g.learns_light_mix(s.method),
         learn_selection: g.learn_selection,
         target: g.target,
         density: g.density,
@@ -474,7 +478,8 @@ fn train_iteration(
         .map_err(guiding_error)?;
     if renderer.settings.guiding.learn_lights {
         let lights = renderer.guide_buffers().read_light_training()?;
-        tree.load_light_readback(&lights).map_err(guiding_error)?;
+        tree.load_light_readback(&lights, &renderer.source_model_pmf())
+            .map_err(guiding_error)?;
     }
     let refit = tree.refit(next_spp);
     let refit_seconds = t.elapsed().as_secs_f64();
@@ -499,9 +504,10 @@ fn train_iteration(
         refused_splits: refit.refused_splits,
         selection_records: selection.records,
         mean_bsdf_fraction: selection.mean_fraction,
+        mean_light_mix: tree.mean_light_mix(),
     };
     log::debug!(
-        "guiding iteration {k}: {done} spp in {:.2} s (GPU {:.2} s), read-back {:.3} s, refit {:.3} s, upload {:.3} s; {} leaves, {} + {} nodes, {:.1} KiB; selection: {} records, mean BSDF fraction {:.3}",
+        "guiding iteration {k}: {done} spp in {:.2} s (GPU {:.2} s), read-back {:.3} s, refit {:.3} s, upload {:.3} s; {} leaves, {} + {} nodes, {:.1} KiB; selection: {} records, mean BSDF fraction {:.3}, mean light mix {:.3}",
         it.render_seconds,
         it.gpu_seconds,
         it.readback_seconds,
@@ -512,7 +518,8 @@ fn train_iteration(
         it.training_nodes,
         it.gpu_bytes as f64 / 1024.0,
         it.selection_records,
-        it.mean_bsdf_fraction
+        it.mean_bsdf_fraction,
+        it.mean_light_mix
     );
     Ok(Some(it))
 }

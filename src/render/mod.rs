@@ -99,6 +99,8 @@ pub struct Renderer {
     camera: Camera,
     scene_radius: f32,
     light_model_count: u32,
+    /// Each light model's probability under power-proportional selection.
+    model_power_pmf: Vec<f32>,
     light_triangle_count: u32,
     punctual_count: u32,
     shaders: ShaderSource,
@@ -176,6 +178,7 @@ impl Renderer {
             camera,
             scene_radius: 0.5 * scene.extent(),
             light_model_count: lights.models.len() as u32,
+            model_power_pmf: lights.model_alias.iter().map(|a| a.pmf).collect(),
             light_triangle_count: lights.triangles.len() as u32,
             punctual_count: scene.punctual.len() as u32,
             shaders,
@@ -290,6 +293,17 @@ impl Renderer {
 
     pub fn guide_buffers(&self) -> &GuideBuffers {
         &self.guide
+    }
+
+    /// Each light model's probability under the settings' source distribution
+    /// (`source_model_pmf` in shaders_glsl/inc/lights.glsl).
+    pub fn source_model_pmf(&self) -> Vec<f32> {
+        match self.settings.source {
+            LightSource::Power => self.model_power_pmf.clone(),
+            LightSource::Uniform => {
+                vec![1.0 / self.light_model_count.max(1) as f32; self.light_model_count as usize]
+            }
+        }
     }
 
     /// Change the bound guiding buffers in place (the descriptor set is rebuilt).
