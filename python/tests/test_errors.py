@@ -21,6 +21,7 @@ def cli_error(cli, *args):
         ({"max_depth": 0}, ["--max-depth", "0"]),
         ({"ris_candidates": 0, "method": "ris"}, ["--ris-candidates", "0", "--method", "ris"]),
         ({"bsdf_fraction": 1.5, "method": "guided"}, ["--bsdf-fraction", "1.5", "--method", "guided"]),
+        ({"light_mix": 1.0, "method": "guided"}, ["--light-mix", "1", "--method", "guided"]),
         ({"camera": "nope"}, ["--camera", "nope"]),
     ],
 )
@@ -53,6 +54,10 @@ def test_other_bad_arguments(scene, pt):
         pt.render(spp=1, sample_offset=-1)
     with pytest.raises(ValueError, match="--source"):
         lanterna.Renderer(scene, 8, 6, source="brightest")
+    with pytest.raises(ValueError, match="expected auto, learned or a probability"):
+        lanterna.Renderer(scene, 8, 6, method="guided", light_mix="sometimes")
+    for mix in ("auto", "learned", None, 0.3):
+        lanterna.Renderer(scene, 8, 6, method="guided", light_mix=mix)
     with pytest.raises(TypeError, match="unexpected keyword argument 'spp'"):
         lanterna.Renderer(scene, 8, 6, spp=4)
     with pytest.raises(ValueError, match="--load-guiding needs --method guided or guided-ris"):
