@@ -221,7 +221,12 @@ fn inverse_variance_combination_agrees_with_pt() {
 }
 
 /// Learned light selection keeps NEE, RIS and MIS unbiased: guided methods with
-/// --learn-lights agree with pt on the many-light scenes.
+/// --learn-lights agree with pt on the many-light scenes; `guided` with each leaf's
+/// learned mix (its default), `guided-ris` with the largest fixed mix, 0.95, where a
+/// mismatch between the mix that samples and the one in the pdfs weighs most. Seen to
+/// fail (p = 4·10⁻⁹) with `sample_light` choosing from the table with probability 0.5
+/// while the pdfs use the leaf's mix; pdfs alone using 0.5 (the table-chosen models'
+/// own pmf right) went unnoticed here and in the conformance suite (+1.3 ± 0.4 %).
 #[test]
 fn learned_light_selection_agrees_with_pt() {
     for (kind, options, w, h) in [
@@ -245,6 +250,10 @@ fn learned_light_selection_agrees_with_pt() {
             let mut s = testing::settings(method, w, h);
             s.seed = 52 + i as u32;
             s.guiding.learn_lights = true;
+            if method == Method::GuidedRis {
+                s.guiding.learn_light_mix = Some(false);
+                s.guiding.light_mix = lanterna::guiding::MAX_LIGHT_MIX;
+            }
             let b = run_batches(&t.scene, &t.camera, s, 12, 48);
             testing::assert_same_expectation(&a, &b, 4, ALPHA);
         }
