@@ -5,7 +5,7 @@ use anyhow::{Context, Result};
 use lanterna::files::FilePlan;
 use lanterna::render::session::{self, DeviceOptions, LoadedScene};
 use lanterna::render::{
-    GuidedOutput, GuidingSettings, LightSource, Method, RenderSettings, Strategy,
+    GuidedOutput, GuidingSettings, LightMix, LightSource, Method, RenderSettings, Strategy,
 };
 use lanterna::scene::{Camera, LoadOptions};
 use lanterna::shaders::ShaderSource;
@@ -44,25 +44,6 @@ impl SceneArgs {
         LoadOptions {
             allow_outside_uris: self.allow_outside_uris,
         }
-    }
-}
-
-/// `--light-mix`: see its help.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum LightMixArg {
-    Auto,
-    Learned,
-    Fixed(f32),
-}
-
-fn parse_light_mix(s: &str) -> Result<LightMixArg, String> {
-    match s {
-        "auto" => Ok(LightMixArg::Auto),
-        "learned" => Ok(LightMixArg::Learned),
-        _ => s
-            .parse::<f32>()
-            .map(LightMixArg::Fixed)
-            .map_err(|_| format!("`{s}`: expected auto, learned or a probability")),
     }
 }
 
@@ -216,8 +197,8 @@ pub struct EstimatorArgs {
     /// `learned`: each SD-tree leaf chooses its own between passes (from 0.5), the one
     /// that minimises the predicted variance of its one-sample NEE; `auto`: learned for
     /// `guided`, 0.5 for `guided-ris` (measured better there).
-    #[arg(long, value_name = "auto|learned|P", default_value = "auto", value_parser = parse_light_mix)]
-    pub light_mix: LightMixArg,
+    #[arg(long, value_name = "auto|learned|P", default_value = "auto", value_parser = LightMix::parse)]
+    pub light_mix: LightMix,
     /// Ray traversal: the device's ray queries, or the kernels' own traversal of a BVH
     /// built on the CPU; auto takes software on CPU devices (lavapipe, where it is
     /// faster) and on devices without ray queries, ray queries on GPUs.
@@ -246,7 +227,7 @@ impl EstimatorArgs {
     /// the renderer do that).
     pub fn settings(&self, method: Method, width: u32, height: u32) -> RenderSettings {
         use lanterna::guiding::{DirectionalFilter, SpatialFilter};
-        RenderSettings {
+        let mut settings = RenderSettings {
             method,
             width,
             height,
@@ -276,20 +257,14 @@ impl EstimatorArgs {
                 memory_cap_bytes: self.guiding_memory.saturating_mul(1 << 20),
                 // The last of --learn-lights / --no-learn-lights wins; neither: on.
                 learn_lights: self.learn_lights || !self.no_learn_lights,
-                light_mix: match self.light_mix {
-                    LightMixArg::Fixed(m) => m,
-                    _ => 0.5,
-                },
-                learn_light_mix: match self.light_mix {
-                    LightMixArg::Auto => None,
-                    LightMixArg::Learned => Some(true),
-                    LightMixArg::Fixed(_) => Some(false),
-                },
                 output: self.guided_output,
+                ..GuidingSettings::default()
             },
             traversal: self.traversal,
             ..RenderSettings::default()
-        }
+        };
+        settings.guiding.set_light_mix(self.light_mix);
+        settings
     }
 }
 

@@ -4,7 +4,7 @@
 //! the command line checks them (the renderer, the guiding configuration), so the same
 //! values fail with the same messages.
 
-use crate::render::{GuidedOutput, LightSource, RenderSettings, Strategy, Traversal};
+use crate::render::{GuidedOutput, LightMix, LightSource, RenderSettings, Strategy, Traversal};
 use crate::shaders::ShaderSource;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -132,22 +132,12 @@ pub fn apply(
             "learn_lights" => settings.guiding.learn_lights = v.extract()?,
             "light_mix" => {
                 // As on the command line: a number (fixed), "learned", or "auto"/None.
-                let g = &mut settings.guiding;
-                if let Ok(m) = v.extract::<Option<f32>>() {
-                    g.learn_light_mix = m.map(|_| false);
-                    g.light_mix = m.unwrap_or(0.5);
-                } else {
-                    match v.extract::<String>()?.as_str() {
-                        "auto" => g.learn_light_mix = None,
-                        "learned" => g.learn_light_mix = Some(true),
-                        other => {
-                            return Err(PyValueError::new_err(format!(
-                                "light_mix: `{other}`: expected auto, learned or a probability"
-                            )))
-                        }
-                    }
-                    g.light_mix = 0.5;
-                }
+                let mix = match v.extract::<Option<f32>>() {
+                    Ok(m) => m.map_or(LightMix::Auto, LightMix::Fixed),
+                    Err(_) => LightMix::parse(&v.extract::<String>()?)
+                        .map_err(|e| PyValueError::new_err(format!("light_mix: {e}")))?,
+                };
+                settings.guiding.set_light_mix(mix);
             }
             "traversal" => {
                 settings.traversal = value_enum::<Traversal>(&flag, &v.extract::<String>()?)?

@@ -36,7 +36,8 @@ pub use guide_buffers::GuideBuffers;
 pub use guided::{train, GuidingOutcome, IterationStats, Training, TrainingPlan};
 pub use readback::Outlier;
 pub use settings::{
-    GuidedOutput, GuidingSettings, LightSource, Method, RenderSettings, SettingsError, Strategy,
+    GuidedOutput, GuidingSettings, LightMix, LightSource, Method, RenderSettings, SettingsError,
+    Strategy,
 };
 pub use traversal::{Traversal, TraversalChoice, TraversalKind};
 

@@ -345,7 +345,39 @@ fn flatten(prefix: &str, value: &serde_json::Value, out: &mut Vec<(String, Strin
     }
 }
 
+/// What `--light-mix` (and Python's `light_mix`) asks for: `auto`, `learned` or a fixed
+/// probability (see `GuidingSettings::learn_light_mix`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightMix {
+    Auto,
+    Learned,
+    Fixed(f32),
+}
+
+impl LightMix {
+    /// `auto`, `learned` or a number (range-checked later, by `validate`).
+    pub fn parse(s: &str) -> Result<LightMix, String> {
+        match s {
+            "auto" => Ok(LightMix::Auto),
+            "learned" => Ok(LightMix::Learned),
+            _ => s
+                .parse::<f32>()
+                .map(LightMix::Fixed)
+                .map_err(|_| format!("`{s}`: expected auto, learned or a probability")),
+        }
+    }
+}
+
 impl GuidingSettings {
+    /// Set the light mix options as `mix` asks (a learned mix starts from 0.5).
+    pub fn set_light_mix(&mut self, mix: LightMix) {
+        (self.light_mix, self.learn_light_mix) = match mix {
+            LightMix::Auto => (0.5, None),
+            LightMix::Learned => (0.5, Some(true)),
+            LightMix::Fixed(m) => (m, Some(false)),
+        };
+    }
+
     /// Whether `method` chooses the light mix per leaf. By default (None) `guided` does
     /// and `guided-ris` keeps the fixed mix: the leaf's choice minimises the variance of
     /// one-sample NEE, exact for `guided`'s NEE and measured worse than the fixed 0.5 for
