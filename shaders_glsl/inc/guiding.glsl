@@ -394,13 +394,15 @@ uint guide_light_sample(uint leaf, float u, out float pmf) {
     return last;  // rounding: the CDF may end a little below 1
 }
 
-// Add the NEE estimate `value` and its square to light model `model`'s slot of leaf
-// `leaf`'s training table (open addressing with atomics; a full neighbourhood drops the
-// record from the table, which only affects what is learned, never correctness), and
-// its square to the leaf's total (training header sum.y).
+// Add the NEE estimate `value` to light model `model`'s slot of leaf `leaf`'s training
+// table (open addressing with atomics; a full neighbourhood drops the record from the
+// table, which only affects what is learned, never correctness); with a learned mix
+// (GUIDE_FLAG_LEARN_LIGHT_MIX) its square too, there and in the leaf's total (training
+// header sum.y).
 void guide_light_record(uint leaf, uint model, float value) {
+    bool learn_mix = (guide_header.flags & GUIDE_FLAG_LEARN_LIGHT_MIX) != 0u;
     float second = value * value;
-    atomicAdd(guide_training[guide_leaves[leaf].training_root - 1u].sum.y, second);
+    if (learn_mix) atomicAdd(guide_training[guide_leaves[leaf].training_root - 1u].sum.y, second);
     uint base = leaf * GUIDE_LIGHT_SLOTS;
     uint h = (model * 2654435761u) >> 28u;  // top 4 bits: GUIDE_LIGHT_SLOTS = 16
     [[dont_unroll]] for (uint probe = 0u; probe < GUIDE_LIGHT_PROBES; ++probe) {
@@ -408,7 +410,7 @@ void guide_light_record(uint leaf, uint model, float value) {
         uint prev = atomicCompSwap(guide_light_training[i].model, GUIDE_LIGHT_EMPTY, model);
         if (prev == GUIDE_LIGHT_EMPTY || prev == model) {
             atomicAdd(guide_light_training[i].value, value);
-            atomicAdd(guide_light_training[i].second, second);
+            if (learn_mix) atomicAdd(guide_light_training[i].second, second);
             return;
         }
     }

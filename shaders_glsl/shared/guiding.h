@@ -31,6 +31,10 @@
 // target, L²/pdf instead of L/pdf, and the refit takes the square root of each cell's
 // mean (the density then follows √E[L²] rather than E[L]).
 #define GUIDE_FLAG_SECOND_MOMENT 128u
+// Learned light mix (with GUIDE_FLAG_LEARN_LIGHTS): NEE records also sum their squares,
+// per light training slot and per leaf, for the CPU's choice of each leaf's light_mix;
+// with a fixed mix nothing reads them and they are not recorded.
+#define GUIDE_FLAG_LEARN_LIGHT_MIX 256u
 
 // Learned light selection: per spatial leaf, a table of GUIDE_LIGHT_SLOTS light models
 // (open addressing, GUIDE_LIGHT_PROBES probes) with the NEE contribution each delivered.

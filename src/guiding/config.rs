@@ -207,6 +207,9 @@ impl GuidingConfig {
         }
         if self.learn_lights {
             f |= crate::gpu::GUIDE_FLAG_LEARN_LIGHTS;
+            if self.learn_light_mix {
+                f |= crate::gpu::GUIDE_FLAG_LEARN_LIGHT_MIX;
+            }
         }
         if self.learn_selection {
             f |= crate::gpu::GUIDE_FLAG_LEARN_SELECTION;
