@@ -13,6 +13,7 @@
 #include "inc/sampling.glsl"
 #include "inc/scene_data.glsl"
 #include "inc/debug.glsl"
+#include "inc/lane_stats.glsl"
 #include "inc/trace.glsl"
 #include "inc/material.glsl"
 #include "inc/guiding.glsl"
@@ -258,6 +259,7 @@ void main() {
         TRACE3("--- pixel (%u, %u) sample %u\n", pixel.x, pixel.y, sample_index);
         PathInfo info;
         vec3 L = trace_path(pixel, rng, rays, info);
+        lane_stats_path(1u + uint(info.directions));
         if (!all_finite(L) || any(lessThan(L, vec3(0.0)))) {
             nonfinite += 1u;
             continue;
@@ -316,6 +318,7 @@ void main() {
     atomicAdd(stats[STAT_SHADOW_RAYS], uint64_t(rays.shadow));
     if (nonfinite > 0u) atomicAdd(stats[STAT_NONFINITE_SAMPLES], uint64_t(nonfinite));
     if (clamped > 0u) atomicAdd(stats[STAT_CLAMPED_SAMPLES], uint64_t(clamped));
+    lane_stats_flush();
 }
 
 #endif

@@ -12,6 +12,8 @@
 #ifndef INC_BVH_GLSL
 #define INC_BVH_GLSL
 
+#include "lane_stats.glsl"
+
 // Entry distance of the ray into a box, or FLT_MAX when it misses it or enters beyond
 // `tmax`. The exit distance is widened by 2·γ₃ (Ize, "Robust BVH ray traversal") so that
 // rounding cannot make a ray miss the box of a triangle it hits (flat boxes of
@@ -47,6 +49,7 @@ Hit bvh_trace(vec3 o, vec3 d, float tmax, const bool any_hit) {
     uint sp = 0u;
     uint ref = 0u;  // the root is always inner node 0
     while (true) {
+        lane_stats_traversal_step();
         if ((ref & BVH_LEAF_BIT) == 0u) {
             BvhNode n = bvh_nodes[ref];
             float ta = bvh_box_entry(n.a_min, n.a_max, o, inv_d, best);

@@ -59,7 +59,13 @@
 #define STAT_NONFINITE_SAMPLES 3
 #define STAT_GUIDE_RECORDS 4
 #define STAT_CLAMPED_SAMPLES 5
-#define STAT_COUNT 8
+// SIMD lane utilisation (the lane-statistics kernel only, inc/lane_stats.glsl): steps
+// taken by lanes, and lane slots of the subgroup steps they took them in.
+#define STAT_TRAVERSAL_LANE_STEPS 6
+#define STAT_TRAVERSAL_LANE_SLOTS 7
+#define STAT_PATH_LANE_STEPS 8
+#define STAT_PATH_LANE_SLOTS 9
+#define STAT_COUNT 10
 
 // AOV channels (BINDING_AOV holds AOV_CHANNELS floats per pixel, summed over samples).
 #define AOV_ALBEDO 0          // 3: base colour at the first hit

@@ -454,6 +454,27 @@ fn profile(md: &mut String, p: &super::profile::Profile, r: &BenchReport) {
         }
         let _ = writeln!(md);
     }
+    if !p.lanes.is_empty() {
+        let _ = writeln!(
+            md,
+            "SIMD lanes doing work (lane-statistics kernel, depth {}): in the software traversal loop, all rays, and in the \
+             path loop, where a lane whose path ended waits for its subgroup's longest:\n",
+            r.sizes.max_depth
+        );
+        let _ = writeln!(md, "| method | traversal loop | path loop |");
+        let _ = writeln!(md, "|---|---|---|");
+        let share = |u: Option<f64>| u.map_or("–".to_string(), pct);
+        for l in &p.lanes {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} |",
+                l.method,
+                share(l.traversal),
+                share(l.path)
+            );
+        }
+        let _ = writeln!(md);
+    }
     let _ = writeln!(md, "{}\n", summary(p, r));
 }
 

@@ -5,7 +5,8 @@
 //! guided methods' training and render passes — all from GPU timestamps. Differences
 //! between neighbouring settings attribute the time to camera rays, bounces, NEE, RIS
 //! candidates and guiding; the gap between wall and GPU time, and the film read-back
-//! timed alone, are the host's share.
+//! timed alone, are the host's share. Then, with the lane-statistics kernel, how much
+//! of the device's SIMD width each method keeps busy in the traversal and path loops.
 
 use super::harness::{RunSample, Session};
 use super::spread::Spread;
@@ -58,6 +59,23 @@ pub struct Profile {
     /// Reading the film back (the per-render host cost besides submission), milliseconds.
     pub film_readback_ms: Spread,
     pub parts: Vec<Part>,
+    /// SIMD lane utilisation per method (one run each of the lane-statistics kernel).
+    #[serde(default)]
+    pub lanes: Vec<LaneEntry>,
+}
+
+/// How much of the SIMD width one method keeps busy (see `shaders_glsl/inc/lane_stats.glsl`).
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct LaneEntry {
+    pub method: String,
+    pub max_depth: u32,
+    /// Steps of the software traversal loop that did work, over the lane slots they ran
+    /// in (None with ray queries: the driver's traversal is not counted).
+    pub traversal: Option<f64>,
+    /// Path-loop steps that did work over the slots (lanes whose path ended wait).
+    pub path: Option<f64>,
+    /// The raw counts, all passes (training included) summed.
+    pub counts: crate::render::LaneCounts,
 }
 
 fn entry(
@@ -391,6 +409,26 @@ pub fn run(bench: &Bench) -> Result<Profile> {
             &training,
         ));
     }
+    // SIMD lane utilisation: one run of each method with the counting kernel (its time
+    // is not reported: the counters cost time).
+    let mut lanes = Vec::new();
+    for name in &bench.sizes.profile_lane_methods {
+        let method: Method = name
+            .parse()
+            .map_err(|e| super::BenchError::Other(format!("profile lane method `{name}`: {e}")))?;
+        let mut s = session.settings(method);
+        s.max_depth = depth;
+        s.lane_stats = true;
+        let runs = session.measure(s, Budget::Spp(1), budget, 1)?;
+        let counts = runs[0].stats.lanes;
+        lanes.push(LaneEntry {
+            method: method.name().into(),
+            max_depth: depth,
+            traversal: counts.traversal_utilisation(),
+            path: counts.path_utilisation(),
+            counts,
+        });
+    }
     let mut readback = Vec::new();
     for _ in 0..5 {
         let t = Instant::now();
@@ -405,6 +443,7 @@ pub fn run(bench: &Bench) -> Result<Profile> {
         entries,
         film_readback_ms: Spread::of(&readback),
         parts,
+        lanes,
     })
 }
 

@@ -61,6 +61,10 @@ pub struct Sizes {
     pub profile_ris_candidates: Vec<u32>,
     /// Max depths of the profile's `pt` runs.
     pub profile_depths: Vec<u32>,
+    /// Methods whose SIMD lane utilisation the profile counts (one run each, with a
+    /// kernel of its own to compile).
+    #[serde(default)]
+    pub profile_lane_methods: Vec<String>,
     /// `trend`: scenes, image sizes and spp budgets (training paths ≈ 0.3 × pixels × spp).
     #[serde(default)]
     pub trend: Vec<TrendSize>,
@@ -137,6 +141,10 @@ impl Sizes {
             profile: scene("street.gltf", 128, None, 4),
             profile_ris_candidates: vec![1, 8, 32],
             profile_depths: vec![1, 2, 3, 4],
+            profile_lane_methods: crate::render::Method::ALL
+                .iter()
+                .map(|m| m.name().to_string())
+                .collect(),
             trend: ["bistro-night.gltf", "street.gltf"]
                 .into_iter()
                 .flat_map(|scene| {
@@ -183,6 +191,9 @@ impl Sizes {
             profile: scene("street.gltf", 32, None, 2),
             profile_ris_candidates: vec![1, 32],
             profile_depths: vec![1, 4],
+            // Each method's lane-statistics kernel is one more lavapipe compile (tens of
+            // seconds): left out of the test suite's run (tests/lane_stats.rs checks it).
+            profile_lane_methods: Vec::new(),
             trend: vec![trend("bistro-night.gltf", 16, vec![4, 16], 32)],
         }
     }

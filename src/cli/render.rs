@@ -72,6 +72,12 @@ pub struct Args {
     /// render again (until Ctrl-C).
     #[arg(long, requires = "shader_dir")]
     pub watch: bool,
+    /// Count SIMD lane utilisation (the kernel's lanes doing work in the software
+    /// traversal loop and in the path loop, against the slots their subgroups ran) and
+    /// report it: where a CPU device such as lavapipe loses its vector width. Uses a
+    /// kernel with subgroup counters: slower, same image.
+    #[arg(long, conflicts_with = "pixel")]
+    pub lane_stats: bool,
 }
 
 /// Saved SD-trees carry the scene's content hash (hex) as a number.
@@ -154,6 +160,7 @@ pub fn run(args: Args) -> Result<()> {
     let started = Instant::now();
     let mut settings = args.method.settings();
     settings.exposure = args.exposure;
+    settings.lane_stats = args.lane_stats;
     let (loaded, camera, mut settings) = common::prepare(&args.scene, settings)?;
     let (width, height) = (settings.width, settings.height);
     let selected_light_png = args
@@ -458,6 +465,23 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
         renderer.traversal.kind,
         renderer.traversal.reason,
     );
+    if args.lane_stats {
+        let pct = |u: Option<f64>| {
+            u.map_or("not measured".to_string(), |u| {
+                format!("{:.1} %", u * 100.0)
+            })
+        };
+        log::info!(
+            "SIMD lanes doing work: traversal loop {} ({}), path loop {} (lanes whose path ended wait for their subgroup's longest)",
+            pct(stats.lanes.traversal_utilisation()),
+            if renderer.traversal.kind == lanterna::render::TraversalKind::Software {
+                "software traversal, all rays"
+            } else {
+                "only the software traversal is counted"
+            },
+            pct(stats.lanes.path_utilisation()),
+        );
+    }
     log::info!(
         "wrote {}{}",
         output.display(),

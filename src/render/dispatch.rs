@@ -42,6 +42,7 @@ impl Renderer {
         self.upload_params()?;
         let mut v = self.variant(false);
         v.debug = true;
+        v.lanes = false;
         self.pipeline(v)?;
         let set = self.descriptor_set(v)?;
         crate::vk::take_debug_printf_messages();

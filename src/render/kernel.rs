@@ -18,6 +18,8 @@ pub(super) struct Variant {
     pub aovs: bool,
     /// The debug-printf kernel (per-pixel traces).
     pub debug: bool,
+    /// The kernel with SIMD lane-utilisation counters (`settings.lane_stats`).
+    pub lanes: bool,
 }
 
 /// What one binding of the kernel's descriptor set holds.
@@ -99,6 +101,8 @@ impl Renderer {
         }
         let spirv = self.shaders.load(&self.traversal.kind.kernel(if v.debug {
             "render_debug"
+        } else if v.lanes {
+            "render_lanes"
         } else {
             "render"
         }))?;
@@ -114,8 +118,8 @@ impl Renderer {
         ];
         let started = Instant::now();
         let name = format!(
-            "render (ris={}, guiding={}, training={}, aovs={}, debug={}, traversal={})",
-            v.ris, v.guiding, v.training, v.aovs, v.debug, self.traversal.kind
+            "render (ris={}, guiding={}, training={}, aovs={}, debug={}, lanes={}, traversal={})",
+            v.ris, v.guiding, v.training, v.aovs, v.debug, v.lanes, self.traversal.kind
         );
         let p = ComputePipeline::new(
             &self.device,
@@ -189,6 +193,7 @@ impl Renderer {
             training,
             aovs: self.settings.aovs,
             debug: false,
+            lanes: self.settings.lane_stats,
         }
     }
 

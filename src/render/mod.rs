@@ -78,6 +78,8 @@ pub struct RenderStats {
     pub nonfinite_samples: u64,
     /// Samples with a channel above FILM_MAX_SAMPLE, clamped to it in the film.
     pub clamped_samples: u64,
+    /// SIMD lane utilisation counters (zero unless rendered with `lane_stats`).
+    pub lanes: LaneCounts,
     /// GPU time from timestamp queries (0 when the device has none).
     pub gpu_seconds: f64,
     /// Wall time spent in the dispatch loop.
@@ -87,6 +89,39 @@ pub struct RenderStats {
 impl RenderStats {
     pub fn rays(&self) -> u64 {
         self.camera_rays + self.bounce_rays + self.shadow_rays
+    }
+}
+
+/// What the lane-statistics kernel counts (see `shaders_glsl/inc/lane_stats.glsl`): steps
+/// its lanes took in the software traversal loop and in the path loop, and the lane slots
+/// of the subgroup steps they took them in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LaneCounts {
+    pub traversal_steps: u64,
+    pub traversal_slots: u64,
+    pub path_steps: u64,
+    pub path_slots: u64,
+}
+
+impl LaneCounts {
+    /// Share of the traversal loop's lane slots that did work (None: not measured, or
+    /// no software traversal).
+    pub fn traversal_utilisation(&self) -> Option<f64> {
+        (self.traversal_slots > 0)
+            .then(|| self.traversal_steps as f64 / self.traversal_slots as f64)
+    }
+
+    /// Share of the path loop's lane slots that did work: a lane whose path ended waits
+    /// for the longest path of its subgroup.
+    pub fn path_utilisation(&self) -> Option<f64> {
+        (self.path_slots > 0).then(|| self.path_steps as f64 / self.path_slots as f64)
+    }
+
+    fn add(&mut self, o: &LaneCounts) {
+        self.traversal_steps += o.traversal_steps;
+        self.traversal_slots += o.traversal_slots;
+        self.path_steps += o.path_steps;
+        self.path_slots += o.path_slots;
     }
 }
 

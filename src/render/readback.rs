@@ -73,6 +73,12 @@ impl Renderer {
         stats.shadow_rays += counters[gpu::STAT_SHADOW_RAYS as usize];
         stats.nonfinite_samples += counters[gpu::STAT_NONFINITE_SAMPLES as usize];
         stats.clamped_samples += counters[gpu::STAT_CLAMPED_SAMPLES as usize];
+        stats.lanes.add(&super::LaneCounts {
+            traversal_steps: counters[gpu::STAT_TRAVERSAL_LANE_STEPS as usize],
+            traversal_slots: counters[gpu::STAT_TRAVERSAL_LANE_SLOTS as usize],
+            path_steps: counters[gpu::STAT_PATH_LANE_STEPS as usize],
+            path_slots: counters[gpu::STAT_PATH_LANE_SLOTS as usize],
+        });
         self.stats.fill_zero()?;
         Ok(())
     }

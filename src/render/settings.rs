@@ -210,6 +210,10 @@ pub struct RenderSettings {
     /// device (`Renderer::traversal` holds what is used and why).
     #[serde(default)]
     pub traversal: super::traversal::Traversal,
+    /// Render with the kernel that counts SIMD lane utilisation (`--lane-stats`; slower,
+    /// same image; see `RenderStats::lanes`).
+    #[serde(skip)]
+    pub lane_stats: bool,
     pub guiding: GuidingSettings,
 }
 
@@ -230,6 +234,7 @@ impl Default for RenderSettings {
             exposure: 0.0,
             aovs: false,
             traversal: super::traversal::Traversal::Auto,
+            lane_stats: false,
             guiding: GuidingSettings::default(),
         }
     }

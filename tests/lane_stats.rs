@@ -1,0 +1,96 @@
+//! The lane-statistics kernel (`--lane-stats`, bench profile suite): it renders the same
+//! image as the regular kernel, and its counts agree with what the kernel's ray counters
+//! say independently: a path-loop step traces a camera or a bounce ray, or ends the path
+//! on a rejected direction sample (at most one per path). In a closed furnace every path
+//! runs to the maximum depth, so no lane ever waits for another.
+
+use lanterna::render::{LaneCounts, Method, RenderStats, TraversalKind};
+use lanterna::scene::generate::{Kind, Options};
+use lanterna::testing;
+use std::sync::atomic::AtomicBool;
+
+/// Film sums and stats of `spp` samples of `kind` at 8×8, `pt`, depth 4.
+fn render(kind: Kind, lane_stats: bool, spp: u64) -> (Vec<u64>, RenderStats, TraversalKind) {
+    let t = testing::generated(kind, &Options::default());
+    let mut s = testing::settings(Method::Pt, 8, 8);
+    s.max_depth = 4;
+    s.lane_stats = lane_stats;
+    let mut r = testing::test_renderer_on(testing::device(), &t.scene, &t.camera, &s);
+    let mut stats = RenderStats::default();
+    r.render_samples(
+        0,
+        spp,
+        false,
+        &AtomicBool::new(false),
+        &mut |_| {},
+        &mut stats,
+    )
+    .expect("render");
+    (r.film().unwrap().sums, stats, r.traversal.kind)
+}
+
+fn check_counts(what: &str, c: &LaneCounts, stats: &RenderStats, software: bool) {
+    let traced = stats.camera_rays + stats.bounce_rays;
+    assert!(
+        c.path_steps >= traced && c.path_steps <= traced + stats.camera_rays,
+        "{what}: path-loop steps are the camera and bounce rays, plus at most one \
+         rejected direction per path ({c:?}, {stats:?})"
+    );
+    assert!(c.path_slots >= c.path_steps, "{what}: {c:?}");
+    if software {
+        assert!(
+            c.traversal_steps > 0,
+            "{what}: no traversal steps counted ({c:?})"
+        );
+        assert!(c.traversal_slots >= c.traversal_steps, "{what}: {c:?}");
+    }
+}
+
+#[test]
+fn lane_counts_match_the_rays_and_leave_the_image_unchanged() {
+    let spp = 4;
+    // The furnace is closed: every sample takes exactly max_depth path-loop steps.
+    let (plain, plain_stats, kind) = render(Kind::Furnace, false, spp);
+    let (counted, stats, _) = render(Kind::Furnace, true, spp);
+    let software = kind == TraversalKind::Software;
+    assert_eq!(
+        plain, counted,
+        "the lane-statistics kernel changed the image"
+    );
+    assert_eq!(
+        plain_stats.lanes,
+        LaneCounts::default(),
+        "the regular kernel counted lanes"
+    );
+    let c = stats.lanes;
+    check_counts("furnace", &c, &stats, software);
+    assert_eq!(c.path_steps, 8 * 8 * spp * 4, "furnace: {c:?}");
+    assert_eq!(
+        c.path_steps,
+        stats.camera_rays + stats.bounce_rays,
+        "furnace: {c:?}"
+    );
+    assert_eq!(
+        c.path_utilisation(),
+        Some(1.0),
+        "furnace: no lane waits ({c:?})"
+    );
+
+    // In the Cornell box paths leave through the open front at different depths: lanes wait.
+    let (_, stats, _) = render(Kind::CornellLights, true, spp);
+    let c = stats.lanes;
+    check_counts("cornell-lights", &c, &stats, software);
+    let u = c.path_utilisation().unwrap();
+    assert!(
+        u > 0.0 && u < 1.0,
+        "cornell-lights: path utilisation {u} ({c:?})"
+    );
+    if software {
+        let u = c.traversal_utilisation().unwrap();
+        assert!(
+            u > 0.0 && u < 1.0,
+            "cornell-lights: traversal utilisation {u} ({c:?})"
+        );
+    }
+    testing::assert_no_validation_errors();
+}
