@@ -153,6 +153,10 @@ struct NeeResult {
     uint chosen_model;   // light model NEE picked (AOV), INVALID_INDEX if none
     bool connected;      // the shadow ray found the light visible
     float ris_weight;    // RIS contribution weight W (0 without RIS)
+    // The shadow ray that decides it, when one does: the path loop traces it (raygen's
+    // one trace_ray call site) and passes the answer to nee_resolve.
+    bool needs_shadow_ray;
+    Ray shadow;
 };
 
 NeeResult nee_none() {
@@ -164,26 +168,42 @@ NeeResult nee_none() {
     r.chosen_model = INVALID_INDEX;
     r.connected = false;
     r.ris_weight = 0.0;
+    r.needs_shadow_ray = false;
+    r.shadow = Ray(vec3(0.0), vec3(0.0), 0.0);
     return r;
+}
+
+// The NEE result once its shadow ray is answered: it counts only when the light is
+// visible. (Results whose visibility is known, or that found nothing, pass unchanged.)
+void nee_resolve(inout NeeResult r, bool visible) {
+    if (!r.needs_shadow_ray || visible) return;
+    r.connected = false;
+    r.contribution = vec3(0.0);
+    r.record_dir = vec3(0.0);
+    r.record_value = 0.0;
+    r.record_pdf = 0.0;
 }
 
 uint light_model_of(LightSample ls) {
     return ls.tri != INVALID_INDEX ? light_triangles[ls.tri].model : INVALID_INDEX;
 }
 
-// Is the light point of `ls` visible from the surface point? The origin moves off the
-// surface on the side of wo (the BSDFs are opaque: light from below the geometric
-// surface cannot reach the side the path arrived on), the far end off the light toward
-// the shading point (see visible_between in inc/trace.glsl).
-bool shadow_test(Surface s, LightSample ls, inout uint shadow_rays) {
-    shadow_rays += 1u;
-    if (ls.dist >= FLT_MAX) return visible(offset_ray(s.p, s.ng), ls.wi, FLT_MAX);
-    if (!ls.area) return visible_to_point(s.p, s.ng, ls.p);
-    return visible_between(s.p, s.ng, ls.p, ls.n);
+// The shadow ray that decides whether the light point of `ls` is visible from the
+// surface point; the result counts as connected until nee_resolve hears otherwise. The
+// origin moves off the surface on the side of wo (the BSDFs are opaque: light from below
+// the geometric surface cannot reach the side the path arrived on), the far end off the
+// light toward the shading point (segment_between in inc/trace.glsl).
+void shadow_ray(Surface s, LightSample ls, inout NeeResult r) {
+    r.needs_shadow_ray = true;
+    r.connected = true;
+    if (ls.dist >= FLT_MAX) r.shadow = ray_to_infinity(s.p, s.ng, ls.wi);
+    else if (!ls.area) r.shadow = segment_to_point(s.p, s.ng, ls.p);
+    else r.shadow = segment_between(s.p, s.ng, ls.p, ls.n);
 }
 
-// One light sample from the source distribution, MIS-weighted against direction sampling.
-NeeResult nee_single(Surface s, DirectionSampler d, inout Rng rng, inout uint shadow_rays) {
+// One light sample from the source distribution, MIS-weighted against direction sampling;
+// its contribution as if the light were visible, and the shadow ray that decides it.
+NeeResult nee_single(Surface s, DirectionSampler d, inout Rng rng) {
     NeeResult r = nee_none();
     if (params.strategy == STRATEGY_BSDF_ONLY) return r;
     LightSample ls = sample_light(d.lights, rng_next4(rng), true);
@@ -198,13 +218,11 @@ NeeResult nee_single(Surface s, DirectionSampler d, inout Rng rng, inout uint sh
         float tree_pdf;
         w = power_heuristic(p_light, direction_pdf_mix(s, d, ls.wi, bsdf_pdf, tree_pdf));
     }
-    bool vis = shadow_test(s, ls, shadow_rays);
-    TRACE6("  nee light model %u tri %u pdf=%f mis=%f visible=%u f=%v3f\n", r.chosen_model, ls.tri, ls.pdf, w, uint(vis), f);
-    if (!vis) return r;
-    r.connected = true;
+    shadow_ray(s, ls, r);
+    TRACE5("  nee light model %u tri %u pdf=%f mis=%f f=%v3f\n", r.chosen_model, ls.tri, ls.pdf, w, f);
     vec3 Li_over_pdf = ls.Le_G * (w / ls.pdf);
     r.contribution = f * Li_over_pdf;
-    TRACE1("  nee contribution=%v3f\n", r.contribution);
+    TRACE1("  nee contribution if visible=%v3f\n", r.contribution);
     if (ls.area) {
         r.record_dir = ls.wi;
         r.record_value = (Li_over_pdf.x + Li_over_pdf.y + Li_over_pdf.z) / 3.0;
@@ -276,7 +294,7 @@ float ris_denominator(RisContext ctx, RisCandidate c, uint M) {
 // RIS-selected light. `ds` is this vertex's direction sample and `next` the surface it
 // hit (valid when hit_next); an emitter there joins as the extra candidate.
 NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_next, Surface next, float next_t,
-                  inout Rng rng, inout uint shadow_rays) {
+                  inout Rng rng) {
     NeeResult r = nee_none();
     if (params.strategy == STRATEGY_BSDF_ONLY) return r;
     RisContext ctx = RisContext(s, d);
@@ -308,15 +326,14 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
     r.chosen_model = res.extra_chosen ? instances[next.instance].light_model : light_model_of(res.y.ls);
     r.ris_weight = res.W;
     // The extra candidate's visibility is known: its ray hit it.
-    bool vis = res.extra_chosen || shadow_test(s, res.y.ls, shadow_rays);
+    if (res.extra_chosen) r.connected = true;
+    else shadow_ray(s, res.y.ls, r);
     // The kept candidate's true emission (the target's differs on textured emitters).
     LightSample y = res.y.ls;
     if (res.extra_chosen) y.Le_G = next.emission * y.cos_y / max(next_t * next_t, 1e-20);
     else light_sample_complete(y);
-    TRACE6("  ris chosen model %u tri %u p_hat=%f W=%f visible=%u Le_G=%v3f\n", r.chosen_model, y.tri, res.p_hat, res.W,
-           uint(vis), y.Le_G);
-    if (!vis) return r;
-    r.connected = true;
+    TRACE6("  ris chosen model %u tri %u p_hat=%f W=%f shadow ray=%u Le_G=%v3f\n", r.chosen_model, y.tri, res.p_hat, res.W,
+           uint(r.needs_shadow_ray), y.Le_G);
     r.contribution = res.y.f * y.Le_G * res.W;
     if (y.area) {
         vec3 Li_over_pdf = y.Le_G * res.W;

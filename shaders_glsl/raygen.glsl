@@ -45,6 +45,7 @@ struct VertexRecord {
     float nee_pdf;    // solid-angle pdf of nee_dir (for second-moment records)
     uint nee_model;   // light model NEE picked, for learned light selection
     float nee_lum;    // luminance of the NEE contribution
+    uint light_leaf;  // SD-tree leaf of the vertex when light selection is learned
 };
 
 void camera_ray(uvec2 pixel, vec2 jitter, out vec3 origin, out vec3 dir) {
@@ -86,23 +87,24 @@ void record_path(VertexRecord rec[GUIDE_MAX_RECORDED_VERTICES], uint count, inou
             : l_act;
         // The vertex's direction record carries its statistical weight (value 0 when no
         // direction was sampled); its NEE record only adds the light NEE found (see
-        // GuideRecord in shared/guiding.h).
-        GuideRecord dir_rec;
-        dir_rec.pos = rec[k].p;
-        dir_rec.dir = rec[k].wi;
-        dir_rec.value = rec[k].pdf > 0.0 ? max(l.x + l.y + l.z, 0.0) / (3.0 * rec[k].pdf) : 0.0;
-        // Second moment: (L/p)²·p = L²/p, an estimate of ∫ L² over the cell.
-        if (second_moment) dir_rec.value *= dir_rec.value * rec[k].pdf;
-        dir_rec.weight = 1.0;
-        guide_record(dir_rec, vec3(rng_next2(rng), rng_next(rng)));
-        if (target == 0u && (guide_header.flags & GUIDE_FLAG_RECORD_NEE) != 0u && rec[k].nee_value > 0.0) {
-            GuideRecord nee_rec;
-            nee_rec.pos = rec[k].p;
-            nee_rec.dir = rec[k].nee_dir;
-            nee_rec.value = rec[k].nee_value;
-            if (second_moment) nee_rec.value *= nee_rec.value * rec[k].nee_pdf;
-            nee_rec.weight = 0.0;
-            guide_record(nee_rec, vec3(rng_next2(rng), rng_next(rng)));
+        // GuideRecord in shared/guiding.h). Both go through one guide_record call site.
+        bool nee_record = target == 0u && (guide_header.flags & GUIDE_FLAG_RECORD_NEE) != 0u && rec[k].nee_value > 0.0;
+        [[dont_unroll]] for (uint j = 0u; j < (nee_record ? 2u : 1u); ++j) {
+            GuideRecord r;
+            r.pos = rec[k].p;
+            if (j == 0u) {
+                r.dir = rec[k].wi;
+                r.value = rec[k].pdf > 0.0 ? max(l.x + l.y + l.z, 0.0) / (3.0 * rec[k].pdf) : 0.0;
+                // Second moment: (L/p)²·p = L²/p, an estimate of ∫ L² over the cell.
+                if (second_moment) r.value *= r.value * rec[k].pdf;
+                r.weight = 1.0;
+            } else {
+                r.dir = rec[k].nee_dir;
+                r.value = rec[k].nee_value;
+                if (second_moment) r.value *= r.value * rec[k].nee_pdf;
+                r.weight = 0.0;
+            }
+            guide_record(r, vec3(rng_next2(rng), rng_next(rng)));
         }
         if (learn_selection && rec[k].leaf != INVALID_INDEX && rec[k].pdf > 0.0) {
             // f·cos·L_in = weight · pdf · L_in: the direction estimate times its pdf.
@@ -115,8 +117,9 @@ void record_path(VertexRecord rec[GUIDE_MAX_RECORDED_VERTICES], uint count, inou
             sel.product = max((product.x + product.y + product.z) / 3.0, 0.0);
             guide_selection_record(sel, rng_next(rng));
         }
-        if ((guide_header.flags & GUIDE_FLAG_LEARN_LIGHTS) != 0u && rec[k].nee_model != INVALID_INDEX && rec[k].nee_lum > 0.0)
-            guide_light_record(guide_find_leaf(rec[k].p), rec[k].nee_model, rec[k].nee_lum);
+        // The light table of the leaf whose table NEE sampled from (the vertex's leaf).
+        if (rec[k].light_leaf != INVALID_INDEX && rec[k].nee_model != INVALID_INDEX && rec[k].nee_lum > 0.0)
+            guide_light_record(rec[k].light_leaf, rec[k].nee_model, rec[k].nee_lum);
     }
 }
 
@@ -139,96 +142,126 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
     camera_ray(pixel, stratified_pixel_sample(rng.key.x, rng.key.y, rng.key.z), origin, dir);
     TRACE2("camera ray o=%v3f d=%v3f\n", origin, dir);
     rays.camera += 1u;
-    Hit hit = trace_closest(origin, dir, FLT_MAX);
-    if (!hit.valid) {
-        TRACE0("  miss\n");
-        return vec3(0.0);
-    }
-    Surface s = make_surface(hit, dir);
-    info.albedo = s.bsdf.base_color;
-    info.normal = s.n;
-    info.depth = hit.t;
-    info.position = s.p;
-    vec3 L = params.hide_emitters != 0u ? vec3(0.0) : s.emission;
-    vec3 beta = vec3(1.0);
 
     VertexRecord rec[GUIDE_MAX_RECORDED_VERTICES];
     uint recorded = 0u;
     bool record_nee = TRAINING && (guide_header.flags & GUIDE_FLAG_RECORD_NEE) != 0u;
 
-    for (uint depth = 1u; depth < params.max_depth; ++depth) {
-        TRACE6("vertex %u p=%v3f n=%v3f material %u front=%u emission=%v3f\n", depth, s.p, s.n, s.material, uint(s.front),
+    vec3 L = vec3(0.0);
+    vec3 beta = vec3(1.0);
+    Surface s;
+    DirectionSampler d;
+    DirectionSample ds;
+    ds.valid = true;
+    Hit next;
+    Surface ns;
+    NeeResult nee = nee_none();
+    // Every ray of the path goes through the one trace_ray call below: step 0 is the
+    // camera ray; then each vertex takes two steps, its direction sample's closest hit
+    // (odd steps) and its NEE shadow ray (even steps). One call site keeps one copy of
+    // the traversal in the kernel (every call is inlined): lavapipe compiles it about 4×
+    // faster than with a call per ray kind, at the same speed (bench/README.md).
+    for (uint step = 0u;; ++step) {
+        bool shadow_step = step > 0u && (step & 1u) == 0u;
+        uint depth = (step + 1u) / 2u;  // the vertex whose rays these are (0: the camera)
+        Ray ray = shadow_step ? nee.shadow : Ray(origin, dir, FLT_MAX);
+        Hit hit;
+        hit.valid = false;
+        hit.t = FLT_MAX;
+        if (shadow_step ? nee.needs_shadow_ray : ds.valid) {
+            if (shadow_step) rays.shadow += 1u;
+            else if (depth > 0u) rays.bounce += 1u;
+            hit = trace_ray(ray.o, ray.d, ray.tmax, shadow_step);
+        }
+        if (!shadow_step) {
+            next = hit;
+            if (hit.valid) ns = make_surface(hit, dir);
+        }
+        if (step == 0u) {
+            if (!next.valid) {
+                TRACE0("  miss\n");
+                return vec3(0.0);
+            }
+            info.albedo = ns.bsdf.base_color;
+            info.normal = ns.n;
+            info.depth = next.t;
+            info.position = ns.p;
+            L = params.hide_emitters != 0u ? vec3(0.0) : ns.emission;
+        } else if (!shadow_step) {
+            // The direction sample's hit is known: choose NEE's light (RIS takes an
+            // emitter hit there as a candidate); its shadow ray is the next step.
+            nee = NEE_MODE == NEE_RIS ? nee_ris(s, d, ds, next.valid, ns, next.t, rng) : nee_single(s, d, rng);
+            continue;
+        } else {
+            bool hit_next = next.valid;
+            nee_resolve(nee, !hit.valid);
+            TRACE2("  nee visible=%u contribution=%v3f\n", uint(nee.connected), nee.contribution);
+            L += beta * nee.contribution;
+            if (nee.connected) info.lights_connected += 1.0;
+            if (depth == 1u) {
+                info.ris_weight = nee.ris_weight;
+                info.selected_light = nee.chosen_model;
+            }
+
+            vec3 emitted = vec3(0.0);
+            vec3 emitted_recorded = vec3(0.0);
+            if (hit_next && max3(ns.emission) > 0.0) {
+                float w = emission_weight(d.lights, ns, ds.wi, next.t, ds.pdf);
+                emitted = ns.emission * w;
+                // Without NEE records, direct light reaches the guide through hits alone.
+                emitted_recorded = record_nee ? emitted : ns.emission;
+                TRACE3("  direction hit emitter: Le=%v3f mis=%f contribution=%v3f\n", ns.emission, w, beta * ds.weight * emitted);
+            }
+            L += beta * ds.weight * emitted;
+
+            // Russian roulette (off unless rr_depth > 0).
+            vec3 weight = ds.weight;
+            bool alive = ds.valid && hit_next;
+            if (alive && params.rr_depth > 0u && depth >= params.rr_depth) {
+                float q = min(max3(beta * weight), 0.95);
+                if (rng_next(rng) >= q) alive = false;
+                else weight /= q;
+            }
+
+            if (TRAINING && recorded < GUIDE_MAX_RECORDED_VERTICES) {
+                VertexRecord r;
+                r.p = s.p;
+                r.wi = ds.wi;
+                r.pdf = ds.valid ? ds.pdf : 0.0;
+                r.weight = weight;
+                r.nee = nee.contribution;
+                r.emitted = emitted_recorded;
+                r.emitted_mis = emitted;
+                r.leaf = d.bsdf_fraction < 1.0 ? d.leaf : INVALID_INDEX;
+                r.bsdf_pdf = ds.bsdf_pdf;
+                r.guide_pdf = ds.guide_pdf;
+                r.nee_dir = nee.record_dir;
+                r.nee_value = nee.record_value;
+                r.nee_pdf = nee.record_pdf;
+                r.nee_model = nee.connected ? nee.chosen_model : INVALID_INDEX;
+                r.nee_lum = luminance(nee.contribution);
+                r.light_leaf = d.lights.leaf;
+                rec[recorded++] = r;
+            }
+            if (!alive) {
+                TRACE1("  path ends (the direction sample hit a surface: %u)\n", uint(hit_next));
+                break;
+            }
+            beta *= weight;
+        }
+        // The next vertex: sample its direction, if the path may grow from it.
+        s = ns;
+        if (depth + 1u >= params.max_depth) break;
+        TRACE6("vertex %u p=%v3f n=%v3f material %u front=%u emission=%v3f\n", depth + 1u, s.p, s.n, s.material, uint(s.front),
                s.emission);
         TRACE4("  base colour %v3f metallic %f alpha %f throughput %v3f\n", s.bsdf.base_color, s.bsdf.metallic, s.bsdf.alpha,
                beta);
-        DirectionSampler d = direction_sampler(s);
-        DirectionSample ds = sample_direction(s, d, rng);
+        d = direction_sampler(s);
+        ds = sample_direction(s, d, rng);
         info.directions += 1.0;
         if (ds.guided) info.guided += 1.0;
-        bool hit_next = false;
-        Hit next;
-        Surface ns;
-        if (ds.valid) {
-            rays.bounce += 1u;
-            next = trace_closest(offset_ray(s.p, s.ng), ds.wi, FLT_MAX);
-            hit_next = next.valid;
-            if (hit_next) ns = make_surface(next, ds.wi);
-        }
-
-        NeeResult nee = NEE_MODE == NEE_RIS ? nee_ris(s, d, ds, hit_next, ns, next.t, rng, rays.shadow)
-                                            : nee_single(s, d, rng, rays.shadow);
-        L += beta * nee.contribution;
-        if (nee.connected) info.lights_connected += 1.0;
-        if (depth == 1u) {
-            info.ris_weight = nee.ris_weight;
-            info.selected_light = nee.chosen_model;
-        }
-
-        vec3 emitted = vec3(0.0);
-        vec3 emitted_recorded = vec3(0.0);
-        if (hit_next && max3(ns.emission) > 0.0) {
-            float w = emission_weight(d.lights, ns, ds.wi, next.t, ds.pdf);
-            emitted = ns.emission * w;
-            // Without NEE records, direct light reaches the guide through hits alone.
-            emitted_recorded = record_nee ? emitted : ns.emission;
-            TRACE3("  direction hit emitter: Le=%v3f mis=%f contribution=%v3f\n", ns.emission, w, beta * ds.weight * emitted);
-        }
-        L += beta * ds.weight * emitted;
-
-        // Russian roulette (off unless rr_depth > 0).
-        vec3 weight = ds.weight;
-        bool alive = ds.valid && hit_next;
-        if (alive && params.rr_depth > 0u && depth >= params.rr_depth) {
-            float q = min(max3(beta * weight), 0.95);
-            if (rng_next(rng) >= q) alive = false;
-            else weight /= q;
-        }
-
-        if (TRAINING && recorded < GUIDE_MAX_RECORDED_VERTICES) {
-            VertexRecord r;
-            r.p = s.p;
-            r.wi = ds.wi;
-            r.pdf = ds.valid ? ds.pdf : 0.0;
-            r.weight = weight;
-            r.nee = nee.contribution;
-            r.emitted = emitted_recorded;
-            r.emitted_mis = emitted;
-            r.leaf = d.bsdf_fraction < 1.0 ? d.leaf : INVALID_INDEX;
-            r.bsdf_pdf = ds.bsdf_pdf;
-            r.guide_pdf = ds.guide_pdf;
-            r.nee_dir = nee.record_dir;
-            r.nee_value = nee.record_value;
-            r.nee_pdf = nee.record_pdf;
-            r.nee_model = nee.connected ? nee.chosen_model : INVALID_INDEX;
-            r.nee_lum = luminance(nee.contribution);
-            rec[recorded++] = r;
-        }
-        if (!alive) {
-            TRACE1("  path ends (the direction sample hit a surface: %u)\n", uint(hit_next));
-            break;
-        }
-        beta *= weight;
-        s = ns;
+        origin = offset_ray(s.p, s.ng);
+        dir = ds.wi;
     }
     if (TRAINING) record_path(rec, recorded, rng);
     TRACE1("sample radiance L=%v3f\n", L);

@@ -29,8 +29,8 @@ float bvh_box_entry(vec3 bmin, vec3 bmax, vec3 o, vec3 inv_d, float tmax) {
 }
 
 // The closest hit (any_hit = false) or the first accepted hit (any_hit = true) on
-// [0, tmax]. `any_hit` is a constant at every call, so each caller compiles its own loop.
-Hit bvh_trace(vec3 o, vec3 d, float tmax, const bool any_hit) {
+// [0, tmax].
+Hit trace_ray(vec3 o, vec3 d, float tmax, bool any_hit) {
     Hit h;
     h.valid = false;
     h.instance = INVALID_INDEX;
@@ -96,10 +96,10 @@ Hit bvh_trace(vec3 o, vec3 d, float tmax, const bool any_hit) {
     return h;
 }
 
-Hit trace_closest(vec3 origin, vec3 dir, float tmax) { return bvh_trace(origin, dir, tmax, false); }
+Hit trace_closest(vec3 origin, vec3 dir, float tmax) { return trace_ray(origin, dir, tmax, false); }
 
 // True when nothing blocks the segment origin → origin + dir·tmax (`dir` need not be
 // unit length: t is measured in multiples of it).
-bool visible(vec3 origin, vec3 dir, float tmax) { return !bvh_trace(origin, dir, tmax, true).valid; }
+bool visible(vec3 origin, vec3 dir, float tmax) { return !trace_ray(origin, dir, tmax, true).valid; }
 
 #endif

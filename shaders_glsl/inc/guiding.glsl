@@ -309,11 +309,13 @@ void guide_splat_box(uint root, vec2 p, float v) {
     lo.x = clamp(lo.x, 0.0, 1.0 - size);
     vec2 hi = lo + size;
     float density = v / (size * size);
-    guide_splat_rect(root, lo, hi, density);
-    if (lo.y < 0.0) {
-        guide_splat_rect(root, lo + vec2(0.0, 1.0), hi + vec2(0.0, 1.0), density);
-    } else if (hi.y > 1.0) {
-        guide_splat_rect(root, lo - vec2(0.0, 1.0), hi - vec2(0.0, 1.0), density);
+    // The box, and its wrapped part when it crosses φ = 0 or 2π: one call site in a loop,
+    // so that the kernel holds one copy of the rectangle walk.
+    vec2 wrap = lo.y < 0.0 ? vec2(0.0, 1.0) : hi.y > 1.0 ? vec2(0.0, -1.0) : vec2(0.0);
+    uint parts = wrap.y != 0.0 ? 2u : 1u;
+    [[dont_unroll]] for (uint i = 0u; i < parts; ++i) {
+        vec2 shift = i == 0u ? vec2(0.0) : wrap;
+        guide_splat_rect(root, lo + shift, hi + shift, density);
     }
 }
 
@@ -333,10 +335,11 @@ void guide_record_into(uint leaf, GuideRecord r) {
     }
 }
 
-// Record one training sample taken at r.pos, whose spatial leaf is `leaf_at_p`. `u`
-// (uniform in [0,1)³) jitters the position within the leaf's box when the stochastic
-// spatial filter is on.
-void guide_record_from_leaf(uint leaf_at_p, GuideRecord r, vec3 u) {
+// Record one training sample taken at r.pos. `u` (uniform in [0,1)³) jitters the
+// position within its leaf's box when the stochastic spatial filter is on: the leaf of
+// r.pos gives the box, the leaf of the jittered point takes the record (both through one
+// guide_find_leaf call site, so that the kernel holds one copy of the descent here).
+void guide_record(GuideRecord r, vec3 u) {
     // A weight that is not a finite number ≥ 0 marks a broken record: drop it whole.
     if (!(r.weight >= 0.0) || isinf(r.weight)) {
         return;
@@ -346,18 +349,17 @@ void guide_record_from_leaf(uint leaf_at_p, GuideRecord r, vec3 u) {
     if (!counts && !splats) {
         return;
     }
-    uint leaf = leaf_at_p;
-    if ((guide_header.flags & GUIDE_FLAG_SPATIAL_JITTER) != 0u) {
-        // precise: no fused multiply-add, so the CPU mirror picks the same leaf.
-        precise vec3 q = r.pos + (u - 0.5) * guide_leaves[leaf_at_p].box_size;
-        q = clamp(q, guide_header.origin, guide_header.origin + guide_header.size);
+    bool jitter = (guide_header.flags & GUIDE_FLAG_SPATIAL_JITTER) != 0u;
+    vec3 q = r.pos;
+    uint leaf;
+    [[dont_unroll]] for (uint pass = 0u;; ++pass) {
         leaf = guide_find_leaf(q);
+        if (!jitter || pass == 1u) break;
+        // precise: no fused multiply-add, so the CPU mirror picks the same leaf.
+        precise vec3 j = r.pos + (u - 0.5) * guide_leaves[leaf].box_size;
+        q = clamp(j, guide_header.origin, guide_header.origin + guide_header.size);
     }
     guide_record_into(leaf, r);
-}
-
-void guide_record(GuideRecord r, vec3 u) {
-    guide_record_from_leaf(guide_find_leaf(r.pos), r, u);
 }
 
 // ---- learned light selection -------------------------------------------------------------

@@ -65,7 +65,7 @@ float source_model_pmf(uint model) {
 // sampling and pdf function (pbrt's LightSampleContext).
 struct LightContext {
     vec3 p;       // the shading point
-    uint leaf;    // its SD-tree leaf when it has a learned table, else INVALID_INDEX
+    uint leaf;    // its SD-tree leaf when light selection is learned, else INVALID_INDEX
     float mix;    // probability of choosing the model from that table (0: source only)
 };
 

@@ -1,7 +1,8 @@
 // Ray traversal: the closest hit and visibility, with alpha-masked (MASK) and stochastic
 // (BLEND) geometry resolved in the candidate loop, for camera, bounce and shadow rays.
 // Ray queries here, or (LANTERNA_SOFTWARE_TRAVERSAL) the software traversal of inc/bvh.glsl
-// behind the same two functions.
+// behind the same interface: trace_ray(o, d, tmax, any_hit), which the path loop calls
+// from one place for every ray, and its two wrappers trace_closest and visible.
 #ifndef INC_TRACE_GLSL
 #define INC_TRACE_GLSL
 
@@ -51,9 +52,13 @@ uvec4 ray_key(vec3 o, vec3 d) {
 #ifdef LANTERNA_SOFTWARE_TRAVERSAL
 #include "bvh.glsl"
 #else
-Hit trace_closest(vec3 origin, vec3 dir, float tmax) {
+// The closest hit (any_hit = false) or the first accepted hit (any_hit = true) on
+// [0, tmax]: one function for both, so that a kernel that traces every ray through one
+// call site holds one copy of the traversal.
+Hit trace_ray(vec3 origin, vec3 dir, float tmax, bool any_hit) {
     rayQueryEXT rq;
-    rayQueryInitializeEXT(rq, tlas, gl_RayFlagsNoneEXT, 0xffu, origin, 0.0, dir, tmax);
+    uint flags = any_hit ? gl_RayFlagsTerminateOnFirstHitEXT : gl_RayFlagsNoneEXT;
+    rayQueryInitializeEXT(rq, tlas, flags, 0xffu, origin, 0.0, dir, tmax);
     uvec4 key = ray_key(origin, dir);
     while (rayQueryProceedEXT(rq)) {
         if (rayQueryGetIntersectionTypeEXT(rq, false) == gl_RayQueryCandidateIntersectionTriangleEXT) {
@@ -65,6 +70,10 @@ Hit trace_closest(vec3 origin, vec3 dir, float tmax) {
     }
     Hit h;
     h.valid = rayQueryGetIntersectionTypeEXT(rq, true) == gl_RayQueryCommittedIntersectionTriangleEXT;
+    h.instance = INVALID_INDEX;
+    h.primitive = INVALID_INDEX;
+    h.bary = vec2(0.0);
+    h.t = tmax;
     if (h.valid) {
         h.instance = HIT_INSTANCE(rq, true);
         h.primitive = rayQueryGetIntersectionPrimitiveIndexEXT(rq, true);
@@ -74,22 +83,11 @@ Hit trace_closest(vec3 origin, vec3 dir, float tmax) {
     return h;
 }
 
+Hit trace_closest(vec3 origin, vec3 dir, float tmax) { return trace_ray(origin, dir, tmax, false); }
+
 // True when nothing blocks the segment origin → origin + dir·tmax (`dir` need not be
 // unit length: t is measured in multiples of it, as for every ray query).
-bool visible(vec3 origin, vec3 dir, float tmax) {
-    rayQueryEXT rq;
-    rayQueryInitializeEXT(rq, tlas, gl_RayFlagsTerminateOnFirstHitEXT, 0xffu, origin, 0.0, dir, tmax);
-    uvec4 key = ray_key(origin, dir);
-    while (rayQueryProceedEXT(rq)) {
-        if (rayQueryGetIntersectionTypeEXT(rq, false) == gl_RayQueryCandidateIntersectionTriangleEXT) {
-            uint inst = HIT_INSTANCE(rq, false);
-            uint prim = rayQueryGetIntersectionPrimitiveIndexEXT(rq, false);
-            vec2 bary = rayQueryGetIntersectionBarycentricsEXT(rq, false);
-            if (alpha_passes(inst, prim, bary, key)) rayQueryConfirmIntersectionEXT(rq);
-        }
-    }
-    return rayQueryGetIntersectionTypeEXT(rq, true) == gl_RayQueryCommittedIntersectionNoneEXT;
-}
+bool visible(vec3 origin, vec3 dir, float tmax) { return !trace_ray(origin, dir, tmax, true).valid; }
 #endif
 
 // Offset a ray origin off the surface along the geometric normal, scaled to the
@@ -111,7 +109,15 @@ vec3 offset_ray(vec3 p, vec3 n) {
 // Shadow rays stop this fraction of their (offset-to-offset) length short of the target.
 const float SHADOW_EPSILON = 1e-4;
 
-// Is the segment between two surface points free? (pbrt-v4's SpawnRayTo.)
+// A ray to trace: from `o` along `d` over [0, tmax], t in units of `d` (which need not
+// be unit length).
+struct Ray {
+    vec3 o;
+    vec3 d;
+    float tmax;
+};
+
+// The shadow ray of the segment between two surface points (pbrt-v4's SpawnRayTo).
 //
 // A point computed on a triangle (from barycentrics, or sampled on a light) is only
 // known to within a few ulps of its coordinates, so a ray that starts or ends exactly
@@ -125,16 +131,21 @@ const float SHADOW_EPSILON = 1e-4;
 // behind the light's face, and the light occludes itself. A relative shortening alone
 // cannot fix that: the offset is absolute (ulps of the position), the shortening scales
 // with the distance, so close lights always lose.
-bool visible_between(vec3 origin_p, vec3 origin_n, vec3 target_p, vec3 target_n) {
+Ray segment_between(vec3 origin_p, vec3 origin_n, vec3 target_p, vec3 target_n) {
     vec3 o = offset_ray(origin_p, origin_n);
     vec3 t = offset_ray(target_p, target_n);
-    return visible(o, t - o, 1.0 - SHADOW_EPSILON);
+    return Ray(o, t - o, 1.0 - SHADOW_EPSILON);
 }
 
-// Is the segment from a surface point to a point in free space (a punctual light) free?
-bool visible_to_point(vec3 origin_p, vec3 origin_n, vec3 target_p) {
+// The shadow ray from a surface point to a point in free space (a punctual light).
+Ray segment_to_point(vec3 origin_p, vec3 origin_n, vec3 target_p) {
     vec3 o = offset_ray(origin_p, origin_n);
-    return visible(o, target_p - o, 1.0 - SHADOW_EPSILON);
+    return Ray(o, target_p - o, 1.0 - SHADOW_EPSILON);
+}
+
+// The shadow ray from a surface point toward a light at infinity (direction `wi`).
+Ray ray_to_infinity(vec3 origin_p, vec3 origin_n, vec3 wi) {
+    return Ray(offset_ray(origin_p, origin_n), wi, FLT_MAX);
 }
 
 #endif
