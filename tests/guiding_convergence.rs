@@ -1,20 +1,35 @@
 //! The learned directional distributions converge to the incident radiance. On the gap
 //! scene, SD-trees are trained with growing budgets (default options: NEE records, box
-//! filters, learned selection); a brute-force probe (`SdTree::probe`: uniform spatial
-//! leaves, an 8×8 grid over the direction square, sampling from the BSDF and the
+//! filters, learned selection); a brute-force probe (`SdTree::probe`: 4096 uniform
+//! spatial leaves, an 8×8 grid over the direction square, sampling from the BSDF and the
 //! uniform sphere, no NEE records, so direction-sampled hits alone measure the direct
-//! light) records a plain path tracer's estimates of the incident radiance. For the
-//! probe leaves that recorded the most, the learned leaf at the probe leaf's centre is
-//! compared with the probe's histogram in relative L1 distance Σ|p − q| (0: equal, 2:
-//! disjoint). It must fall as the training budget grows and end below 0.6.
+//! light) records a plain path tracer's estimates of the incident radiance. At four query
+//! points (in the busiest cells of a 4×4×4 grid over the scene) the learned leaf's
+//! sampling distribution is compared with the probe's energy summed over the region that
+//! distribution was learned from (the leaf, or the ancestor whose tree it still shares
+//! after a split at the last refit), in relative L1 distance Σ|p − q| (0: equal, 2:
+//! disjoint).
 //!
-//! Measured (32×24, seed 41): mean L1 1.125, 0.698, 0.527 after 4, 32, 256 spp; the
-//! probe's own noise (two halves of its samples against each other) is 0.33–0.81 per
-//! leaf, so the bound is close to what this probe resolves.
+//! Training is not deterministic (float atomics; the learned selection sees records in
+//! device order), so each budget is trained `RUNS` times from different samples. The
+//! mean distance must fall from each budget to the next by more than twice the standard
+//! error of the difference (from the runs' spread) and end below 0.5.
 //!
-//! Defects this test was seen to fail on (injected once, then reverted):
-//! - NEE records splatted toward the opposite direction (`nee_rec.dir = -nee_dir` in
-//!   raygen.glsl, through LANTERNA_TEST_SHADER_DIR): mean L1 1.612, 1.255, 1.167.
+//! Measured (32×24, seed 41, 4 runs): mean L1 0.81 (sd 0.09), 0.466 (sd 0.020), 0.427
+//! (sd 0.008) after 4, 32, 256 spp. The probe's own noise (two halves against each
+//! other) is 0.2–0.44 per region; at 1024 spp the regions shrink to depth 12–14 and the
+//! distance rises to 0.466 with that noise (0.53 where a region is one probe leaf), so
+//! larger budgets are beyond what this probe resolves. With the nearest spatial filter
+//! instead of the box, 0.63, 0.41, 0.39: the box filter's blur is a visible part of
+//! what remains. Comparing with the probe leaf at the query point instead of the region
+//! the distribution was learned from made the test flaky (0.56–0.61 against a bound of
+//! 0.6, and 1.09 for one leaf split three times at the last refit).
+//!
+//! Defects this test was seen to fail on (injected once, then reverted, through
+//! LANTERNA_TEST_SHADER_DIR):
+//! - NEE records splatted toward the opposite direction (`r.dir = -rec[k].nee_dir` in
+//!   raygen.glsl's `record_path`): mean L1 1.35, 1.29, 1.37.
+//! - NEE records dropped (`nee_record` always false): 1.19, 0.79, 0.84.
 
 use lanterna::guiding::{DirectionalFilter, GuidingConfig, SdTree, SpatialFilter};
 use lanterna::lights::LightTable;
@@ -26,6 +41,8 @@ use std::sync::atomic::AtomicBool;
 
 const GRID_LEVEL: u32 = 3; // 8 × 8 cells
 const GRID: usize = 8;
+/// Independent trainings per budget.
+const RUNS: u64 = 4;
 
 fn l1(p: &[f64], q: &[f64]) -> f64 {
     p.iter().zip(q).map(|(a, b)| (a - b).abs()).sum()
@@ -53,6 +70,7 @@ fn learned_distributions_approach_the_incident_radiance() {
     let mut stats = RenderStats::default();
 
     // The brute-force probe: two independent halves, to see its own noise.
+    let probe_depth = 12;
     let (lo, hi) = r.bounds;
     let probe_config = GuidingConfig {
         spatial_filter: SpatialFilter::Nearest,
@@ -62,9 +80,9 @@ fn learned_distributions_approach_the_incident_radiance() {
         ..GuidingConfig::default()
     };
     let mut halves = Vec::new();
-    let probe_spp = 1024;
+    let probe_spp = 4096;
     for half in 0..2u64 {
-        let mut probe = SdTree::probe(lo, hi, &probe_config, 9, GRID_LEVEL).unwrap();
+        let mut probe = SdTree::probe(lo, hi, &probe_config, probe_depth, GRID_LEVEL).unwrap();
         r.set_guide_buffers(GuideBuffers::upload(&r.device, &probe.gpu_arrays()).unwrap());
         r.clear_film().unwrap();
         let first = 1 << 30;
@@ -81,71 +99,157 @@ fn learned_distributions_approach_the_incident_radiance() {
         probe.load_training_readback(&training).unwrap();
         halves.push(probe);
     }
-    // The probe leaves with the most recorded energy in both halves.
-    let leaves = halves[0].leaves().len() as u32;
-    let mut ranked: Vec<(f64, u32)> = (0..leaves)
-        .map(|i| {
-            let a = halves[0].training_histogram(i, GRID).1;
-            let b = halves[1].training_histogram(i, GRID).1;
-            (a.min(b), i)
-        })
-        .collect();
-    ranked.sort_by(|a, b| b.0.total_cmp(&a.0));
-    let chosen: Vec<u32> = ranked.iter().take(4).map(|&(_, i)| i).collect();
-    let truth: Vec<Vec<f64>> = chosen
+    // Unnormalised energy per grid cell of each probe leaf, per half.
+    let energy: Vec<Vec<Vec<f64>>> = halves
         .iter()
-        .map(|&i| {
-            let (a, _) = halves[0].training_histogram(i, GRID);
-            let (b, _) = halves[1].training_histogram(i, GRID);
-            a.iter().zip(&b).map(|(x, y)| 0.5 * (x + y)).collect()
+        .map(|h| {
+            (0..h.leaves().len() as u32)
+                .map(|i| {
+                    let (p, total) = h.training_histogram(i, GRID);
+                    p.iter().map(|x| x * total).collect()
+                })
+                .collect()
         })
         .collect();
-    let noise: Vec<f64> = chosen
+    let boxes: Vec<(glam::Vec3, glam::Vec3)> = halves[0]
+        .leaves()
         .iter()
-        .map(|&i| {
-            l1(
-                &halves[0].training_histogram(i, GRID).0,
-                &halves[1].training_histogram(i, GRID).0,
-            )
-        })
+        .map(|l| (l.box_min, l.box_min + l.box_size))
         .collect();
-    eprintln!("probe noise (L1 between its halves) per chosen leaf: {noise:.3?}");
+    // The truth over a region: the probe's energy summed over the probe leaves inside it
+    // (or the probe leaf containing `point` where the region is smaller), normalised;
+    // per half and averaged.
+    let region_truth = |bmin: glam::Vec3, bmax: glam::Vec3, point: glam::Vec3| {
+        let inside =
+            |a: glam::Vec3, b: glam::Vec3, p: glam::Vec3| p.cmpge(a).all() && p.cmplt(b).all();
+        let mut picked: Vec<usize> = (0..boxes.len())
+            .filter(|&i| inside(bmin, bmax, 0.5 * (boxes[i].0 + boxes[i].1)))
+            .collect();
+        if picked.is_empty() {
+            picked = (0..boxes.len())
+                .filter(|&i| inside(boxes[i].0, boxes[i].1, point))
+                .collect();
+        }
+        let sum = |h: usize| {
+            let mut acc = vec![0.0f64; GRID * GRID];
+            for &i in &picked {
+                for (a, e) in acc.iter_mut().zip(&energy[h][i]) {
+                    *a += e;
+                }
+            }
+            let t: f64 = acc.iter().sum();
+            acc.iter().map(|a| a / t).collect::<Vec<f64>>()
+        };
+        let (a, b) = (sum(0), sum(1));
+        let noise = l1(&a, &b);
+        (
+            a.iter()
+                .zip(&b)
+                .map(|(x, y)| 0.5 * (x + y))
+                .collect::<Vec<f64>>(),
+            noise,
+        )
+    };
+    // Query points: in each of the 4 cells of a 4 × 4 × 4 grid over the SD-tree's root
+    // cube (its leaves at depth 6) that recorded the most energy, the centre of the probe
+    // leaf there that recorded the most.
+    let root_min = halves[0].leaves()[0].box_min;
+    let cube = (hi - lo).max_element();
+    let cell = |p: glam::Vec3| {
+        let c = ((p - root_min) / cube * 4.0)
+            .floor()
+            .clamp(glam::Vec3::ZERO, glam::Vec3::splat(3.0));
+        (c.x as usize) + 4 * (c.y as usize) + 16 * (c.z as usize)
+    };
+    let leaf_energy = |i: usize| {
+        let a: f64 = energy[0][i].iter().sum();
+        let b: f64 = energy[1][i].iter().sum();
+        a.min(b)
+    };
+    let mut cells = vec![(0.0f64, usize::MAX, 0.0f64); 64];
+    for i in 0..boxes.len() {
+        let e = leaf_energy(i);
+        let c = &mut cells[cell(0.5 * (boxes[i].0 + boxes[i].1))];
+        c.0 += e;
+        if e > c.2 {
+            c.1 = i;
+            c.2 = e;
+        }
+    }
+    cells.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let points: Vec<glam::Vec3> = cells
+        .iter()
+        .take(4)
+        .map(|&(_, i, _)| 0.5 * (boxes[i].0 + boxes[i].1))
+        .collect();
 
     // Learned trees of growing budgets, each trained from scratch.
+    let runs = RUNS;
     let mut means = Vec::new();
     for spp in [4u64, 32, 256] {
-        let trained = train(
-            &mut r,
-            TrainingPlan::whole(Budget::Spp(spp)),
-            0,
-            &cancel,
-            &mut |_| {},
-            &mut stats,
-            None,
-        )
-        .unwrap();
-        let d: Vec<f64> = chosen
-            .iter()
-            .zip(&truth)
-            .map(|(&i, p)| {
-                let l = &halves[0].leaves()[i as usize];
-                let centre = l.box_min + 0.5 * l.box_size;
-                let leaf = trained.tree.find_leaf(centre);
-                l1(&trained.tree.sampling_histogram(leaf, GRID), p)
-            })
-            .collect();
-        let mean = d.iter().sum::<f64>() / d.len() as f64;
-        eprintln!("training {spp:>3} spp: L1 per chosen leaf {d:.3?}, mean {mean:.3}");
-        means.push(mean);
+        let mut per_run = Vec::new();
+        for run in 0..runs {
+            let trained = train(
+                &mut r,
+                TrainingPlan::whole(Budget::Spp(spp)),
+                run << 24,
+                &cancel,
+                &mut |_| {},
+                &mut stats,
+                None,
+            )
+            .unwrap();
+            let mut noise = Vec::new();
+            let mut depth = Vec::new();
+            let d: Vec<f64> = points
+                .iter()
+                .map(|&p| {
+                    let leaf = trained.tree.find_leaf(p);
+                    let l = trained.tree.leaf(leaf);
+                    // The region its sampling tree learned from: leaves split at the last
+                    // refit share their ancestor's tree (refit.rs), so the union of the
+                    // leaves sharing it.
+                    let (mut bmin, mut bmax) = (l.box_min, l.box_min + l.box_size);
+                    for o in trained.tree.leaves() {
+                        if std::sync::Arc::ptr_eq(&o.sampling, &l.sampling) {
+                            bmin = bmin.min(o.box_min);
+                            bmax = bmax.max(o.box_min + o.box_size);
+                        }
+                    }
+                    let (truth, n) = region_truth(bmin, bmax, p);
+                    noise.push(n);
+                    let shared = ((bmax - bmin).element_product() / l.box_size.element_product())
+                        .log2()
+                        .round() as u32;
+                    depth.push(l.depth - shared);
+                    l1(&trained.tree.sampling_histogram(leaf, GRID), &truth)
+                })
+                .collect();
+            let mean = d.iter().sum::<f64>() / d.len() as f64;
+            eprintln!("training {spp:>3} spp run {run}: L1 per chosen leaf {d:.3?}, mean {mean:.3}; region depth {depth:?}, probe noise {noise:.3?}");
+            per_run.push(mean);
+        }
+        let m = per_run.iter().sum::<f64>() / runs as f64;
+        let var = per_run.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (runs as f64 - 1.0);
+        eprintln!(
+            "training {spp:>3} spp: mean L1 {m:.3}, sd {:.3}",
+            var.sqrt()
+        );
+        means.push((m, var));
     }
+    for pair in means.windows(2) {
+        let ((m0, v0), (m1, v1)) = (pair[0], pair[1]);
+        let se = ((v0 + v1) / runs as f64).sqrt();
+        assert!(
+            m0 - m1 > 2.0 * se,
+            "L1 distance does not fall with the training budget: {m0:.3} -> {m1:.3} \
+             (standard error of the difference {se:.3})"
+        );
+    }
+    let last = means.last().unwrap().0;
     assert!(
-        means.windows(2).all(|m| m[1] < m[0]),
-        "L1 distance does not fall with the training budget: {means:.3?}"
-    );
-    assert!(
-        *means.last().unwrap() < 0.6,
-        "L1 distance after the largest budget {:.3}, expected < 0.6",
-        means.last().unwrap()
+        last < 0.5,
+        "L1 distance after the largest budget {last:.3}, expected < 0.5"
     );
     testing::assert_no_validation_errors();
 }
