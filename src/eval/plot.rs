@@ -14,6 +14,8 @@ use crate::image_io::write_png_rgb8;
 
 /// Plot size in pixels.
 pub const PLOT_SIZE: (u32, u32) = (960, 640);
+/// Right margin of the ratio plots, where their legend goes.
+const LEGEND_WIDTH: u32 = 250;
 
 /// What the horizontal axis shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -283,6 +285,8 @@ fn draw_ratios(
     let mut chart = ChartBuilder::on(&root)
         .caption(title, (fonts::FAMILY, 24))
         .margin(16)
+        // Room for the legend right of the plot, where it hides no line or guide label.
+        .margin_right(LEGEND_WIDTH)
         .x_label_area_size(56)
         .y_label_area_size(70)
         .build_cartesian_2d(
@@ -315,28 +319,22 @@ fn draw_ratios(
         chart
             .draw_series(std::iter::once(Text::new(
                 label.clone(),
-                (x_lo * 1.05, *value + 0.01 * (y_hi - y_lo)),
+                (x_lo * 1.05, *value + 0.04 * (y_hi - y_lo)),
                 (fonts::FAMILY, 14).into_font().color(&grey),
             )))
             .map_err(|x| e(&x))?;
     }
-    let mut any = false;
     for line in lines {
         if line.points.is_empty() {
             continue;
         }
-        any = true;
         let color = line.color;
         chart
             .draw_series(LineSeries::new(
                 line.points.iter().copied(),
                 color.stroke_width(2),
             ))
-            .map_err(|x| e(&x))?
-            .label(line.label.as_str())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 24, y)], color.stroke_width(2))
-            });
+            .map_err(|x| e(&x))?;
         match line.marker {
             0 => chart.draw_series(
                 line.points
@@ -356,15 +354,30 @@ fn draw_ratios(
         }
         .map_err(|x| e(&x))?;
     }
-    if any {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .label_font((fonts::FAMILY, 16))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|x| e(&x))?;
+    // The legend, right of the plot where it hides no line or guide label, with each
+    // line's marker (which tells the scenes apart).
+    let x0 = (PLOT_SIZE.0 - LEGEND_WIDTH) as i32 + 8;
+    let font = (fonts::FAMILY, 16).into_font();
+    for (i, line) in lines.iter().filter(|l| !l.points.is_empty()).enumerate() {
+        let (y, color) = (80 + 26 * i as i32, line.color);
+        root.draw(&PathElement::new(
+            vec![(x0, y), (x0 + 28, y)],
+            color.stroke_width(2),
+        ))
+        .map_err(|x| e(&x))?;
+        let at = (x0 + 14, y);
+        match line.marker {
+            0 => root.draw(&Circle::new(at, 5, color.filled())),
+            1 => root.draw(&TriangleMarker::new(at, 7, color.filled())),
+            _ => root.draw(&Cross::new(at, 6, color.stroke_width(2))),
+        }
+        .map_err(|x| e(&x))?;
+        root.draw(&Text::new(
+            line.label.clone(),
+            (x0 + 36, y - 9),
+            font.clone(),
+        ))
+        .map_err(|x| e(&x))?;
     }
     root.present().map_err(|x| e(&x))?;
     Ok(())
