@@ -366,11 +366,26 @@ fn load_refuses_crafted_sums_behind_a_valid_checksum() {
     let bytes = std::fs::read(&path).unwrap();
     // The fixed part of the format (io.rs): magic, version, hash, iterations, box, the
     // options, then the five counts; then the header, spatial nodes, leaves, sampling.
-    let counts_at = 16 + 4 + 8 + 4 + 24 + 48;
+    // The options are 13 words (the learned light mix made them 13 in format 4; with 12
+    // the edits below landed in the wrong arrays and passed by luck until the default
+    // spatial filter changed), so the counts are checked against the arrays.
+    let counts_at = 16 + 4 + 8 + 4 + 24 + 52;
     let count = |i: usize| {
         let at = counts_at + 4 * i;
         u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize
     };
+    let arrays = tree.gpu_arrays();
+    assert_eq!(
+        [count(0), count(1), count(2), count(3), count(4)],
+        [
+            arrays.spatial.len(),
+            arrays.leaves.len(),
+            arrays.sampling.len(),
+            arrays.training.len(),
+            arrays.lights.len()
+        ],
+        "the test's idea of the file layout is stale"
+    );
     let sampling_at = counts_at
         + 20
         + size_of::<GuideHeader>()
