@@ -32,13 +32,14 @@
 //! - `lamp_behind_alpha_masked_screen`: shadow rays that treat alpha-masked geometry as
 //!   opaque: block (8, 0) 0.00001 vs 0.029, p = 2e-16.
 //! - `sconces_guiding_options` (learned and fixed selection probability, `indirect` and
-//!   `contribution` targets, `--guide-density variance-aware`): the mixture pdf
+//!   `contribution` targets, `--guide-density variance-aware`, the stochastic box
+//!   spatial filter): the mixture pdf
 //!   evaluated with the header's α while directions are drawn with the leaf's learned α
 //!   (2026-11-23): `guided` image mean +5.64 % against an allowance of ±5.35 %.
 //! - `sconces_far_from_origin`: no rebasing of the scene toward the origin (256-ulp ray
 //!   offsets are 0.24 m at 10⁴): block (8, 8) 0.147 vs 0.368, p = 7e-32.
 
-use lanterna::guiding::{GuideDensity, GuideTarget};
+use lanterna::guiding::{GuideDensity, GuideTarget, SpatialFilter};
 use lanterna::lights::LightTable;
 use lanterna::render::{Method, RenderSettings, Strategy};
 use lanterna::scene::export_mitsuba::{self, ExportOptions};
@@ -67,6 +68,7 @@ struct Config {
     bsdf_fraction: Option<f32>,
     target: GuideTarget,
     density: GuideDensity,
+    spatial_filter: SpatialFilter,
 }
 
 const fn config(name: &'static str, method: Method, strategy: Strategy) -> Config {
@@ -78,6 +80,7 @@ const fn config(name: &'static str, method: Method, strategy: Strategy) -> Confi
         bsdf_fraction: None,
         target: GuideTarget::All,
         density: GuideDensity::Radiance,
+        spatial_filter: SpatialFilter::Nearest,
     }
 }
 
@@ -128,6 +131,13 @@ const GUIDED_VARIANCE_AWARE: Config = Config {
 const GUIDED_RIS_VARIANCE_AWARE: Config = Config {
     name: "guided-ris --guide-density variance-aware --guide-target all",
     density: GuideDensity::VarianceAware,
+    ..GUIDED_RIS
+};
+
+// The reference implementation's stochastic box filter (the default is nearest).
+const GUIDED_RIS_JITTER: Config = Config {
+    name: "guided-ris --spatial-filter jitter",
+    spatial_filter: SpatialFilter::StochasticBox,
     ..GUIDED_RIS
 };
 
@@ -269,6 +279,7 @@ fn render(ts: &TestScene, c: Config, max_depth: u32, batches: u32, spp: u64) -> 
             bsdf_fraction: c.bsdf_fraction.unwrap_or(0.5),
             target: c.target,
             density: c.density,
+            spatial_filter: c.spatial_filter,
             ..Default::default()
         },
         ..testing::settings(c.method, WIDTH, HEIGHT)
@@ -464,6 +475,7 @@ fn sconces_guiding_options() {
             GUIDED_CONTRIBUTION,
             GUIDED_VARIANCE_AWARE,
             GUIDED_RIS_VARIANCE_AWARE,
+            GUIDED_RIS_JITTER,
         ],
         16,
         128,

@@ -1,35 +1,41 @@
 //! The learned directional distributions converge to the incident radiance. On the gap
-//! scene, SD-trees are trained with growing budgets (default options: NEE records, box
-//! filters, learned selection); a brute-force probe (`SdTree::probe`: 4096 uniform
-//! spatial leaves, an 8×8 grid over the direction square, sampling from the BSDF and the
-//! uniform sphere, no NEE records, so direction-sampled hits alone measure the direct
-//! light) records a plain path tracer's estimates of the incident radiance. At four query
-//! points (in the busiest cells of a 4×4×4 grid over the scene) the learned leaf's
-//! sampling distribution is compared with the probe's energy summed over the region that
-//! distribution was learned from (the leaf, or the ancestor whose tree it still shares
-//! after a split at the last refit), in relative L1 distance Σ|p − q| (0: equal, 2:
-//! disjoint).
+//! scene, SD-trees are trained with growing budgets (default options: NEE records,
+//! nearest spatial filter, directional box, learned selection); a brute-force probe
+//! (`SdTree::probe`: 4096 uniform spatial leaves, an 8×8 grid over the direction
+//! square, sampling from the BSDF and the uniform sphere, no NEE records, so
+//! direction-sampled hits alone measure the direct light) records a plain path tracer's
+//! estimates of the incident radiance. At four query points (in the busiest cells of a
+//! 4×4×4 grid over the scene) the learned leaf's sampling distribution is compared with
+//! the probe's energy summed over the region that distribution was learned from (the
+//! leaf, or the ancestor whose tree it still shares after a split at the last refit), in
+//! relative L1 distance Σ|p − q| (0: equal, 2: disjoint).
 //!
 //! Training is not deterministic (float atomics; the learned selection sees records in
 //! device order), so each budget is trained `RUNS` times from different samples. The
-//! mean distance must fall from each budget to the next by more than twice the standard
-//! error of the difference (from the runs' spread) and end below 0.5.
+//! mean distance must fall from 4 to 32 spp by more than twice the standard error of the
+//! difference (from the runs' spread), not rise by more than that after, and end below
+//! 0.5.
 //!
-//! Measured (32×24, seed 41, 4 runs): mean L1 0.81 (sd 0.09), 0.466 (sd 0.020), 0.427
-//! (sd 0.008) after 4, 32, 256 spp. The probe's own noise (two halves against each
-//! other) is 0.2–0.44 per region; at 1024 spp the regions shrink to depth 12–14 and the
-//! distance rises to 0.466 with that noise (0.53 where a region is one probe leaf), so
-//! larger budgets are beyond what this probe resolves. With the nearest spatial filter
-//! instead of the box, 0.63, 0.41, 0.39: the box filter's blur is a visible part of
-//! what remains. Comparing with the probe leaf at the query point instead of the region
-//! the distribution was learned from made the test flaky (0.56–0.61 against a bound of
-//! 0.6, and 1.09 for one leaf split three times at the last refit).
+//! Measured (32×24, seed 41, 4 runs): mean L1 0.65 (sd 0.10), 0.415 (sd 0.05), 0.407
+//! (sd 0.01) after 4, 32, 256 spp; with the stochastic box filter (the default before
+//! 2026-11-23) 0.81, 0.466, 0.427. The probe's own noise (two halves against each other)
+//! is 0.2–0.44 per region. The level from 32 spp on is not the probe's: with 4× its
+//! samples its noise halves (0.12–0.19) and the distances stay 0.39 and 0.40. So the
+//! learned distributions stop approaching the brute-force ones at about 0.4; what is
+//! left is systematic (candidates: the directional box filter's blur, the quadtree's
+//! ρ = 1 % refinement, and records weighted by where guided paths put their vertices
+//! rather than where the probe's do). Comparing with the probe leaf at the query point
+//! instead of the region the distribution was learned from made the test flaky
+//! (0.56–0.61 against a bound of 0.6, and 1.09 for one leaf split three times at the last
+//! refit).
 //!
 //! Defects this test was seen to fail on (injected once, then reverted, through
 //! LANTERNA_TEST_SHADER_DIR):
 //! - NEE records splatted toward the opposite direction (`r.dir = -rec[k].nee_dir` in
-//!   raygen.glsl's `record_path`): mean L1 1.35, 1.29, 1.37.
-//! - NEE records dropped (`nee_record` always false): 1.19, 0.79, 0.84.
+//!   raygen.glsl's `record_path`): mean L1 1.24, 1.25, 1.37 (box filter: 1.35, 1.29,
+//!   1.37).
+//! - NEE records dropped (`nee_record` always false): 1.03, 0.72, 0.82 (box: 1.19,
+//!   0.79, 0.84).
 
 use lanterna::guiding::{DirectionalFilter, GuidingConfig, SdTree, SpatialFilter};
 use lanterna::lights::LightTable;
@@ -237,14 +243,24 @@ fn learned_distributions_approach_the_incident_radiance() {
         );
         means.push((m, var));
     }
-    for pair in means.windows(2) {
+    // It falls from the smallest budget to the next, and never rises beyond the runs'
+    // noise after that (it levels off; see the module comment).
+    for (k, pair) in means.windows(2).enumerate() {
         let ((m0, v0), (m1, v1)) = (pair[0], pair[1]);
         let se = ((v0 + v1) / runs as f64).sqrt();
-        assert!(
-            m0 - m1 > 2.0 * se,
-            "L1 distance does not fall with the training budget: {m0:.3} -> {m1:.3} \
-             (standard error of the difference {se:.3})"
-        );
+        if k == 0 {
+            assert!(
+                m0 - m1 > 2.0 * se,
+                "L1 distance does not fall with the training budget: {m0:.3} -> {m1:.3} \
+                 (standard error of the difference {se:.3})"
+            );
+        } else {
+            assert!(
+                m1 - m0 < 2.0 * se,
+                "L1 distance rises with the training budget: {m0:.3} -> {m1:.3} \
+                 (standard error of the difference {se:.3})"
+            );
+        }
     }
     let last = means.last().unwrap().0;
     assert!(

@@ -132,7 +132,7 @@ class Renderer:
             ``guide_target`` ("all"/"indirect"/"contribution"), ``guide_density``
             ("radiance"/"variance-aware"),
             ``strategy`` ("mis"/"nee"/"bsdf"), ``hide_emitters``, ``guiding_threshold``,
-            ``guiding_memory`` (MiB), ``spatial_filter`` ("jitter"/"nearest"),
+            ``guiding_memory`` (MiB), ``spatial_filter`` ("nearest", the default, or "jitter"),
             ``directional_filter`` ("box"/"nearest"), ``guided_output``
             ("late-passes"/"render-phase"/"inverse-variance"), ``learn_lights`` (bool,
             default True; False: the paper's light selection),

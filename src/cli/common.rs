@@ -171,7 +171,7 @@ pub struct EstimatorArgs {
     #[arg(long, default_value_t = 256)]
     pub guiding_memory: u64,
     /// Guiding: spatial filter of the training records.
-    #[arg(long, value_enum, default_value = "jitter")]
+    #[arg(long, value_enum, default_value = "nearest")]
     pub spatial_filter: SpatialFilterArg,
     /// Guiding: directional filter of the training records.
     #[arg(long, value_enum, default_value = "box")]
