@@ -163,10 +163,9 @@ fn learned_distributions_approach_the_incident_radiance() {
     // Query points: in each of the 4 cells of a 4 × 4 × 4 grid over the SD-tree's root
     // cube (its leaves at depth 6) that recorded the most energy, the centre of the probe
     // leaf there that recorded the most.
-    let root_min = halves[0].leaves()[0].box_min;
     let cube = (hi - lo).max_element();
     let cell = |p: glam::Vec3| {
-        let c = ((p - root_min) / cube * 4.0)
+        let c = ((p - lo) / cube * 4.0)
             .floor()
             .clamp(glam::Vec3::ZERO, glam::Vec3::splat(3.0));
         (c.x as usize) + 4 * (c.y as usize) + 16 * (c.z as usize)
@@ -194,11 +193,10 @@ fn learned_distributions_approach_the_incident_radiance() {
         .collect();
 
     // Learned trees of growing budgets, each trained from scratch.
-    let runs = RUNS;
     let mut means = Vec::new();
     for spp in [4u64, 32, 256] {
         let mut per_run = Vec::new();
-        for run in 0..runs {
+        for run in 0..RUNS {
             let trained = train(
                 &mut r,
                 TrainingPlan::whole(Budget::Spp(spp)),
@@ -239,8 +237,7 @@ fn learned_distributions_approach_the_incident_radiance() {
             eprintln!("training {spp:>3} spp run {run}: L1 per chosen leaf {d:.3?}, mean {mean:.3}; region depth {depth:?}, probe noise {noise:.3?}");
             per_run.push(mean);
         }
-        let m = per_run.iter().sum::<f64>() / runs as f64;
-        let var = per_run.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (runs as f64 - 1.0);
+        let (m, var) = lanterna::stats::mean_var(&per_run);
         eprintln!(
             "training {spp:>3} spp: mean L1 {m:.3}, sd {:.3}",
             var.sqrt()
@@ -251,7 +248,7 @@ fn learned_distributions_approach_the_incident_radiance() {
     // noise after that (it levels off; see the module comment).
     for (k, pair) in means.windows(2).enumerate() {
         let ((m0, v0), (m1, v1)) = (pair[0], pair[1]);
-        let se = ((v0 + v1) / runs as f64).sqrt();
+        let se = ((v0 + v1) / RUNS as f64).sqrt();
         if k == 0 {
             assert!(
                 m0 - m1 > 2.0 * se,

@@ -4,6 +4,7 @@
 
 use std::path::Path;
 
+use plotters::element::{Drawable, PointCollection};
 use plotters::prelude::*;
 
 use super::compare_types::CompareError;
@@ -257,6 +258,28 @@ pub fn write_ratio_plot(
     Ok(())
 }
 
+/// A ratio line's marker at `at` (in any coordinates): 0 a disc, 1 a triangle, else a
+/// cross; the same on the plot and in its legend.
+fn marker<DB: DrawingBackend, C: Clone + 'static>(
+    at: C,
+    kind: usize,
+    color: RGBColor,
+) -> DynElement<'static, DB, C>
+where
+    Circle<C, i32>: Drawable<DB>,
+    TriangleMarker<C, i32>: Drawable<DB>,
+    Cross<C, i32>: Drawable<DB>,
+    for<'b> &'b Circle<C, i32>: PointCollection<'b, C>,
+    for<'b> &'b TriangleMarker<C, i32>: PointCollection<'b, C>,
+    for<'b> &'b Cross<C, i32>: PointCollection<'b, C>,
+{
+    match kind {
+        0 => Circle::new(at, 5, color.filled()).into_dyn(),
+        1 => TriangleMarker::new(at, 7, color.filled()).into_dyn(),
+        _ => Cross::new(at, 6, color.stroke_width(2)).into_dyn(),
+    }
+}
+
 fn draw_ratios(
     buffer: &mut [u8],
     title: &str,
@@ -335,24 +358,9 @@ fn draw_ratios(
                 color.stroke_width(2),
             ))
             .map_err(|x| e(&x))?;
-        match line.marker {
-            0 => chart.draw_series(
-                line.points
-                    .iter()
-                    .map(|&p| Circle::new(p, 5, color.filled()).into_dyn()),
-            ),
-            1 => chart.draw_series(
-                line.points
-                    .iter()
-                    .map(|&p| TriangleMarker::new(p, 7, color.filled()).into_dyn()),
-            ),
-            _ => chart.draw_series(
-                line.points
-                    .iter()
-                    .map(|&p| Cross::new(p, 6, color.stroke_width(2)).into_dyn()),
-            ),
-        }
-        .map_err(|x| e(&x))?;
+        chart
+            .draw_series(line.points.iter().map(|&p| marker(p, line.marker, color)))
+            .map_err(|x| e(&x))?;
     }
     // The legend, right of the plot where it hides no line or guide label, with each
     // line's marker (which tells the scenes apart).
@@ -366,12 +374,8 @@ fn draw_ratios(
         ))
         .map_err(|x| e(&x))?;
         let at = (x0 + 14, y);
-        match line.marker {
-            0 => root.draw(&Circle::new(at, 5, color.filled())),
-            1 => root.draw(&TriangleMarker::new(at, 7, color.filled())),
-            _ => root.draw(&Cross::new(at, 6, color.stroke_width(2))),
-        }
-        .map_err(|x| e(&x))?;
+        root.draw(&marker(at, line.marker, color))
+            .map_err(|x| e(&x))?;
         root.draw(&Text::new(
             line.label.clone(),
             (x0 + 36, y - 9),
