@@ -22,6 +22,31 @@ pub(super) struct Variant {
     pub lanes: bool,
 }
 
+/// Texture slots of the descriptor-set layout come in multiples of this many.
+const TEXTURE_SLOT_STEP: usize = 16;
+
+/// The layout's texture slots for a scene with `textures` textures: a multiple of
+/// [`TEXTURE_SLOT_STEP`], at least one step. The slot count is part of the pipeline
+/// layout, and lavapipe's shader cache keys its compiled kernels by the layout: with the
+/// exact count every scene with another number of textures recompiled every kernel
+/// variant (10–30 s each), and most of the test suite's time on a fresh machine went to
+/// recompiling kernels it already had.
+fn texture_slots(textures: usize) -> u32 {
+    (textures.div_ceil(TEXTURE_SLOT_STEP).max(1) * TEXTURE_SLOT_STEP) as u32
+}
+
+/// The scene's textures padded to [`texture_slots`] with copies of the first, which the
+/// kernel never reads (material texture indices stay below the scene's count). Without
+/// textures nothing is written: the kernel reads no slot then.
+fn padded_texture_slots(
+    mut textures: Vec<(raw::ImageView, raw::Sampler)>,
+) -> Vec<(raw::ImageView, raw::Sampler)> {
+    if let Some(&first) = textures.first() {
+        textures.resize(texture_slots(textures.len()) as usize, first);
+    }
+    textures
+}
+
 /// What one binding of the kernel's descriptor set holds.
 enum Bound<'a> {
     Buffer(&'a Buffer),
@@ -78,7 +103,7 @@ impl Renderer {
         }
         table.push((
             gpu::BINDING_TEXTURES,
-            Bound::Images(g.texture_descriptors()),
+            Bound::Images(padded_texture_slots(g.texture_descriptors())),
         ));
         table
     }
@@ -90,7 +115,7 @@ impl Renderer {
             .map(|(binding, bound)| match bound {
                 Bound::Buffer(_) => BindingSpec::buffer(*binding),
                 Bound::Accel(_) => BindingSpec::accel(*binding),
-                Bound::Images(images) => BindingSpec::images(*binding, images.len() as u32),
+                Bound::Images(images) => BindingSpec::images(*binding, texture_slots(images.len())),
             })
             .collect()
     }
