@@ -215,6 +215,63 @@ fn leaf_view_shows_the_leaf() {
     assert!(view.rgb.iter().all(|v| (0.0..=1.0).contains(v)));
 }
 
+/// The kernel looks a model's probability up in the hash copy of its leaf's table
+/// (`guide_light_pmf`): every entry of every table must be found with its value, models
+/// a table lacks must get 0, and the tables must keep their packed form in front (the
+/// saved file and `guide_light_sample` read that). Full tables of models that share
+/// first slots make the probing wrap around.
+#[test]
+fn light_hash_finds_every_table_entry() {
+    use lanterna::gpu::{
+        GuideLightSlot, GUIDE_LIGHT_EMPTY, GUIDE_LIGHT_HASH_BITS, GUIDE_LIGHT_HASH_SLOTS,
+        GUIDE_LIGHT_SLOTS,
+    };
+    use lanterna::guiding::light_hash_lookup;
+    let mut arrays = grown_tree().gpu_arrays();
+    let leaves = arrays.leaves.len();
+    assert!(leaves >= 3);
+    let slots = GUIDE_LIGHT_SLOTS as usize;
+    let empty = GuideLightSlot {
+        model: GUIDE_LIGHT_EMPTY,
+        value: 0.0,
+    };
+    arrays.lights = vec![empty; leaves * slots];
+    // Leaf 0: a full table of models that all start probing at slot 30 of 32 (the
+    // kernel's hash: top bits of model · 2654435761), so probes collide and wrap; leaf 1:
+    // one entry; leaf 2 and beyond: empty.
+    let first_slot = |m: u32| m.wrapping_mul(2_654_435_761) >> (32 - GUIDE_LIGHT_HASH_BITS);
+    let full: Vec<u32> = (0u32..)
+        .filter(|&m| first_slot(m) == GUIDE_LIGHT_HASH_SLOTS - 2)
+        .take(slots)
+        .collect();
+    for (k, &model) in full.iter().enumerate() {
+        arrays.lights[k] = GuideLightSlot {
+            model,
+            value: (k + 1) as f32 / 1000.0,
+        };
+    }
+    arrays.lights[slots] = GuideLightSlot {
+        model: 5,
+        value: 1.0,
+    };
+    let buffer = arrays.light_buffer();
+    assert_eq!(buffer.len(), arrays.light_buffer_len());
+    assert_eq!(&buffer[..arrays.lights.len()], arrays.lights.as_slice());
+    for (k, &model) in full.iter().enumerate() {
+        assert_eq!(
+            light_hash_lookup(&buffer, leaves, 0, model),
+            (k + 1) as f32 / 1000.0,
+            "model {model} of the full table"
+        );
+        assert_eq!(light_hash_lookup(&buffer, leaves, 1, model), 0.0);
+    }
+    assert_eq!(light_hash_lookup(&buffer, leaves, 1, 5), 1.0);
+    for model in [full[0] + 1, full[3] + 1, 9_999, GUIDE_LIGHT_EMPTY - 1] {
+        assert_eq!(light_hash_lookup(&buffer, leaves, 0, model), 0.0);
+        assert_eq!(light_hash_lookup(&buffer, leaves, 2, model), 0.0);
+    }
+}
+
 #[test]
 fn light_tables_normalise_and_follow_splits() {
     use lanterna::gpu::{GUIDE_LIGHT_EMPTY, GUIDE_LIGHT_SLOTS};

@@ -367,10 +367,13 @@ void guide_record(GuideRecord r, vec3 u) {
 
 // Probability of light model `model` in leaf `leaf`'s table (0 when absent).
 float guide_light_pmf(uint leaf, uint model) {
-    uint base = leaf * GUIDE_LIGHT_SLOTS;
-    // The CPU packs a table's entries first, largest first: the first empty slot ends it.
-    [[dont_unroll]] for (uint i = 0u; i < GUIDE_LIGHT_SLOTS; ++i) {
-        GuideLightSlot s = guide_lights[base + i];
+    // The leaf's hash copy of its table: one or two probes where the linear scan of the
+    // packed table read every entry for a model the table does not hold.
+    uint base = guide_header.leaf_count * GUIDE_LIGHT_SLOTS + leaf * GUIDE_LIGHT_HASH_SLOTS;
+    uint h = (model * 2654435761u) >> (32u - GUIDE_LIGHT_HASH_BITS);
+    // At most half the slots are full, so every probe sequence ends at an empty slot.
+    [[dont_unroll]] for (uint i = 0u; i < GUIDE_LIGHT_HASH_SLOTS; ++i) {
+        GuideLightSlot s = guide_lights[base + ((h + i) & (GUIDE_LIGHT_HASH_SLOTS - 1u))];
         if (s.model == model) return s.value;
         if (s.model == GUIDE_LIGHT_EMPTY) break;
     }

@@ -41,6 +41,13 @@
 #define GUIDE_LIGHT_SLOTS 16
 #define GUIDE_LIGHT_PROBES 4
 #define GUIDE_LIGHT_EMPTY 0xffffffffu
+// The same tables once more, after all leaves' packed tables in BINDING_GUIDE_LIGHTS, as
+// open-addressing hashes for looking up a model's probability (guide_light_pmf, once per
+// RIS candidate): GUIDE_LIGHT_HASH_SLOTS slots per leaf (at most half full), a model's
+// first slot the top GUIDE_LIGHT_HASH_BITS bits of model · 2654435761 (Knuth's
+// multiplicative hash), linear probing to the next empty slot.
+#define GUIDE_LIGHT_HASH_SLOTS 32
+#define GUIDE_LIGHT_HASH_BITS 5
 
 // GuideSpatialNode.axis of a leaf.
 #define GUIDE_SPATIAL_LEAF 3u
@@ -65,7 +72,9 @@ struct GuideHeader {
 };
 
 // One slot of a leaf's light table (BINDING_GUIDE_LIGHTS): value = the model's selection
-// probability; the slots of a leaf sum to 1 or are all empty.
+// probability; the slots of a leaf sum to 1 or are all empty. The buffer holds
+// leaf_count × GUIDE_LIGHT_SLOTS packed slots (entries first, largest first), then
+// leaf_count × GUIDE_LIGHT_HASH_SLOTS hash slots of the same entries.
 struct GuideLightSlot {
     uint model;
     float value;

@@ -14,7 +14,8 @@ use super::sdtree::{Leaf, SdTree, SpatialNode};
 use super::{GuidingConfig, GuidingError};
 use crate::gpu::{
     GuideHeader, GuideLeaf, GuideLightSlot, GuideLightTrainingSlot, GuideQuadNode,
-    GuideSpatialNode, GUIDE_LIGHT_EMPTY, GUIDE_LIGHT_SLOTS, GUIDE_SPATIAL_LEAF,
+    GuideSpatialNode, GUIDE_LIGHT_EMPTY, GUIDE_LIGHT_HASH_BITS, GUIDE_LIGHT_HASH_SLOTS,
+    GUIDE_LIGHT_SLOTS, GUIDE_SPATIAL_LEAF,
 };
 use glam::Vec3;
 use std::collections::{HashMap, HashSet};
@@ -28,9 +29,12 @@ pub(crate) const LIGHT_SLOT_BYTES: u64 = std::mem::size_of::<GuideLightSlot>() a
 pub(crate) const LIGHT_TRAINING_SLOT_BYTES: u64 =
     std::mem::size_of::<GuideLightTrainingSlot>() as u64;
 const SLOTS: usize = GUIDE_LIGHT_SLOTS as usize;
-/// GPU bytes one leaf adds besides its quadtrees: its record and its two light tables.
-pub(crate) const LEAF_TOTAL_BYTES: u64 =
-    LEAF_BYTES + (LIGHT_SLOT_BYTES + LIGHT_TRAINING_SLOT_BYTES) * SLOTS as u64;
+const HASH_SLOTS: usize = GUIDE_LIGHT_HASH_SLOTS as usize;
+/// GPU bytes one leaf adds besides its quadtrees: its record and its light tables (the
+/// packed one and its hash copy, and the training table).
+pub(crate) const LEAF_TOTAL_BYTES: u64 = LEAF_BYTES
+    + LIGHT_SLOT_BYTES * (SLOTS + HASH_SLOTS) as u64
+    + LIGHT_TRAINING_SLOT_BYTES * SLOTS as u64;
 
 /// The contents of the four guiding buffers.
 #[derive(Clone, Debug, PartialEq)]
@@ -78,9 +82,63 @@ impl GuideArrays {
         self.spatial_buffer_len()
             + LEAF_BYTES * self.leaves.len() as u64
             + QUAD_NODE_BYTES * (self.sampling.len() + self.training.len()) as u64
-            + LIGHT_SLOT_BYTES * self.lights.len() as u64
+            + LIGHT_SLOT_BYTES * self.light_buffer_len() as u64
             + LIGHT_TRAINING_SLOT_BYTES * self.light_training.len() as u64
     }
+
+    /// Slots of the light-table buffer (BINDING_GUIDE_LIGHTS): the packed tables, then
+    /// their hash copies.
+    pub fn light_buffer_len(&self) -> usize {
+        self.lights.len() / SLOTS * (SLOTS + HASH_SLOTS)
+    }
+
+    /// Contents of the light-table buffer: every leaf's packed table (`lights`), then
+    /// every leaf's table as an open-addressing hash (shared/guiding.h), which
+    /// `guide_light_pmf` probes instead of scanning the packed table.
+    pub fn light_buffer(&self) -> Vec<GuideLightSlot> {
+        let mut out = self.lights.clone();
+        out.reserve(self.lights.len() / SLOTS * HASH_SLOTS);
+        for table in self.lights.chunks_exact(SLOTS) {
+            let start = out.len();
+            out.resize(start + HASH_SLOTS, EMPTY_SLOT);
+            let hash = &mut out[start..];
+            for entry in table.iter().take_while(|e| e.model != GUIDE_LIGHT_EMPTY) {
+                let mut i = light_hash_slot(entry.model);
+                while hash[i].model != GUIDE_LIGHT_EMPTY {
+                    i = (i + 1) % HASH_SLOTS;
+                }
+                hash[i] = *entry;
+            }
+        }
+        out
+    }
+}
+
+/// A light model's first slot in a leaf's hash table (the kernel's `guide_light_pmf`).
+pub(crate) fn light_hash_slot(model: u32) -> usize {
+    (model.wrapping_mul(2_654_435_761) >> (32 - GUIDE_LIGHT_HASH_BITS)) as usize
+}
+
+/// A light model's probability in leaf `leaf`'s hash table as the kernel looks it up
+/// (0 when absent): probes from its first slot to the next empty one.
+pub fn light_hash_lookup(
+    buffer: &[GuideLightSlot],
+    leaf_count: usize,
+    leaf: usize,
+    model: u32,
+) -> f32 {
+    let hash = &buffer[leaf_count * SLOTS + leaf * HASH_SLOTS..][..HASH_SLOTS];
+    let first = light_hash_slot(model);
+    for k in 0..HASH_SLOTS {
+        let s = hash[(first + k) % HASH_SLOTS];
+        if s.model == model {
+            return s.value;
+        }
+        if s.model == GUIDE_LIGHT_EMPTY {
+            break;
+        }
+    }
+    0.0
 }
 
 fn to_gpu_node(n: &QuadNode, base: u32) -> GuideQuadNode {
@@ -172,9 +230,8 @@ impl SdTree {
         let (_, sampling, _, training) = self.layout();
         HEADER_BYTES
             + SPATIAL_NODE_BYTES * self.nodes.len() as u64
-            + LEAF_BYTES * self.leaves.len() as u64
+            + LEAF_TOTAL_BYTES * self.leaves.len() as u64
             + QUAD_NODE_BYTES * (sampling + training) as u64
-            + (LIGHT_SLOT_BYTES + LIGHT_TRAINING_SLOT_BYTES) * (SLOTS * self.leaves.len()) as u64
     }
 
     /// The GPU buffers' contents.

@@ -79,7 +79,12 @@ impl GuideBuffers {
                 "guide training quadtrees",
             )?,
             training_nodes: arrays.training.len(),
-            lights: Buffer::from_slice(device, &arrays.lights, usage, "guide light tables")?,
+            lights: Buffer::from_slice(
+                device,
+                &arrays.light_buffer(),
+                usage,
+                "guide light tables",
+            )?,
             light_training: Buffer::from_slice(
                 device,
                 &arrays.light_training,
