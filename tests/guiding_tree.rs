@@ -216,17 +216,18 @@ fn leaf_view_shows_the_leaf() {
 }
 
 /// The kernel looks a model's probability up in the hash copy of its leaf's table
-/// (`guide_light_pmf`): every entry of every table must be found with its value, models
-/// a table lacks must get 0, and the tables must keep their packed form in front (the
-/// saved file and `guide_light_sample` read that). Full tables of models that share
+/// (`guide_light_pmf`) and draws models from its alias copy (`guide_light_sample`):
+/// every entry of every table must be found with its value, models a table lacks must
+/// get 0, draws must follow the table, and the tables must keep their packed form in
+/// front (the saved file and the alias draws read that). Full tables of models that share
 /// first slots make the probing wrap around.
 #[test]
-fn light_hash_finds_every_table_entry() {
+fn light_hash_and_alias_copies_match_the_table() {
     use lanterna::gpu::{
         GuideLightSlot, GUIDE_LIGHT_EMPTY, GUIDE_LIGHT_HASH_BITS, GUIDE_LIGHT_HASH_SLOTS,
         GUIDE_LIGHT_SLOTS,
     };
-    use lanterna::guiding::light_hash_lookup;
+    use lanterna::guiding::{light_alias_sample, light_hash_lookup};
     let mut arrays = grown_tree().gpu_arrays();
     let leaves = arrays.leaves.len();
     assert!(leaves >= 3);
@@ -247,7 +248,7 @@ fn light_hash_finds_every_table_entry() {
     for (k, &model) in full.iter().enumerate() {
         arrays.lights[k] = GuideLightSlot {
             model,
-            value: (k + 1) as f32 / 1000.0,
+            value: (k + 1) as f32 / 136.0,
         };
     }
     arrays.lights[slots] = GuideLightSlot {
@@ -260,7 +261,7 @@ fn light_hash_finds_every_table_entry() {
     for (k, &model) in full.iter().enumerate() {
         assert_eq!(
             light_hash_lookup(&buffer, leaves, 0, model),
-            (k + 1) as f32 / 1000.0,
+            (k + 1) as f32 / 136.0,
             "model {model} of the full table"
         );
         assert_eq!(light_hash_lookup(&buffer, leaves, 1, model), 0.0);
@@ -269,6 +270,34 @@ fn light_hash_finds_every_table_entry() {
     for model in [full[0] + 1, full[3] + 1, 9_999, GUIDE_LIGHT_EMPTY - 1] {
         assert_eq!(light_hash_lookup(&buffer, leaves, 0, model), 0.0);
         assert_eq!(light_hash_lookup(&buffer, leaves, 2, model), 0.0);
+    }
+    // The alias copy (`guide_light_sample`) draws each model with its probability:
+    // over a fine grid of u each model's share is its probability to the grid's
+    // resolution, and the reported probability is the table's.
+    let grid = 1 << 16;
+    let mut drawn = vec![0usize; slots];
+    for j in 0..grid {
+        let u = (j as f32 + 0.5) / grid as f32;
+        let (model, p) = light_alias_sample(&buffer, leaves, 0, u);
+        let k = full
+            .iter()
+            .position(|&m| m == model)
+            .expect("a model of the table");
+        assert_eq!(p, (k + 1) as f32 / 136.0);
+        drawn[k] += 1;
+        assert_eq!(light_alias_sample(&buffer, leaves, 1, u), (5, 1.0));
+        assert_eq!(
+            light_alias_sample(&buffer, leaves, 2, u).0,
+            GUIDE_LIGHT_EMPTY
+        );
+    }
+    for (k, &n) in drawn.iter().enumerate() {
+        let share = n as f64 / grid as f64;
+        let p = (k + 1) as f64 / 136.0;
+        assert!(
+            (share - p).abs() < 1e-3,
+            "model {k}: drawn {share}, probability {p}"
+        );
     }
 }
 

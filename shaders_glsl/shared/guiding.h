@@ -48,6 +48,9 @@
 // multiplicative hash), linear probing to the next empty slot.
 #define GUIDE_LIGHT_HASH_SLOTS 32
 #define GUIDE_LIGHT_HASH_BITS 5
+// And after the hashes, as alias tables (Walker/Vose) over each leaf's GUIDE_LIGHT_SLOTS
+// packed slots, for drawing from it (guide_light_sample): slot i's `model` is its alias
+// slot and `value` its threshold.
 
 // GuideSpatialNode.axis of a leaf.
 #define GUIDE_SPATIAL_LEAF 3u
@@ -74,7 +77,8 @@ struct GuideHeader {
 // One slot of a leaf's light table (BINDING_GUIDE_LIGHTS): value = the model's selection
 // probability; the slots of a leaf sum to 1 or are all empty. The buffer holds
 // leaf_count × GUIDE_LIGHT_SLOTS packed slots (entries first, largest first), then
-// leaf_count × GUIDE_LIGHT_HASH_SLOTS hash slots of the same entries.
+// leaf_count × GUIDE_LIGHT_HASH_SLOTS hash slots of the same entries, then
+// leaf_count × GUIDE_LIGHT_SLOTS alias slots.
 struct GuideLightSlot {
     uint model;
     float value;

@@ -33,7 +33,7 @@ const HASH_SLOTS: usize = GUIDE_LIGHT_HASH_SLOTS as usize;
 /// GPU bytes one leaf adds besides its quadtrees: its record and its light tables (the
 /// packed one and its hash copy, and the training table).
 pub(crate) const LEAF_TOTAL_BYTES: u64 = LEAF_BYTES
-    + LIGHT_SLOT_BYTES * (SLOTS + HASH_SLOTS) as u64
+    + LIGHT_SLOT_BYTES * (2 * SLOTS + HASH_SLOTS) as u64
     + LIGHT_TRAINING_SLOT_BYTES * SLOTS as u64;
 
 /// The contents of the four guiding buffers.
@@ -86,18 +86,19 @@ impl GuideArrays {
             + LIGHT_TRAINING_SLOT_BYTES * self.light_training.len() as u64
     }
 
-    /// Slots of the light-table buffer (BINDING_GUIDE_LIGHTS): the packed tables, then
-    /// their hash copies.
+    /// Slots of the light-table buffer (BINDING_GUIDE_LIGHTS): the packed tables, their
+    /// hash copies, their alias tables.
     pub fn light_buffer_len(&self) -> usize {
-        self.lights.len() / SLOTS * (SLOTS + HASH_SLOTS)
+        self.lights.len() / SLOTS * (2 * SLOTS + HASH_SLOTS)
     }
 
     /// Contents of the light-table buffer: every leaf's packed table (`lights`), then
     /// every leaf's table as an open-addressing hash (shared/guiding.h), which
-    /// `guide_light_pmf` probes instead of scanning the packed table.
+    /// `guide_light_pmf` probes instead of scanning the packed table, then every leaf's
+    /// alias table over its packed slots, which `guide_light_sample` draws from.
     pub fn light_buffer(&self) -> Vec<GuideLightSlot> {
         let mut out = self.lights.clone();
-        out.reserve(self.lights.len() / SLOTS * HASH_SLOTS);
+        out.reserve(self.lights.len() / SLOTS * (SLOTS + HASH_SLOTS));
         for table in self.lights.chunks_exact(SLOTS) {
             let start = out.len();
             out.resize(start + HASH_SLOTS, EMPTY_SLOT);
@@ -110,6 +111,28 @@ impl GuideArrays {
                 hash[i] = *entry;
             }
         }
+        for table in self.lights.chunks_exact(SLOTS) {
+            let weights: Vec<f64> = table
+                .iter()
+                .map(|e| match e.model {
+                    GUIDE_LIGHT_EMPTY => 0.0,
+                    _ => f64::from(e.value.max(0.0)),
+                })
+                .collect();
+            match crate::lights::alias::build(&weights) {
+                Some(alias) => out.extend(alias.iter().map(|a| GuideLightSlot {
+                    model: a.alias,
+                    value: a.threshold,
+                })),
+                // An empty table: every slot leads to its first, empty, packed slot.
+                None => out.extend(
+                    [GuideLightSlot {
+                        model: 0,
+                        value: 0.0,
+                    }; SLOTS],
+                ),
+            }
+        }
         out
     }
 }
@@ -117,6 +140,27 @@ impl GuideArrays {
 /// A light model's first slot in a leaf's hash table (the kernel's `guide_light_pmf`).
 pub(crate) fn light_hash_slot(model: u32) -> usize {
     (model.wrapping_mul(2_654_435_761) >> (32 - GUIDE_LIGHT_HASH_BITS)) as usize
+}
+
+/// The light model (and its probability) that leaf `leaf`'s alias table draws with u in
+/// [0, 1), as the kernel's `guide_light_sample` does; GUIDE_LIGHT_EMPTY for an empty
+/// table.
+pub fn light_alias_sample(
+    buffer: &[GuideLightSlot],
+    leaf_count: usize,
+    leaf: usize,
+    u: f32,
+) -> (u32, f32) {
+    let alias = &buffer[leaf_count * (SLOTS + HASH_SLOTS) + leaf * SLOTS..][..SLOTS];
+    let scaled = u * SLOTS as f32;
+    let i = (scaled as usize).min(SLOTS - 1);
+    let k = if scaled - (i as f32) < alias[i].value {
+        i
+    } else {
+        alias[i].model as usize
+    };
+    let s = buffer[leaf * SLOTS + k];
+    (s.model, s.value)
 }
 
 /// A light model's probability in leaf `leaf`'s hash table as the kernel looks it up
