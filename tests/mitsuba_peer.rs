@@ -369,3 +369,52 @@ fn texture_transforms_agree_with_mitsuba() {
         report["pixels"]
     );
 }
+
+/// The comparison script's Welch test where both sides are constant (a pixel that sees
+/// only an emitter): float32 accumulation differences (Mitsuba sums 1,024 samples of
+/// 7.11 to 7.111465, lanterna's fixed-point film gives 7.111566) are agreement, a real
+/// difference is not, and the report stays strict JSON (the infinite t of such a pixel
+/// once made the bench's long rows fail to parse).
+#[test]
+fn compare_script_treats_constant_pixels_and_writes_strict_json() {
+    if !mitsuba_available() {
+        println!("skipped: no Python here imports mitsuba (scripts/setup --mitsuba)");
+        return;
+    }
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts");
+    let code = format!(
+        r#"
+import json, sys
+import numpy as np
+sys.path.insert(0, {dir:?})
+import mitsuba_compare as mc
+def const(v, n):
+    return np.full((n, 1, 1, 3), v)
+p_same = mc.welch(const(7.111566, 4), const(7.111465, 4))[4].min()
+p_diff = mc.welch(const(7.111566, 4), const(7.2, 4))[4].min()
+t = mc.welch(const(7.111566, 4), const(7.111465, 4))[3]
+text = json.dumps(mc.finite_json({{"t": float(t.flat[0]), "v": [float("nan"), 1.0]}}), allow_nan=False)
+print(json.dumps({{"p_same": float(p_same), "p_diff": float(p_diff), "json": text}}))
+"#,
+        dir = script.display().to_string()
+    );
+    let python = lanterna::testing::mitsuba_python().expect("a Python that imports mitsuba");
+    let out = Command::new(python)
+        .args(["-c", &code])
+        .output()
+        .expect("run Python");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(String::from_utf8_lossy(&out.stdout).trim()).unwrap();
+    assert_eq!(
+        v["p_same"], 1.0,
+        "constant pixels equal to float32 rounding: {v}"
+    );
+    assert_eq!(v["p_diff"], 0.0, "constant pixels that differ: {v}");
+    let inner: serde_json::Value = serde_json::from_str(v["json"].as_str().unwrap()).unwrap();
+    assert!(inner["t"].is_null() && inner["v"][0].is_null(), "{inner}");
+}

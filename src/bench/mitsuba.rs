@@ -161,10 +161,14 @@ fn run_script(
 
 fn scene_peer(bench: &Bench, size: &PeerSize) -> Result<PeerScene> {
     let path = bench.scene_path(&size.scene)?;
-    let dir = bench
-        .work_dir
-        .join("mitsuba")
-        .join(size.scene.trim_end_matches(".gltf"));
+    // One directory per row: a scene can have several (short and long budgets), and
+    // each row's export, batches and reference must not overwrite another's.
+    let dir = bench.work_dir.join("mitsuba").join(format!(
+        "{}-{}w-{}spp",
+        size.scene.trim_end_matches(".gltf"),
+        size.width,
+        size.spp
+    ));
     let export_dir = dir.join("export");
     let batch_dir = dir.join("lanterna");
     std::fs::create_dir_all(&batch_dir).map_err(|e| BenchError::io(&batch_dir, e))?;
