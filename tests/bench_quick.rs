@@ -217,6 +217,11 @@ fn quick_bench_writes_results() {
         check_spread(&p["lanterna_samples_per_s"], "lanterna rate");
         assert_eq!(methods(&p["lanterna_equal_time"], "equal time").len(), 4);
         assert!(num(&p["mitsuba_equal_time_mae"], "mitsuba MAE") > 0.0);
+        // Both sides report the time their equal-time renders took.
+        assert!(num(&p["mitsuba_equal_time_seconds"], "mitsuba seconds") > 0.0);
+        for m in p["lanterna_equal_time"].as_array().unwrap() {
+            check_spread(&m["seconds"], "lanterna equal-time seconds");
+        }
     } else {
         assert!(r["mitsuba_skipped"].is_string(), "{}", r["mitsuba_skipped"]);
     }

@@ -329,12 +329,12 @@ fn mitsuba(md: &mut String, r: &BenchReport) {
         "Scenes exported with `lanterna scene export-mitsuba`, rendered by Mitsuba's `path` integrator at the same max depth and size \
          (`{}`). Agreement: lanterna `pt` batches vs Mitsuba runs, Welch tests of the image mean, of 8×8 blocks and of pixels \
          (family-wise α = 10⁻³); it applies only where the export is exact. Equal time: every lanterna method and Mitsuba's `path` \
-         get the time of one lanterna `pt` batch; MAE against a Mitsuba reference.\n",
+         get the time of one lanterna `pt` batch (Mitsuba's spp is rescaled by the time it took until within 5 %; the seconds each render took are shown); MAE against a Mitsuba reference.\n",
         p.script
     );
     let _ = writeln!(
         md,
-        "| scene | size | exact | mean lanterna/Mitsuba − 1 (R, G, B) | blocks / pixels agree | lanterna `pt` M samples/s | Mitsuba `path` M samples/s | speed ratio | equal time | Mitsuba MAE (spp) | best lanterna: MAE (spp) | MAE ratio |"
+        "| scene | size | exact | mean lanterna/Mitsuba − 1 (R, G, B) | blocks / pixels agree | lanterna `pt` M samples/s | Mitsuba `path` M samples/s | speed ratio | equal time | Mitsuba MAE (spp, s) | best lanterna: MAE (spp, s) | MAE ratio |"
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|");
     for s in &p.scenes {
@@ -350,7 +350,7 @@ fn mitsuba(md: &mut String, r: &BenchReport) {
             .find(|m| m.method == s.best_method);
         let _ = writeln!(
             md,
-            "| {} | {}×{} | {} | {} | {} / {} | {} | {} | {} | {:.2} s | {} ({}) | `{}`: {} ({}) | **{:.2}** |",
+            "| {} | {}×{} | {} | {} | {} / {} | {} | {} | {} | {:.2} s | {} ({}, {:.2} s) | `{}`: {} ({}, {:.2} s) | **{:.2}** |",
             s.scene,
             s.width,
             s.height,
@@ -364,9 +364,11 @@ fn mitsuba(md: &mut String, r: &BenchReport) {
             s.equal_time_seconds,
             num(s.mitsuba_equal_time_mae),
             s.mitsuba_equal_time_spp,
+            s.mitsuba_equal_time_seconds,
             s.best_method,
             best.map(|b| spread(&b.mae, 1.0)).unwrap_or_default(),
             best.map(|b| num(b.spp.median)).unwrap_or_default(),
+            best.map_or(0.0, |b| b.seconds.median),
             s.best_mae_ratio_to_mitsuba
         );
     }

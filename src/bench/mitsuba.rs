@@ -36,6 +36,10 @@ pub struct EqualTimeMethod {
     pub method: String,
     pub spp: Spread,
     pub mae: Spread,
+    /// Seconds the renders took (the budget is a deadline; absent in files from before
+    /// 2026-11-23).
+    #[serde(default)]
+    pub seconds: Spread,
 }
 
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
@@ -72,6 +76,9 @@ pub struct PeerScene {
     pub equal_time_seconds: f64,
     pub mitsuba_equal_time_spp: u64,
     pub mitsuba_equal_time_mae: f64,
+    /// Seconds Mitsuba's equal-time render took (0 in files from before 2026-11-23).
+    #[serde(default)]
+    pub mitsuba_equal_time_seconds: f64,
     pub lanterna_equal_time: Vec<EqualTimeMethod>,
     /// The lanterna method with the lowest median equal-time MAE.
     pub best_method: String,
@@ -234,6 +241,7 @@ fn scene_peer(bench: &Bench, size: &PeerSize) -> Result<PeerScene> {
         session.configure(settings.clone())?;
         let mut spp = Vec::new();
         let mut mae = Vec::new();
+        let mut seconds = Vec::new();
         for seed in 0..bench.repeat.max(1) as u32 {
             settings.seed = 100 + seed;
             session.renderer.set_settings(settings.clone())?;
@@ -248,6 +256,7 @@ fn scene_peer(bench: &Bench, size: &PeerSize) -> Result<PeerScene> {
             .map_err(|e| BenchError::Other(e.to_string()))?;
             spp.push(film.spp as f64);
             mae.push(e);
+            seconds.push(r.seconds);
         }
         log::info!(
             "mitsuba: {method} at {t:.2} s: {} spp, MAE {:.4}",
@@ -258,6 +267,7 @@ fn scene_peer(bench: &Bench, size: &PeerSize) -> Result<PeerScene> {
             method: method.name().into(),
             spp: Spread::of(&spp),
             mae: Spread::of(&mae),
+            seconds: Spread::of(&seconds),
         });
     }
     let best = equal_time
@@ -313,6 +323,10 @@ fn scene_peer(bench: &Bench, size: &PeerSize) -> Result<PeerScene> {
             .and_then(Value::as_u64)
             .unwrap_or(0),
         mitsuba_equal_time_mae: mitsuba_mae,
+        mitsuba_equal_time_seconds: report
+            .pointer("/mae/equal_time/mitsuba/seconds")
+            .and_then(Value::as_f64)
+            .unwrap_or(0.0),
         best_method: best.method.clone(),
         best_mae_ratio_to_mitsuba: best.mae.median / mitsuba_mae,
         lanterna_equal_time: equal_time,

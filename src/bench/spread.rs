@@ -2,7 +2,7 @@
 //! median and maximum over its repetitions, so one noisy run cannot hide or fake a trend.
 
 /// Minimum, median and maximum of a set of measurements.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Spread {
     pub min: f64,
     pub median: f64,
