@@ -38,6 +38,7 @@ struct VertexRecord {
     vec3 emitted;     // emission arriving along wi that this vertex's record counts
     vec3 emitted_mis; // emission arriving along wi as the image counts it (MIS-weighted)
     uint leaf;        // SD-tree leaf whose selection probability drew wi (guided vertices)
+    uint pos_leaf;    // SD-tree leaf of p where the direction sampler found it, else INVALID_INDEX
     float bsdf_pdf;   // the two pdfs the mixture pdf `pdf` mixes
     float guide_pdf;
     vec3 nee_dir;
@@ -104,7 +105,7 @@ void record_path(VertexRecord rec[GUIDE_MAX_RECORDED_VERTICES], uint count, inou
                 if (second_moment) r.value *= r.value * rec[k].nee_pdf;
                 r.weight = 0.0;
             }
-            guide_record(r, vec3(rng_next2(rng), rng_next(rng)));
+            guide_record(r, vec3(rng_next2(rng), rng_next(rng)), rec[k].pos_leaf);
         }
         if (learn_selection && rec[k].leaf != INVALID_INDEX && rec[k].pdf > 0.0) {
             // f·cos·L_in = weight · pdf · L_in: the direction estimate times its pdf.
@@ -233,6 +234,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
                 r.emitted = emitted_recorded;
                 r.emitted_mis = emitted;
                 r.leaf = d.bsdf_fraction < 1.0 ? d.leaf : INVALID_INDEX;
+                r.pos_leaf = d.leaf;
                 r.bsdf_pdf = ds.bsdf_pdf;
                 r.guide_pdf = ds.guide_pdf;
                 r.nee_dir = nee.record_dir;

@@ -11,6 +11,7 @@
 #ifndef LANTERNA_GUIDING_GLSL
 #define LANTERNA_GUIDING_GLSL
 
+#include "shared/constants.h"
 #include "guiding_buffers.glsl"
 
 const float GUIDE_PI = 3.14159265358979323846;
@@ -339,7 +340,9 @@ void guide_record_into(uint leaf, GuideRecord r) {
 // position within its leaf's box when the stochastic spatial filter is on: the leaf of
 // r.pos gives the box, the leaf of the jittered point takes the record (both through one
 // guide_find_leaf call site, so that the kernel holds one copy of the descent here).
-void guide_record(GuideRecord r, vec3 u) {
+// `leaf` is r.pos's leaf when the caller found it already (the path's direction sampler
+// did, in the same tree), else INVALID_INDEX; it spares a descent per record.
+void guide_record(GuideRecord r, vec3 u, uint leaf) {
     // A weight that is not a finite number ≥ 0 marks a broken record: drop it whole.
     if (!(r.weight >= 0.0) || isinf(r.weight)) {
         return;
@@ -351,9 +354,8 @@ void guide_record(GuideRecord r, vec3 u) {
     }
     bool jitter = (guide_header.flags & GUIDE_FLAG_SPATIAL_JITTER) != 0u;
     vec3 q = r.pos;
-    uint leaf;
     [[dont_unroll]] for (uint pass = 0u;; ++pass) {
-        leaf = guide_find_leaf(q);
+        if (pass > 0u || leaf == INVALID_INDEX) leaf = guide_find_leaf(q);
         if (!jitter || pass == 1u) break;
         // precise: no fused multiply-add, so the CPU mirror picks the same leaf.
         precise vec3 j = r.pos + (u - 0.5) * guide_leaves[leaf].box_size;

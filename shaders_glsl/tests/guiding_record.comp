@@ -2,6 +2,7 @@
 // training buffer (float atomics), which the test reads back and compares with the CPU
 // mirror (SdTree::record). Buffers: TEST_BINDING_IN GuideTestRecord[], and the four
 // SD-tree buffers at their usual bindings (the training buffer is the output).
+// Odd records come with their leaf already found, as the path kernel passes it.
 #version 460
 #extension GL_EXT_scalar_block_layout : require
 #include "shared/bindings.h"
@@ -17,5 +18,8 @@ void main() {
         return;
     }
     GuideTestRecord t = inputs[i];
-    guide_record(t.record, t.u);
+    // Odd records pass their leaf as the path kernel does (found beforehand), even ones
+    // let guide_record find it: both must match the CPU mirror.
+    uint hint = (i & 1u) == 1u ? guide_find_leaf(t.record.pos) : INVALID_INDEX;
+    guide_record(t.record, t.u, hint);
 }

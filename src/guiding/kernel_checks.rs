@@ -272,13 +272,19 @@ pub fn check_record_kernel(
     })
 }
 
-/// The configurations the record check runs with: the default filters, and nearest.
-pub fn record_configs() -> [GuidingConfig; 2] {
+/// The configurations the record check runs with: the default filters, both nearest,
+/// and the stochastic spatial box (no longer the default, so named here; its second
+/// descent must not reuse the leaf a caller passes for the record's own position).
+pub fn record_configs() -> [GuidingConfig; 3] {
     [
         GuidingConfig::default(),
         GuidingConfig {
             spatial_filter: SpatialFilter::Nearest,
             directional_filter: DirectionalFilter::Nearest,
+            ..GuidingConfig::default()
+        },
+        GuidingConfig {
+            spatial_filter: SpatialFilter::StochasticBox,
             ..GuidingConfig::default()
         },
     ]
