@@ -74,6 +74,19 @@ fn l1(p: &[f64], q: &[f64]) -> f64 {
     p.iter().zip(q).map(|(a, b)| (a - b).abs()).sum()
 }
 
+/// The cell-wise mean of histograms.
+fn mean_histogram<'a>(hists: impl Iterator<Item = &'a Vec<f64>>) -> Vec<f64> {
+    let mut sum = vec![0.0; GRID * GRID];
+    let mut n = 0;
+    for h in hists {
+        for (s, x) in sum.iter_mut().zip(h) {
+            *s += x;
+        }
+        n += 1;
+    }
+    sum.iter().map(|s| s / n as f64).collect()
+}
+
 #[test]
 fn learned_distributions_approach_the_incident_radiance() {
     let t = testing::generated(Kind::Gap, &Options::default());
@@ -265,29 +278,15 @@ fn learned_distributions_approach_the_incident_radiance() {
         }
         // Noise or bias: how far the runs' distributions are from each other, and how
         // far their average is from the truth (noise shrinks in the average, bias not).
-        for (pi, _) in points.iter().enumerate() {
+        for pi in 0..points.len() {
             let mut between = Vec::new();
             for (a, ra) in learned.iter().enumerate() {
                 for rb in &learned[a + 1..] {
                     between.push(l1(&ra[pi].0, &rb[pi].0));
                 }
             }
-            // The average over runs of the learned histograms (truth: false) or truths.
-            let average = |truth: bool| -> Vec<f64> {
-                (0..GRID * GRID)
-                    .map(|c| {
-                        let at = |r: &Vec<(Vec<f64>, Vec<f64>)>| {
-                            if truth {
-                                r[pi].1[c]
-                            } else {
-                                r[pi].0[c]
-                            }
-                        };
-                        learned.iter().map(at).sum::<f64>() / RUNS as f64
-                    })
-                    .collect()
-            };
-            let (h, t) = (average(false), average(true));
+            let h = mean_histogram(learned.iter().map(|r| &r[pi].0));
+            let t = mean_histogram(learned.iter().map(|r| &r[pi].1));
             eprintln!(
                 "training {spp:>3} spp point {pi}: L1 between runs {:.3}, of the runs' average {:.3}",
                 between.iter().sum::<f64>() / between.len() as f64,
