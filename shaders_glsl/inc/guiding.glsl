@@ -217,13 +217,15 @@ uint guide_find_leaf(vec3 p) {
 
 // ---- recording ----------------------------------------------------------------------------
 
-// Nearest directional filter: everything goes to the leaf cell holding p.
-void guide_splat_nearest(uint root, vec2 p, float v) {
+// Add v to the cell holding p, `levels` levels deep at most: the leaf cell holding p,
+// or, where the tree is finer, the node's quadrant at that depth (its own sum, which the
+// CPU spreads evenly over the quadrant's subtree before the refit).
+void guide_splat_to_depth(uint root, vec2 p, float v, uint levels) {
     uint n = root;
-    [[dont_unroll]] for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
+    [[dont_unroll]] for (uint level = 0u; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
         uint q = guide_quadrant(p);
         uint c = guide_training[n].child[q];
-        if (c == 0u || level + 1 == GUIDE_MAX_QUAD_DEPTH) {
+        if (c == 0u || level + 1u >= levels) {
             atomicAdd(guide_training[n].sum[q], v);
             return;
         }
@@ -231,92 +233,53 @@ void guide_splat_nearest(uint root, vec2 p, float v) {
     }
 }
 
-// Edge length of the training tree's leaf cell holding p.
-float guide_training_cell_size(uint root, vec2 p) {
+// Nearest directional filter: everything goes to the leaf cell holding p.
+void guide_splat_nearest(uint root, vec2 p, float v) {
+    guide_splat_to_depth(root, p, v, GUIDE_MAX_QUAD_DEPTH);
+}
+
+// Depth of the training tree's leaf cell holding p (the root's quadrants are depth 1;
+// edge length 2^-depth).
+uint guide_training_cell_depth(uint root, vec2 p) {
     uint n = root;
-    float size = 0.5;
+    uint depth = 1u;
     [[dont_unroll]] for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
         uint q = guide_quadrant(p);
         n = guide_training[n].child[q];
         if (n == 0u) {
             break;
         }
-        size *= 0.5;
+        ++depth;
     }
-    return size;
+    return depth;
 }
 
-// Spread `density` × area over the part of the box [lo, hi] inside the square. Quadrants
-// the box covers entirely take their share in their own sum (the CPU pushes it down);
-// partly covered interior quadrants are visited depth first.
-void guide_splat_rect(uint root, vec2 lo, vec2 hi, float density) {
-    // Go straight down to the deepest node whose cell holds the whole box, so the
-    // depth-first walk only branches where the box straddles cells.
-    uint n = root;
-    vec3 cell = vec3(0.0, 0.0, 1.0);
-    [[dont_unroll]] for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
-        float h = cell.z * 0.5;
-        vec2 mid = cell.xy + h;
-        bvec2 lo_high = greaterThanEqual(lo, mid);
-        bvec2 hi_high = greaterThan(hi, mid);
-        if (lo_high != hi_high) {
-            break;
-        }
-        uint q = (lo_high.x ? 1u : 0u) | (lo_high.y ? 2u : 0u);
-        uint c = guide_training[n].child[q];
-        if (c == 0u) {
-            break;
-        }
-        n = c;
-        cell = vec3(cell.xy + vec2(float(q & 1u), float(q >> 1u)) * h, h);
-    }
-    uint stack_node[GUIDE_SPLAT_STACK];
-    vec3 stack_cell[GUIDE_SPLAT_STACK];  // xy origin, z edge length
-    int top = 0;
-    stack_node[0] = n;
-    stack_cell[0] = cell;
-    top = 1;
-    while (top > 0) {
-        --top;
-        n = stack_node[top];
-        cell = stack_cell[top];
-        uvec4 child = guide_training[n].child;
-        float h = cell.z * 0.5;
-        for (uint q = 0u; q < 4u; ++q) {
-            vec2 o = cell.xy + vec2(float(q & 1u), float(q >> 1u)) * h;
-            vec2 len = max(min(hi, o + h) - max(lo, o), vec2(0.0));
-            float area = len.x * len.y;
-            if (!(area > 0.0)) {
-                continue;
-            }
-            bool covered = len.x >= h && len.y >= h;
-            if (child[q] == 0u || covered || top == GUIDE_SPLAT_STACK) {
-                atomicAdd(guide_training[n].sum[q], density * area);
-            } else {
-                stack_node[top] = child[q];
-                stack_cell[top] = vec3(o, h);
-                ++top;
-            }
-        }
-    }
-}
-
-// Box directional filter: a box of the size of the training leaf cell holding p, centred
-// on p, shifted inside the square along u = (cosθ+1)/2 and wrapped around along φ, so
-// the whole value v lands in the tree.
+// Box directional filter: a box of the size of the training leaf cell holding p (depth
+// k), centred on p, shifted inside the square along u = (cosθ+1)/2 and wrapped around
+// along φ, spreads v over the (at most four) cells of the depth-k grid it overlaps, by
+// the area it covers of each. A grid cell the tree holds as a leaf, or inside a coarser
+// leaf, takes its share there, as an exact box filter would; a grid cell the tree has
+// refined further takes it in its own sum, spread evenly over its subtree at the refit
+// rather than over the covered part alone. Four walks and no stack: a depth-first walk
+// over the box with a per-lane stack made recording cost 1.5× a render-phase sample on
+// lavapipe (README, Path guiding).
 void guide_splat_box(uint root, vec2 p, float v) {
-    float size = guide_training_cell_size(root, p);
-    vec2 lo = p - 0.5 * size;
-    lo.x = clamp(lo.x, 0.0, 1.0 - size);
-    vec2 hi = lo + size;
-    float density = v / (size * size);
-    // The box, and its wrapped part when it crosses φ = 0 or 2π: one call site in a loop,
-    // so that the kernel holds one copy of the rectangle walk.
-    vec2 wrap = lo.y < 0.0 ? vec2(0.0, 1.0) : hi.y > 1.0 ? vec2(0.0, -1.0) : vec2(0.0);
-    uint parts = wrap.y != 0.0 ? 2u : 1u;
-    [[dont_unroll]] for (uint i = 0u; i < parts; ++i) {
-        vec2 shift = i == 0u ? vec2(0.0) : wrap;
-        guide_splat_rect(root, lo + shift, hi + shift, density);
+    uint depth = guide_training_cell_depth(root, p);
+    float cells = float(1u << depth);
+    // The box's lower corner in grid cells (scaling by a power of two is exact).
+    precise vec2 lo = p * cells - 0.5;
+    lo.x = clamp(lo.x, 0.0, cells - 1.0);
+    vec2 base = floor(lo);
+    vec2 f = lo - base;
+    [[dont_unroll]] for (uint i = 0u; i < 4u; ++i) {
+        uvec2 corner = uvec2(i & 1u, i >> 1u);
+        precise float w = (corner.x == 0u ? 1.0 - f.x : f.x) * (corner.y == 0u ? 1.0 - f.y : f.y);
+        if (!(w > 0.0)) {
+            continue;
+        }
+        vec2 cell = base + vec2(corner);
+        cell.y = cell.y < 0.0 ? cell.y + cells : cell.y >= cells ? cell.y - cells : cell.y;
+        guide_splat_to_depth(root, (cell + 0.5) / cells, v * w, depth);
     }
 }
 

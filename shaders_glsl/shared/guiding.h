@@ -62,8 +62,6 @@
 #define GUIDE_MAX_RECORDED_VERTICES 16
 // Tries guide_sample makes to keep a direction inside its cell (see there).
 #define GUIDE_SAMPLE_ATTEMPTS 6
-// Box-splat stack: a depth-first walk pushes at most 3 more nodes than it pops per level.
-#define GUIDE_SPLAT_STACK 64
 
 // Start of the spatial buffer: the cube the spatial tree subdivides, and options.
 struct GuideHeader {

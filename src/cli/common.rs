@@ -217,7 +217,8 @@ pub enum SpatialFilterArg {
 /// `--directional-filter`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum DirectionalFilterArg {
-    /// Splat over a box the size of the quadtree cell the direction falls in.
+    /// Splat over a box the size of the quadtree cell the direction falls in (shared by
+    /// area among the cells of that size it overlaps).
     Box,
     Nearest,
 }

@@ -4,7 +4,8 @@
 //! guiding header (record NEE contributions, BSDF sampling fraction). Defaults are the
 //! reference implementation's, except the spatial filter: nearest, measured better than
 //! the reference's stochastic box at equal spp on every scene where they differ (README,
-//! Path guiding); the directional filter is the reference's box.
+//! Path guiding); the directional filter is the reference's box, spread over the grid of
+//! the record's cell depth instead of walked depth first (`guide_splat_box`).
 
 use super::GuidingError;
 
@@ -26,7 +27,9 @@ pub enum SpatialFilter {
 pub enum DirectionalFilter {
     /// Into the quadtree cell holding the direction.
     Nearest,
-    /// Spread over a box of the size of the cell holding the direction, centred on it.
+    /// Spread over a box of the size of the cell holding the direction, centred on it:
+    /// by area over the (at most four) cells of that size it overlaps, each share in the
+    /// leaf holding it, or evenly over a finer subtree (`guide_splat_box`).
     #[default]
     Box,
 }

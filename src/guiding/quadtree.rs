@@ -7,7 +7,7 @@
 //! of the energy (recursively, up to the depth cap) and collapses the others.
 
 use super::sphere::{dir_to_square, square_to_dir, INV_4PI, ONE_MINUS_EPS};
-use crate::gpu::{GUIDE_MAX_QUAD_DEPTH, GUIDE_SAMPLE_ATTEMPTS, GUIDE_SPLAT_STACK};
+use crate::gpu::{GUIDE_MAX_QUAD_DEPTH, GUIDE_SAMPLE_ATTEMPTS};
 use glam::Vec3;
 
 /// One node: the energy of its quadrants and their children (indices into the same
@@ -357,28 +357,31 @@ impl QuadTree {
         (origin, size)
     }
 
-    /// Edge length of the leaf cell holding `p` (as `guide_training_cell_size` walks it).
-    pub fn cell_size_at(&self, mut p: [f32; 2]) -> f32 {
+    /// Depth of the leaf cell holding `p` (as `guide_training_cell_depth` walks it; the
+    /// root's quadrants are depth 1, a cell of depth k has edge 2^-k).
+    pub fn cell_depth_at(&self, mut p: [f32; 2]) -> u32 {
         let mut n = 0;
-        let mut size = 0.5f32;
+        let mut depth = 1;
         for _ in 0..GUIDE_MAX_QUAD_DEPTH {
             let q = quadrant(&mut p);
             n = self.nodes[n].child[q] as usize;
             if n == 0 {
                 break;
             }
-            size *= 0.5;
+            depth += 1;
         }
-        size
+        depth
     }
 
-    /// Nearest directional filter (`guide_splat_nearest`).
-    pub(crate) fn splat_nearest(&mut self, mut p: [f32; 2], v: f32) {
+    /// `v` into the cell holding `p`, `levels` levels deep at most
+    /// (`guide_splat_to_depth`): a finer subtree takes it in its root quadrant's own sum,
+    /// which `build` spreads evenly over the subtree.
+    fn splat_to_depth(&mut self, mut p: [f32; 2], v: f32, levels: u32) {
         let mut n = 0;
         for level in 0..GUIDE_MAX_QUAD_DEPTH {
             let q = quadrant(&mut p);
             let c = self.nodes[n].child[q] as usize;
-            if c == 0 || level + 1 == GUIDE_MAX_QUAD_DEPTH {
+            if c == 0 || level + 1 >= levels {
                 self.nodes[n].sum[q] += v;
                 return;
             }
@@ -386,69 +389,38 @@ impl QuadTree {
         }
     }
 
-    /// `density` × area over the part of [lo, hi] inside the square (`guide_splat_rect`):
-    /// fully covered quadrants keep their share in their own sum.
-    fn splat_rect(&mut self, lo: [f32; 2], hi: [f32; 2], density: f32) {
-        // Straight down to the deepest node whose cell holds the whole box.
-        let (mut n, mut origin, mut size) = (0usize, [0.0f32; 2], 1.0f32);
-        for _ in 0..GUIDE_MAX_QUAD_DEPTH {
-            let h = size * 0.5;
-            let mid = [origin[0] + h, origin[1] + h];
-            let lo_high = [lo[0] >= mid[0], lo[1] >= mid[1]];
-            let hi_high = [hi[0] > mid[0], hi[1] > mid[1]];
-            if lo_high != hi_high {
-                break;
-            }
-            let q = usize::from(lo_high[0]) | (usize::from(lo_high[1]) << 1);
-            let c = self.nodes[n].child[q] as usize;
-            if c == 0 {
-                break;
-            }
-            let o = quadrant_origin(q, h);
-            (n, origin, size) = (c, [origin[0] + o[0], origin[1] + o[1]], h);
-        }
-        // A fixed stack like the kernel's (and no allocation per record).
-        let mut stack = [(0usize, [0.0f32; 2], 0.0f32); GUIDE_SPLAT_STACK as usize];
-        stack[0] = (n, origin, size);
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let (n, origin, size) = stack[top];
-            let child = self.nodes[n].child;
-            let h = size * 0.5;
-            for (q, &c) in child.iter().enumerate() {
-                let o = quadrant_origin(q, h);
-                let o = [origin[0] + o[0], origin[1] + o[1]];
-                let lx = ((hi[0].min(o[0] + h)) - lo[0].max(o[0])).max(0.0);
-                let ly = ((hi[1].min(o[1] + h)) - lo[1].max(o[1])).max(0.0);
-                let area = lx * ly;
-                if area.is_nan() || area <= 0.0 {
-                    continue;
-                }
-                let covered = lx >= h && ly >= h;
-                if c == 0 || covered || top == stack.len() {
-                    self.nodes[n].sum[q] += density * area;
-                } else {
-                    stack[top] = (c as usize, o, h);
-                    top += 1;
-                }
-            }
-        }
+    /// Nearest directional filter (`guide_splat_nearest`).
+    pub(crate) fn splat_nearest(&mut self, p: [f32; 2], v: f32) {
+        self.splat_to_depth(p, v, GUIDE_MAX_QUAD_DEPTH);
     }
 
-    /// Box directional filter (`guide_splat_box`): a box the size of the cell holding
-    /// `p`, shifted inside the square along u and wrapped around along v (φ).
+    /// Box directional filter (`guide_splat_box`, which explains it): a box the size of
+    /// the leaf cell holding `p`, shifted inside the square along u and wrapped around
+    /// along v (φ), spread over the cells of that depth's grid it overlaps. The same
+    /// float operations as the kernel, so the two trees agree exactly.
     pub(crate) fn splat_box(&mut self, p: [f32; 2], v: f32) {
-        let size = self.cell_size_at(p);
-        let mut lo = [p[0] - 0.5 * size, p[1] - 0.5 * size];
-        lo[0] = lo[0].clamp(0.0, 1.0 - size);
-        let hi = [lo[0] + size, lo[1] + size];
-        let density = v / (size * size);
-        self.splat_rect(lo, hi, density);
-        if lo[1] < 0.0 {
-            self.splat_rect([lo[0], lo[1] + 1.0], [hi[0], hi[1] + 1.0], density);
-        } else if hi[1] > 1.0 {
-            self.splat_rect([lo[0], lo[1] - 1.0], [hi[0], hi[1] - 1.0], density);
+        let depth = self.cell_depth_at(p);
+        let cells = (1u32 << depth) as f32;
+        let mut lo = [p[0] * cells - 0.5, p[1] * cells - 0.5];
+        lo[0] = lo[0].clamp(0.0, cells - 1.0);
+        let base = [lo[0].floor(), lo[1].floor()];
+        let f = [lo[0] - base[0], lo[1] - base[1]];
+        for i in 0..4u32 {
+            let corner = [i & 1, i >> 1];
+            let wx = if corner[0] == 0 { 1.0 - f[0] } else { f[0] };
+            let wy = if corner[1] == 0 { 1.0 - f[1] } else { f[1] };
+            let w = wx * wy;
+            if w.is_nan() || w <= 0.0 {
+                continue;
+            }
+            let x = base[0] + corner[0] as f32;
+            let mut y = base[1] + corner[1] as f32;
+            if y < 0.0 {
+                y += cells;
+            } else if y >= cells {
+                y -= cells;
+            }
+            self.splat_to_depth([(x + 0.5) / cells, (y + 0.5) / cells], v * w, depth);
         }
     }
 
@@ -687,6 +659,48 @@ mod tests {
         assert!((tree.mass_in_rect([0.0, 0.0], [1.0 / 16.0, 1.0]) - 1.0).abs() < 1e-6);
     }
 
+    /// The box's share of a neighbour: by the area it covers where the neighbour is as
+    /// coarse as the record's cell or coarser, over the neighbour's whole cell where the
+    /// tree is finer there.
+    #[test]
+    fn box_splat_shares_by_area_and_spreads_over_finer_neighbours() {
+        // Root quadrant 0 (u, v < 1/2) split into cells of 1/4; the others are leaves.
+        let tree = || {
+            QuadTree::from_nodes(vec![
+                QuadNode {
+                    sum: [0.0; 4],
+                    child: [1, 0, 0, 0],
+                },
+                QuadNode::default(),
+            ])
+            .unwrap()
+        };
+        // A record in the leaf [1/2, 1) × [0, 1/2) (edge 1/2) at u = 0.6: its box
+        // reaches 0.15 into [0, 1/2) in u and is split evenly in v across v = 0 (wrap).
+        // Quadrant 2 is a coarse leaf: exact share 0.3·0.5.
+        let mut t = tree();
+        t.splat_box([0.6, 0.0], 1.0);
+        t.build();
+        assert!((t.total() - 1.0).abs() < 1e-6);
+        let upper_left = t.mass_in_rect([0.0, 0.5], [0.5, 1.0]);
+        assert!((upper_left - 0.15).abs() < 1e-6, "{upper_left}");
+        // Quadrant 0 is finer than the box: its share (also 0.15) is spread over the
+        // whole quadrant, so half of it lies in u < 1/4, which an exact box (u from
+        // 0.35) would not reach.
+        let far = t.mass_in_rect([0.0, 0.0], [0.25, 0.5]);
+        assert!((far - 0.075).abs() < 1e-6, "{far}");
+        // A record in the fine quadrant keeps its box at that depth: edge 1/4, centred
+        // at (0.2, 0.2), it covers [0.075, 0.325]², 0.7 of it in the cell [0, 1/4)
+        // along each axis.
+        let mut t = tree();
+        t.splat_box([0.2, 0.2], 1.0);
+        t.build();
+        let inside = t.mass_in_rect([0.0, 0.0], [0.25, 0.25]);
+        assert!((inside - 0.49).abs() < 1e-6, "{inside}");
+        let corner = t.mass_in_rect([0.25, 0.25], [0.5, 0.5]);
+        assert!((corner - 0.09).abs() < 1e-6, "{corner}");
+    }
+
     #[test]
     fn refine_subdivides_by_rho() {
         // All energy in one 1/16 cell of the initial tree. The path to it is kept (share
@@ -717,14 +731,14 @@ mod tests {
             depths.push(tree.depth());
         }
         assert_eq!(depths, [8, 12, 16, 20, 20, 20]);
-        assert_eq!(tree.cell_size_at(p1), 0.5f32.powi(20));
+        assert_eq!(tree.cell_depth_at(p1), 20);
         // When the energy moves to another root quadrant, the fine region collapses.
         let p2 = [0.9, 0.9];
         tree.splat_nearest(p2, 1.0);
         tree.build();
         let next = tree.refined(0.01, 20);
-        assert_eq!(next.cell_size_at(p1), 0.5);
-        assert_eq!(next.cell_size_at(p2), 1.0 / 32.0);
+        assert_eq!(next.cell_depth_at(p1), 1);
+        assert_eq!(next.cell_depth_at(p2), 5);
     }
 
     #[test]
