@@ -239,18 +239,24 @@ void guide_splat_nearest(uint root, vec2 p, float v) {
 }
 
 // Depth of the training tree's leaf cell holding p (the root's quadrants are depth 1;
-// edge length 2^-depth).
-uint guide_training_cell_depth(uint root, vec2 p) {
+// edge length 2^-depth), and the node and quadrant whose sum is that cell.
+uint guide_training_leaf(uint root, vec2 p, out uint node, out uint quadrant) {
     uint n = root;
     uint depth = 1u;
     [[dont_unroll]] for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
         uint q = guide_quadrant(p);
-        n = guide_training[n].child[q];
-        if (n == 0u) {
-            break;
+        uint c = guide_training[n].child[q];
+        if (c == 0u) {
+            node = n;
+            quadrant = q;
+            return depth;
         }
+        n = c;
         ++depth;
     }
+    // Not reached: the CPU builds no tree deeper than GUIDE_MAX_QUAD_DEPTH levels.
+    node = n;
+    quadrant = guide_quadrant(p);
     return depth;
 }
 
@@ -265,8 +271,11 @@ uint guide_training_cell_depth(uint root, vec2 p) {
 // path's records cost 0.7 of a render-phase sample, against 0.3 now (README, Path
 // guiding: directional filter).
 void guide_splat_box(uint root, vec2 p, float v) {
-    uint depth = guide_training_cell_depth(root, p);
+    uint leaf_node, leaf_quadrant;
+    uint depth = guide_training_leaf(root, p, leaf_node, leaf_quadrant);
     float cells = float(1u << depth);
+    // The grid cell holding p: its share goes straight to the leaf just found.
+    vec2 own = min(floor(p * cells), vec2(cells - 1.0));
     // The box's lower corner in grid cells (scaling by a power of two is exact).
     precise vec2 lo = p * cells - 0.5;
     lo.x = clamp(lo.x, 0.0, cells - 1.0);
@@ -280,7 +289,11 @@ void guide_splat_box(uint root, vec2 p, float v) {
         }
         vec2 cell = base + vec2(corner);
         cell.y = cell.y < 0.0 ? cell.y + cells : cell.y >= cells ? cell.y - cells : cell.y;
-        guide_splat_to_depth(root, (cell + 0.5) / cells, v * w, depth);
+        if (cell == own) {
+            atomicAdd(guide_training[leaf_node].sum[leaf_quadrant], v * w);
+        } else {
+            guide_splat_to_depth(root, (cell + 0.5) / cells, v * w, depth);
+        }
     }
 }
 

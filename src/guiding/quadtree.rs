@@ -357,7 +357,7 @@ impl QuadTree {
         (origin, size)
     }
 
-    /// Depth of the leaf cell holding `p` (as `guide_training_cell_depth` walks it; the
+    /// Depth of the leaf cell holding `p` (as `guide_training_leaf` walks it; the
     /// root's quadrants are depth 1, a cell of depth k has edge 2^-k).
     pub fn cell_depth_at(&self, mut p: [f32; 2]) -> u32 {
         let mut n = 0;
