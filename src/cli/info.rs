@@ -63,6 +63,7 @@ fn device_info(json: bool) -> Result<()> {
                     "type": d.kind_name(),
                     "api_version": d.api_version_string(),
                     "driver": d.driver,
+                    "subgroup_size": d.subgroup_size,
                     "missing": d.features.missing(),
                     "traversal": Traversal::Auto.resolve(d).map(|c| serde_json::json!({"kind": c.kind, "reason": c.reason})).ok(),
                     "features": d.features.rows().iter().map(|(n, ok, _)| (n.to_string(), *ok)).collect::<std::collections::BTreeMap<_, _>>(),
@@ -90,6 +91,14 @@ fn device_info(json: bool) -> Result<()> {
                 "cannot render"
             }
         );
+        if d.kind == lanterna::vk::vk::PhysicalDeviceType::CPU {
+            println!(
+                "      SIMD lanes per subgroup: {} ({}={}; --lavapipe-lanes)",
+                d.subgroup_size,
+                lanterna::vk::lavapipe::WIDTH_VARIABLE,
+                lanterna::vk::lavapipe::width_setting()
+            );
+        }
         if let Ok(c) = Traversal::Auto.resolve(d) {
             println!(
                 "      traversal (--traversal auto): {} — {}",

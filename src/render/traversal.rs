@@ -124,6 +124,7 @@ mod tests {
             },
             timestamp_period_ns: 1.0,
             min_scratch_alignment: 1,
+            subgroup_size: 8,
         }
     }
 

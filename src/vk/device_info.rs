@@ -125,6 +125,9 @@ pub struct DeviceInfo {
     pub features: FeatureReport,
     pub timestamp_period_ns: f32,
     pub min_scratch_alignment: u64,
+    /// Invocations per subgroup (SIMD lanes on a CPU device: 8 on lavapipe with AVX2,
+    /// 4 with `LP_NATIVE_VECTOR_WIDTH=128`).
+    pub subgroup_size: u32,
 }
 
 impl DeviceInfo {
@@ -183,9 +186,12 @@ pub(super) fn describe(
     let props = unsafe { raw.get_physical_device_properties(pd) };
     let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
     let mut as_props = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
+    let mut subgroup_props = vk::PhysicalDeviceSubgroupProperties::default();
     let has_as = has_ext(&exts, ash::khr::acceleration_structure::NAME);
     {
-        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
+        let mut props2 = vk::PhysicalDeviceProperties2::default()
+            .push_next(&mut driver_props)
+            .push_next(&mut subgroup_props);
         if has_as {
             props2 = props2.push_next(&mut as_props);
         }
@@ -272,6 +278,7 @@ pub(super) fn describe(
         min_scratch_alignment: (as_props.min_acceleration_structure_scratch_offset_alignment
             as u64)
             .max(1),
+        subgroup_size: subgroup_props.subgroup_size.max(1),
     })
 }
 

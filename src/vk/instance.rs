@@ -62,6 +62,8 @@ pub struct Instance {
 
 impl Instance {
     pub fn new(options: &InstanceOptions) -> Result<Self> {
+        // lavapipe's SIMD width and its cache folder, before any instance exists.
+        super::lavapipe::configure();
         let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::Loader(e.to_string()))?;
         let want_validation =
             options.validation || options.debug_printf || env_flag("LANTERNA_VALIDATION");

@@ -12,6 +12,7 @@ mod device;
 mod device_info;
 mod image;
 mod instance;
+pub mod lavapipe;
 mod pipeline;
 
 pub use accel::{AccelStructure, BlasGeometry, TlasInstance};
