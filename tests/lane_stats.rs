@@ -94,3 +94,38 @@ fn lane_counts_match_the_rays_and_leave_the_image_unchanged() {
     }
     testing::assert_no_validation_errors();
 }
+
+/// Lanes per subgroup of the CPU device that `lanterna info --json` reports, run with the
+/// given arguments and `LP_NATIVE_VECTOR_WIDTH` (None: unset), or None without one.
+fn cpu_lanes(args: &[&str], width_variable: Option<&str>) -> Option<u64> {
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_lanterna"));
+    cmd.args(args).args(["info", "--json"]);
+    match width_variable {
+        Some(v) => cmd.env("LP_NATIVE_VECTOR_WIDTH", v),
+        None => cmd.env_remove("LP_NATIVE_VECTOR_WIDTH"),
+    };
+    let out = cmd.output().expect("run lanterna info");
+    assert!(out.status.success(), "{args:?}: {out:?}");
+    let list: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    list.as_array()?
+        .iter()
+        .find(|d| d["type"] == "CPU")
+        .map(|d| d["subgroup_size"].as_u64().expect("subgroup_size"))
+}
+
+#[test]
+fn lavapipe_runs_four_lanes_unless_told_otherwise() {
+    let Some(default) = cpu_lanes(&[], None) else {
+        eprintln!("no CPU Vulkan device: nothing to check");
+        return;
+    };
+    // The default is set before the instance exists, so lavapipe compiles for it.
+    assert_eq!(default, 4, "lanterna's default width");
+    // A width the user set stays; the flag overrides it.
+    assert_eq!(cpu_lanes(&[], Some("256")), Some(8), "the user's variable");
+    assert_eq!(
+        cpu_lanes(&["--lavapipe-lanes", "8"], Some("128")),
+        Some(8),
+        "--lavapipe-lanes over the variable"
+    );
+}
