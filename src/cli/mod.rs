@@ -31,7 +31,7 @@ struct Cli {
     #[arg(long, global = true, default_value = "info")]
     log: String,
     /// SIMD lanes lavapipe compiles kernels for: 4 (default; fastest for `pt`, `guided`
-    /// and `guided-ris`), 8 (AVX2's full width; `ris` is 6–10 % faster there) or 16.
+    /// and `guided-ris`), 8 (AVX2's full width; `ris` is 6–13 % faster there) or 16.
     /// Sets LP_NATIVE_VECTOR_WIDTH; other devices ignore it.
     #[arg(long, global = true, value_name = "N", value_parser = parse_lanes)]
     lavapipe_lanes: Option<u32>,

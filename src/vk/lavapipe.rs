@@ -4,9 +4,10 @@
 //! lanes — one invocation per lane, 8 lanes of 32 bits with AVX2 — read once per process
 //! from `LP_NATIVE_VECTOR_WIDTH` (bits). The path kernel's loops diverge: a lane whose ray
 //! left the BVH, or whose path ended, waits for the slowest of its subgroup. With 4 lanes
-//! fewer wait, and measured on AVX2 (README, Benchmarks: "SIMD width") `pt`, `guided` and
-//! `guided-ris` render 11–18 % more samples per second and kernels compile in half the
-//! time, while `ris`, whose 32 candidates per vertex keep all lanes busy, loses 6–10 %.
+//! fewer wait, and measured on AVX2 (README, Benchmarks: "SIMD width") `pt` and `guided`
+//! render 10–20 % more samples per second, `guided-ris` 4–13 %, and kernels compile in
+//! half the time, while `ris`, whose 32 candidates per vertex keep all lanes busy, loses
+//! 6–13 %.
 //! So lanterna asks for 4 lanes unless told otherwise (`--lavapipe-lanes`, or the variable
 //! itself).
 //!
