@@ -29,7 +29,7 @@ pub struct BvhOptions {
 
 impl Default for BvhOptions {
     fn default() -> Self {
-        BvhOptions { max_leaf: 4 }
+        BvhOptions { max_leaf: 2 }
     }
 }
 
