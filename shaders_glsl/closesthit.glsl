@@ -297,6 +297,7 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
                   inout Rng rng) {
     NeeResult r = nee_none();
     if (params.strategy == STRATEGY_BSDF_ONLY) return r;
+    d.lights = light_context_for_ris(d.lights);
     RisContext ctx = RisContext(s, d);
     RisCandidate extra;
     // Emitters NEE cannot sample (not in the light table) stay with direction sampling.

@@ -227,6 +227,9 @@ fn inverse_variance_combination_agrees_with_pt() {
 /// fail (p = 4·10⁻⁹) with `sample_light` choosing from the table with probability 0.5
 /// while the pdfs use the leaf's mix; pdfs alone using 0.5 (the table-chosen models'
 /// own pmf right) went unnoticed here and in the conformance suite (+1.3 ± 0.4 %).
+/// The street (with more than 64 light models) takes the RIS candidates' model filter
+/// (`guide_light_filter`): a filter that ruled out models its table holds failed here
+/// (p = 5·10⁻⁸).
 #[test]
 fn learned_light_selection_agrees_with_pt() {
     for (kind, options, w, h) in [
