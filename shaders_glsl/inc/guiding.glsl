@@ -350,8 +350,14 @@ void guide_record(GuideRecord r, vec3 u, uint leaf) {
 // does not hold skip the hash probe: with 16 models in 128 bits, about 12 % of absent
 // models still probe. Those probes were 13–15 % of a `guided-ris` sample on the street
 // (README, "Where the guiding goals stand").
+// Knuth's multiplicative hash of a model; its top bits pick the model's first hash slot
+// and its filter bit (src/guiding/flat.rs mirrors the former).
+uint guide_light_hash(uint model) {
+    return model * 2654435761u;
+}
+
 uint guide_light_filter_bit(uint model) {
-    return (model * 2654435761u) >> 25u;  // top 7 bits: 0..127
+    return guide_light_hash(model) >> 25u;  // top 7 bits: 0..127
 }
 
 uvec4 guide_light_filter(uint leaf) {
@@ -375,7 +381,7 @@ float guide_light_pmf(uint leaf, uint model) {
     // The leaf's hash copy of its table: one or two probes where the linear scan of the
     // packed table read every entry for a model the table does not hold.
     uint base = guide_header.leaf_count * GUIDE_LIGHT_SLOTS + leaf * GUIDE_LIGHT_HASH_SLOTS;
-    uint h = (model * 2654435761u) >> (32u - GUIDE_LIGHT_HASH_BITS);
+    uint h = guide_light_hash(model) >> (32u - GUIDE_LIGHT_HASH_BITS);
     // At most half the slots are full, so every probe sequence ends at an empty slot.
     [[dont_unroll]] for (uint i = 0u; i < GUIDE_LIGHT_HASH_SLOTS; ++i) {
         GuideLightSlot s = guide_lights[base + ((h + i) & (GUIDE_LIGHT_HASH_SLOTS - 1u))];

@@ -67,38 +67,42 @@ struct LightContext {
     vec3 p;       // the shading point
     uint leaf;    // its SD-tree leaf when light selection is learned, else INVALID_INDEX
     float mix;    // probability of choosing the model from that table (0: source only)
-    uvec4 models; // filter of the models that table holds (guide_light_filter)
+    uvec4 models; // filter of the models that table holds (guide_light_filter); all set: probe every model
 };
+
+// Whether RIS builds and tests the filter of a leaf table's models: with few models
+// (cornell-lights: 16) a table holds most of them, and the filter rules out too few to
+// repay building it (2–4 % slower there). Uniform, so scenes with few models skip the
+// bit test too.
+bool light_filter_pays() {
+    return params.light_model_count > 4u * GUIDE_LIGHT_SLOTS;
+}
 
 // The light-sampling context of shading point p (`leaf`: its SD-tree leaf if known).
 LightContext light_context(vec3 p, uint leaf) {
-    LightContext c = LightContext(p, INVALID_INDEX, 0.0, uvec4(0u));
+    LightContext c = LightContext(p, INVALID_INDEX, 0.0, uvec4(~0u));
     if (!GUIDING || (guide_header.flags & GUIDE_FLAG_LEARN_LIGHTS) == 0u) return c;
     if (leaf == INVALID_INDEX) leaf = guide_find_leaf(p);
     c.leaf = leaf;
     c.mix = guide_leaves[leaf].light_mix;  // the CPU writes 0 for an empty table
-    c.models = uvec4(~0u);  // every model may be in the table: probe (see light_context_for_ris)
     return c;
 }
 
 // The context for RIS's candidates: with the filter of the models the leaf's table holds,
 // so that a candidate drawn from the source skips the table's hash probe when its model
 // is ruled out. Built here, not in light_context: kept alive through the whole path the
-// filter's registers made `guided` 5–10 % slower. With few models (cornell-lights: 16) a
-// table holds most of them and the filter would rule out too few to repay building it.
+// filter's registers made `guided` 5–10 % slower.
 LightContext light_context_for_ris(LightContext c) {
-    if (GUIDING && c.mix > 0.0 && params.light_model_count > 4u * GUIDE_LIGHT_SLOTS) c.models = guide_light_filter(c.leaf);
+    if (GUIDING && c.mix > 0.0 && light_filter_pays()) c.models = guide_light_filter(c.leaf);
     return c;
 }
 
 float model_pmf(LightContext ctx, uint model) {
     float p = source_model_pmf(model);
     if (GUIDING && ctx.mix > 0.0) {
-        // Models the filter rules out are not in the table: their table pmf is 0. (The
-        // filter is only built with many models; the test of the count, uniform, keeps
-        // its bit test off the path of scenes with few.)
+        // Models the filter rules out are not in the table: their table pmf is 0.
         bool ruled_out = false;
-        if (params.light_model_count > 4u * GUIDE_LIGHT_SLOTS) ruled_out = !guide_light_filter_may_hold(ctx.models, model);
+        if (light_filter_pays()) ruled_out = !guide_light_filter_may_hold(ctx.models, model);
         float table = ruled_out ? 0.0 : guide_light_pmf(ctx.leaf, model);
         p = (1.0 - ctx.mix) * p + ctx.mix * table;
     }
