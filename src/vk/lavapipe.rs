@@ -80,11 +80,40 @@ fn cache_dir(width: &str) -> Option<PathBuf> {
 }
 
 fn cache_dir_under(home: &std::path::Path, width: &str) -> PathBuf {
-    // Only digits reach a path: the variable is the user's to set.
-    let width: String = width.chars().filter(char::is_ascii_digit).take(4).collect();
-    let width = if width.is_empty() { "default" } else { &width };
-    home.join("lanterna")
-        .join(format!("mesa-shader-cache-lp{width}"))
+    // The folder is named after the width gallivm reads from the variable, so that two
+    // spellings of one width share it and a value it ignores shares the default's; only
+    // a number reaches the path (the variable is the user's to set).
+    let folder = match mesa_num_option(width) {
+        Some(bits) => format!("mesa-shader-cache-lp{bits}"),
+        None => "mesa-shader-cache-lpdefault".to_string(),
+    };
+    home.join("lanterna").join(folder)
+}
+
+/// A number as Mesa's `debug_parse_num_option` reads one (`strtoll` with base 0: leading
+/// space, a sign, `0x` hex or `0` octal, the longest run of digits), or None where it
+/// finds no digits and keeps its default.
+fn mesa_num_option(text: &str) -> Option<i64> {
+    let t = text.trim_start();
+    let (negative, t) = match t.as_bytes().first() {
+        Some(b'-') => (true, &t[1..]),
+        Some(b'+') => (false, &t[1..]),
+        _ => (false, t),
+    };
+    let (radix, digits) = if let Some(hex) = t.strip_prefix("0x").or(t.strip_prefix("0X")) {
+        if hex.starts_with(|c: char| c.is_ascii_hexdigit()) {
+            (16, hex)
+        } else {
+            (8, t) // "0x" without hex digits reads as the 0 before the x
+        }
+    } else if t.starts_with('0') {
+        (8, t)
+    } else {
+        (10, t)
+    };
+    let run: String = digits.chars().take_while(|c| c.is_digit(radix)).collect();
+    let value = i64::from_str_radix(&run, radix).ok()?;
+    Some(if negative { -value } else { value })
 }
 
 #[cfg(test)]
@@ -100,10 +129,22 @@ mod tests {
             Path::new("/c/lanterna/mesa-shader-cache-lp128")
         );
         assert_ne!(cache_dir_under(home, "128"), cache_dir_under(home, "256"));
-        // Whatever the variable holds, the folder stays under the cache home.
-        assert_eq!(
-            cache_dir_under(home, "../../etc"),
-            Path::new("/c/lanterna/mesa-shader-cache-lpdefault")
-        );
+        // Spellings of one width share its folder, as gallivm reads them (strtoll).
+        for same in ["0x80", " 128", "0200", "128 bits"] {
+            assert_eq!(
+                cache_dir_under(home, same),
+                cache_dir_under(home, "128"),
+                "{same:?}"
+            );
+        }
+        // Whatever the variable holds, the folder stays under the cache home, and a value
+        // without digits (gallivm keeps its default) shares the default's.
+        for odd in ["../../etc", "", "x128"] {
+            assert_eq!(
+                cache_dir_under(home, odd),
+                Path::new("/c/lanterna/mesa-shader-cache-lpdefault"),
+                "{odd:?}"
+            );
+        }
     }
 }
