@@ -244,9 +244,9 @@ struct RisCandidate {
     bool from_direction;
 };
 
-RisCandidate ris_draw(RisContext ctx, inout Rng rng) {
+RisCandidate ris_draw(RisContext ctx, vec4 u) {
     RisCandidate c;
-    c.ls = sample_light(ctx.d.lights, rng_next4(rng), false);
+    c.ls = sample_light(ctx.d.lights, u, false);
     c.f = vec3(0.0);
     c.bsdf_pdf = 0.0;
     c.from_direction = false;

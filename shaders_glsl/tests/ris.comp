@@ -16,8 +16,8 @@ layout(push_constant, scalar) uniform Push { uint count; uint trials; uint seed;
 struct RisContext { uint light_count; };
 struct RisCandidate { uint index; float q; };
 
-RisCandidate ris_draw(RisContext ctx, inout Rng rng) {
-    float u = rng_next(rng);
+RisCandidate ris_draw(RisContext ctx, vec4 u4) {
+    float u = u4.x;
     float cdf = 0.0;
     uint i = 0u;
     for (; i + 1u < ctx.light_count; ++i) {
