@@ -196,6 +196,41 @@ fn emissive_factor_above_one_loads_with_a_warning() {
 }
 
 #[test]
+fn an_unsupported_extension_loads_with_a_warning_naming_it() {
+    // Used, not required: the file stays loadable, and the user hears that the glass
+    // pane it describes renders opaque.
+    let dir = tempfile::tempdir().unwrap();
+    let src = root().join("scenes/cornell-lights.gltf");
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&src).unwrap()).unwrap();
+    json["extensionsUsed"].as_array_mut().unwrap().extend([
+        serde_json::json!("KHR_materials_transmission"),
+        serde_json::json!("KHR_materials_variants"),
+    ]);
+    json["materials"][0]["extensions"]["KHR_materials_transmission"] =
+        serde_json::json!({ "transmissionFactor": 1.0 });
+    std::fs::copy(
+        root().join("scenes/cornell-lights.bin"),
+        dir.path().join("cornell-lights.bin"),
+    )
+    .unwrap();
+    let path = dir.path().join("cornell-lights.gltf");
+    std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
+    let (ok, stderr) = lanterna(&["info", path.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stderr.contains("KHR_materials_transmission, which lanterna does not support"),
+        "no warning:\n{stderr}"
+    );
+    // Extensions lanterna reads (the shipped file's emissive strength) and inert ones are
+    // not reported.
+    assert_eq!(stderr.matches("does not support").count(), 1, "{stderr}");
+    let (ok, stderr) = lanterna(&["info", src.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    assert!(!stderr.contains("does not support"), "{stderr}");
+}
+
+#[test]
 fn a_missing_texture_is_a_clear_error() {
     let dir = tempfile::tempdir().unwrap();
     for e in std::fs::read_dir(root().join("scenes")).unwrap() {

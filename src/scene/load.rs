@@ -181,6 +181,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let mut cameras = Vec::new();
     let mut punctual = Vec::new();
     let mut warnings = std::mem::take(&mut registry.warnings);
+    warnings.extend(unsupported_extensions(document.extensions_used()));
     let textures = std::mem::take(&mut registry.textures);
     let mut visited = vec![false; document.nodes().len()];
 
@@ -425,6 +426,43 @@ fn rebase(scene: &mut Scene) {
         origin.y,
         origin.z
     );
+}
+
+/// glTF extensions lanterna reads. A file may use others without requiring them (a
+/// required one it does not know is refused when the file is parsed); their data is then
+/// ignored, which a user should hear about: a glass pane under
+/// `KHR_materials_transmission` renders opaque, an `KHR_materials_unlit` material lit.
+const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
+    "KHR_materials_pbrSpecularGlossiness",
+    "KHR_materials_specular",
+    "KHR_texture_transform",
+];
+
+/// Extensions that change nothing lanterna draws: metadata, and material variants (the
+/// default material is the one rendered, as the extension specifies).
+const INERT_EXTENSIONS: &[&str] = &["KHR_xmp_json_ld", "KHR_materials_variants"];
+
+/// One warning per extension the file uses whose data lanterna ignores.
+fn unsupported_extensions<'a>(used: impl Iterator<Item = &'a str>) -> Vec<String> {
+    let mut names: Vec<&str> = used
+        .filter(|e| !SUPPORTED_EXTENSIONS.contains(e) && !INERT_EXTENSIONS.contains(e))
+        .collect();
+    names.sort_unstable();
+    names.dedup();
+    names
+        .into_iter()
+        .map(|e| {
+            let what = if e.starts_with("KHR_materials_") || e.starts_with("EXT_materials_") {
+                "materials render with the core metallic-roughness model alone"
+            } else {
+                "its data is ignored"
+            };
+            format!("uses the glTF extension {e}, which lanterna does not support: {what}")
+        })
+        .collect()
 }
 
 fn node_name(node: &gltf::Node<'_>) -> String {
