@@ -226,3 +226,43 @@ fn pixel_positions_are_stratified() {
     }
     testing::assert_no_validation_errors();
 }
+
+/// The kernels' integer floor (`floor_to_uint`, which RIS and light sampling use to pick a
+/// light model and a triangle) equals the CPU's floor over 0 ≤ x < 2³²: integers and their
+/// neighbouring floats, powers of two, denormals, and random values at every magnitude.
+#[test]
+fn kernel_integer_floor_is_exact() {
+    let mut xs: Vec<f32> = vec![0.0, f32::from_bits(1), f32::MIN_POSITIVE, 0.5, 0.999_999_94];
+    for k in 1..2048u32 {
+        let f = k as f32;
+        xs.extend([f, f32::from_bits(f.to_bits() - 1), f32::from_bits(f.to_bits() + 1)]);
+    }
+    for e in 0..32 {
+        let f = (1u64 << e) as f32;
+        xs.extend([f, f32::from_bits(f.to_bits() - 1), f32::from_bits(f.to_bits() + 1)]);
+    }
+    xs.retain(|&x| (x as f64) < 4_294_967_296.0);
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    for _ in 0..20_000 {
+        state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+        let bits = (state >> 33) as u32;
+        // Every exponent from denormal to just under 2^32.
+        let x = f32::from_bits(bits % 0x4F80_0000);
+        xs.push(x);
+    }
+    let push: Vec<u8> = (xs.len() as u32).to_le_bytes().to_vec();
+    let out = testing::run_kernel(
+        "tests/floor_to_uint",
+        bytemuck::cast_slice(&xs),
+        &[],
+        xs.len() * 4,
+        &push,
+        xs.len() as u32,
+    )
+    .unwrap();
+    let got: Vec<u32> = bytemuck::pod_collect_to_vec(&out);
+    for (x, g) in xs.iter().zip(&got) {
+        assert_eq!(*g as f64, (*x as f64).floor(), "floor_to_uint({x:e}) = {g}");
+    }
+    testing::assert_no_validation_errors();
+}

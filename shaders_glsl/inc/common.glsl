@@ -26,6 +26,19 @@ float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
 float sqr(float x) { return x * x; }
 bool all_finite(vec3 v) { return !any(isnan(v)) && !any(isinf(v)); }
 
+// floor(x) as an unsigned integer, for 0 ≤ x < 2³², by integer operations on x's bits.
+// On CPU devices (lavapipe, LLVM 15) a float-to-integer conversion is a saturating one,
+// which LLVM expands lane by lane into scalar code (about six instructions per lane);
+// this stays in vector registers. Exact: it drops x's significand bits below the binary
+// point. RIS picks two indices this way for each of its 32 candidates per vertex.
+uint floor_to_uint(float x) {
+    uint b = floatBitsToUint(x);
+    int e = int(b >> 23u) - 127;  // x < 1 (including +0 and denormals): e < 0
+    uint m = (b & 0x7FFFFFu) | 0x800000u;
+    uint r = e <= 23 ? m >> uint(clamp(23 - e, 0, 31)) : m << uint(min(e - 23, 31));
+    return e < 0 ? 0u : r;
+}
+
 // Power heuristic (β = 2) for two strategies with pdfs a and b.
 float power_heuristic(float a, float b) {
     float a2 = a * a;

@@ -34,7 +34,7 @@ struct LightSample {
 
 uint alias_sample(uint begin, uint count, float u, bool models) {
     float scaled = u * float(count);
-    uint i = min(uint(scaled), count - 1u);
+    uint i = min(floor_to_uint(scaled), count - 1u);
     float frac = scaled - float(i);
     // Two reads rather than a ?: over two buffers: glslang types that select badly.
     float threshold;
@@ -186,7 +186,7 @@ LightSample sample_light(LightContext ctx, vec4 u, const bool exact_emission) {
     }
     if (model == INVALID_INDEX) {
         model = params.ris_source == RIS_SOURCE_POWER ? alias_sample(0u, count, um, true)
-                                                       : min(uint(um * float(count)), count - 1u);
+                                                       : min(floor_to_uint(um * float(count)), count - 1u);
         table_pmf = -1.0;
     }
     LightModel m = light_models[model];
@@ -201,7 +201,7 @@ LightSample sample_light(LightContext ctx, vec4 u, const bool exact_emission) {
         return s;
     }
     uint local = params.ris_source == RIS_SOURCE_POWER ? alias_sample(m.first_triangle, m.triangle_count, u.y, false)
-                                                       : min(uint(u.y * float(m.triangle_count)), m.triangle_count - 1u);
+                                                       : min(floor_to_uint(u.y * float(m.triangle_count)), m.triangle_count - 1u);
     uint tri = m.first_triangle + local;
     LightCandidateTriangle lt = light_candidates[tri];
     vec2 b = square_to_triangle(u.zw);
