@@ -115,7 +115,9 @@ float direction_pdf_for_ris(Surface s, DirectionSampler d, vec3 wi, float bsdf_p
 
 DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
     DirectionSample ds;
-    vec4 u = rng_next4(rng);
+    vec2 warp = rng_stratified2(rng, RNG_PAIR_DIRECTION);
+    vec2 choice = rng_stratified2(rng, RNG_PAIR_CHOICE);
+    vec4 u = vec4(choice.x, warp, choice.y);  // lobe, warp (2), BSDF vs guided
     ds.guided = u.w >= d.bsdf_fraction;
     if (!ds.guided) {
         vec3 wi_local;
@@ -131,7 +133,7 @@ DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
         }
     } else {
         float unused_pdf;
-        ds.wi = fold_above(s, guide_sample(d.leaf, u.xy, unused_pdf));
+        ds.wi = fold_above(s, guide_sample(d.leaf, u.yz, unused_pdf));  // the warp pair
     }
     vec3 f = surface_bsdf_eval_pdf(s, d.bsdf, ds.wi, ds.bsdf_pdf);
     ds.pdf = direction_pdf_mix(s, d, ds.wi, ds.bsdf_pdf, ds.guide_pdf);
@@ -206,7 +208,8 @@ void shadow_ray(Surface s, LightSample ls, inout NeeResult r) {
 NeeResult nee_single(Surface s, DirectionSampler d, inout Rng rng) {
     NeeResult r = nee_none();
     if (params.strategy == STRATEGY_BSDF_ONLY) return r;
-    LightSample ls = sample_light(d.lights, rng_next4(rng), true);
+    vec4 u = vec4(rng_stratified2(rng, RNG_PAIR_LIGHT), rng_stratified2(rng, RNG_PAIR_LIGHT_POINT));
+    LightSample ls = sample_light(d.lights, u, true);
     r.chosen_model = light_model_of(ls);
     if (!(ls.pdf > 0.0) || max3(ls.Le_G) <= 0.0) return r;
     float bsdf_pdf;
@@ -320,7 +323,10 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
         extra.bsdf_pdf = 0.0;
         extra.from_direction = true;
     }
-    RisResult res = ris_resample(ctx, params.ris_candidates, rng, has_extra, extra);
+    // The candidates' model numbers are stratified over [0, 1) (strata offset: this
+    // vertex's stratified light pair), so that they spread over the light list.
+    float strata_offset = rng_stratified2(rng, RNG_PAIR_LIGHT).x;
+    RisResult res = ris_resample(ctx, params.ris_candidates, rng, has_extra, extra, strata_offset);
     TRACE4("  ris: %u candidates + %u direction candidate, kept=%u (direction candidate: %u)\n", params.ris_candidates,
            uint(has_extra), uint(res.found), uint(res.extra_chosen));
     if (!res.found) return r;

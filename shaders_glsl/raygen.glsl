@@ -191,6 +191,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
         } else if (!shadow_step) {
             // The direction sample's hit is known: choose NEE's light (RIS takes an
             // emitter hit there as a candidate); its shadow ray is the next step.
+            rng.vertex = depth;
             nee = NEE_MODE == NEE_RIS ? nee_ris(s, d, ds, next.valid, ns, next.t, rng) : nee_single(s, d, rng);
             continue;
         } else {
@@ -259,6 +260,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
         TRACE4("  base colour %v3f metallic %f alpha %f throughput %v3f\n", s.bsdf.base_color, s.bsdf.metallic, s.bsdf.alpha,
                beta);
         d = direction_sampler(s);
+        rng.vertex = depth + 1u;
         ds = sample_direction(s, d, rng);
         info.directions += 1.0;
         if (ds.guided) info.guided += 1.0;

@@ -38,7 +38,13 @@ struct RisResult {
     bool extra_chosen;  // the extra candidate was kept
 };
 
-RisResult ris_resample(RisContext ctx, uint M, inout Rng rng, bool has_extra, RisCandidate extra) {
+// With strata_offset in [0, 1), candidate i's first number u.x is drawn in stratum i of
+// [0, 1) rotated by the offset, fract(offset + (i + ξ)/M): each candidate's u.x is still
+// uniform (the offset is), so the estimate stays unbiased (its expectation is the mean
+// over candidates of E[f(x_i)/q(x_i)] whatever their joint distribution), while the M
+// candidates cover the range of u.x evenly. A negative offset draws them independently.
+RisResult ris_resample(RisContext ctx, uint M, inout Rng rng, bool has_extra, RisCandidate extra,
+                       float strata_offset) {
     Reservoir r = reservoir_empty();
     RisResult res;
     res.found = false;
@@ -48,6 +54,7 @@ RisResult ris_resample(RisContext ctx, uint M, inout Rng rng, bool has_extra, Ri
     vec4 u_kept = vec4(0.0);
     for (uint i = 0u; i < M; ++i) {
         vec4 u = rng_next4(rng);
+        if (strata_offset >= 0.0) u.x = fract(strata_offset + (float(i) + u.x) / float(M));
         RisCandidate c = ris_draw(ctx, u);
         float p = ris_target(ctx, c);
         float w = p > 0.0 ? p / ris_denominator(ctx, c, slots) : 0.0;

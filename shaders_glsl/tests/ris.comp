@@ -11,7 +11,7 @@ layout(set = 0, binding = TEST_BINDING_IN, scalar) readonly buffer In { float ta
 layout(set = 0, binding = TEST_BINDING_AUX, scalar) readonly buffer Aux { float source_pmf[]; };
 struct Selection { uint index; float W; };
 layout(set = 0, binding = TEST_BINDING_OUT, scalar) buffer Out { Selection selections[]; };
-layout(push_constant, scalar) uniform Push { uint count; uint trials; uint seed; uint candidates; } pc;
+layout(push_constant, scalar) uniform Push { uint count; uint trials; uint seed; uint candidates; uint stratified; } pc;
 
 struct RisContext { uint light_count; };
 struct RisCandidate { uint index; float q; };
@@ -38,6 +38,7 @@ void main() {
     if (t >= pc.trials) return;
     Rng rng = rng_init(t, 1u, pc.seed);
     RisCandidate none = RisCandidate(0u, 0.0);
-    RisResult r = ris_resample(RisContext(pc.count), pc.candidates, rng, false, none);
+    float strata_offset = pc.stratified != 0u ? rng_next(rng) : -1.0;
+    RisResult r = ris_resample(RisContext(pc.count), pc.candidates, rng, false, none, strata_offset);
     selections[t] = Selection(r.found ? r.y.index : INVALID_INDEX, r.W);
 }
