@@ -113,12 +113,25 @@ float direction_pdf_for_ris(Surface s, DirectionSampler d, vec3 wi, float bsdf_p
     return p;
 }
 
+// A uniform number u that chose between two ranges at p (u < p or u ≥ p), rescaled to a
+// uniform number in [0, 1) within the range it fell in.
+float reuse_choice(float u, float p, bool upper) {
+    float r = upper ? (u - p) / max(1.0 - p, 1e-30) : u / max(p, 1e-30);
+    return clamp(r, 0.0, 0.99999994);
+}
+
 DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
     DirectionSample ds;
+    // Both choices (BSDF or guided, then the BSDF's lobe) are made on the warp's first
+    // number, which is then rescaled to [0, 1) within the chosen range: the samples of a
+    // pixel that take one strategy or lobe are then themselves stratified, as they would
+    // not be with the choice drawn independently of the warp.
     vec2 warp = rng_stratified2(rng, RNG_PAIR_DIRECTION);
-    vec2 choice = rng_stratified2(rng, RNG_PAIR_CHOICE);
-    vec4 u = vec4(choice.x, warp, choice.y);  // lobe, warp (2), BSDF vs guided
-    ds.guided = u.w >= d.bsdf_fraction;
+    ds.guided = warp.x >= d.bsdf_fraction;
+    warp.x = reuse_choice(warp.x, d.bsdf_fraction, ds.guided);
+    float lobe = warp.x;  // bsdf_sample takes the specular lobe when lobe < spec_prob
+    warp.x = reuse_choice(warp.x, d.bsdf.spec_prob, lobe >= d.bsdf.spec_prob);
+    vec4 u = vec4(lobe, warp, 0.0);
     if (!ds.guided) {
         vec3 wi_local;
         bool ok = bsdf_sample(s.bsdf, d.bsdf, u.xyz, wi_local);

@@ -95,11 +95,11 @@ vec2 stratified_pixel_sample(uint pixel, uint sample_index, uint seed) {
 // The decisions at a path vertex that matter most are drawn from stratified pairs, the
 // rest (RIS's candidates, Russian roulette, training records) from rng_next*. Pair k of
 // vertex r.vertex (≥ 1):
-const uint RNG_PAIR_DIRECTION = 0u;  // the direction's warp (BSDF lobe's two numbers)
-const uint RNG_PAIR_CHOICE = 1u;     // BSDF lobe choice, BSDF vs guided choice
-const uint RNG_PAIR_LIGHT = 2u;      // light model and triangle (RIS: its strata offset)
-const uint RNG_PAIR_LIGHT_POINT = 3u; // the point on the light triangle
-const uint RNG_PAIRS_PER_VERTEX = 4u;
+const uint RNG_PAIR_DIRECTION = 0u;    // the direction: its warp, and (reused) the choices
+                                       // of strategy and lobe (sample_direction)
+const uint RNG_PAIR_LIGHT = 1u;        // light model and triangle (RIS: its strata offset)
+const uint RNG_PAIR_LIGHT_POINT = 2u;  // the point on the light triangle
+const uint RNG_PAIRS_PER_VERTEX = 3u;
 
 // Each number is uniform, whatever the vertex and pair, so every estimator stays
 // unbiased; across the samples of a pixel they are stratified, which is worth most where
