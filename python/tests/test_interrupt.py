@@ -11,7 +11,17 @@ import numpy as np
 import pytest
 
 
-def test_keyboard_interrupt_during_render(pt):
+@pytest.fixture
+def sigint_raises():
+    """Python's own SIGINT handler for the test's duration. A process started in the
+    background by a shell without job control inherits SIGINT ignored, and Python then
+    installs no handler: Ctrl-C could not reach it, and the test would fail for that."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
+def test_keyboard_interrupt_during_render(pt, sigint_raises):
     before = pt.render(spp=4)
     sent = []
 
