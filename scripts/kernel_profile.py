@@ -25,31 +25,14 @@ control flow as `vptest`/`je` on the execution mask; spills as `vmovdqa` to and 
 import argparse
 import collections
 import os
-import re
 import subprocess
 import sys
 import tempfile
 
-LABEL = re.compile(r"^([A-Za-z_][\w.]*):$")
-INSN = re.compile(r"^\s+([0-9a-f]+):\t(.*)$")
-# Kernels are tens of thousands of instructions; the driver's helpers a few hundred.
-KERNEL_MIN_INSTRUCTIONS = 2000
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from kernel_spills import KERNEL_MIN_INSTRUCTIONS, functions  # noqa: E402
 # gallivm's functions start 16-byte aligned.
 ALIGN = 16
-
-
-def functions(listing):
-    """(name, [(offset, instruction text)]) for every function of the listing."""
-    out = []
-    for line in listing.splitlines():
-        m = LABEL.match(line)
-        if m:
-            out.append((m.group(1), []))
-            continue
-        m = INSN.match(line)
-        if m and out:
-            out[-1][1].append((int(m.group(1), 16), m.group(2).strip()))
-    return out
 
 
 def jit_samples(perf_data):

@@ -29,7 +29,7 @@ import sys
 import tempfile
 
 LABEL = re.compile(r"^([A-Za-z_][\w.]*):$")
-INSN = re.compile(r"^\s+[0-9a-f]+:\t(.*)$")
+INSN = re.compile(r"^\s+([0-9a-f]+):\t(.*)$")  # offset, instruction
 FRAME = re.compile(r"subq\s+\$(\d+), %rsp")
 # A vector register stored to / loaded from a stack slot (rsp- or rbp-relative, no index).
 SPILL_STORE = re.compile(r"^v?mov\w*\s+%[xy]mm\d+, -?\d*\(%r[sb]p\)$")
@@ -39,7 +39,8 @@ KERNEL_MIN_INSTRUCTIONS = 2000
 
 
 def functions(listing):
-    """(name, [instruction text]) for every function of a GALLIVM_DEBUG=asm listing."""
+    """(name, [(offset, instruction text)]) for every function of a GALLIVM_DEBUG=asm
+    listing (offsets from the function's start)."""
     out = []
     for line in listing.splitlines():
         m = LABEL.match(line)
@@ -48,7 +49,7 @@ def functions(listing):
             continue
         m = INSN.match(line)
         if m and out:
-            out[-1][1].append(m.group(1).strip())
+            out[-1][1].append((int(m.group(1), 16), m.group(2).strip()))
     return out
 
 
@@ -78,7 +79,7 @@ def kernels_of(lanterna, scene, method, extra):
         if p.returncode != 0:
             sys.exit(f"{' '.join(cmd)} failed:\n{p.stderr[-2000:]}")
         listing = p.stdout + "\n" + p.stderr
-    return [(name, measure(ins)) for name, ins in functions(listing)
+    return [(name, measure([text for _, text in ins])) for name, ins in functions(listing)
             if len(ins) >= KERNEL_MIN_INSTRUCTIONS]
 
 

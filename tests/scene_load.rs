@@ -149,6 +149,21 @@ fn lanterna(args: &[&str]) -> (bool, String) {
     (out.status.success(), stderr)
 }
 
+/// Writes `json` (an edited `cornell-lights.gltf`) with the shipped buffer into `dir`,
+/// runs `lanterna info` on it, which must succeed, and returns the file and its stderr.
+fn info_of_edited_cornell(dir: &Path, json: &serde_json::Value) -> (PathBuf, String) {
+    std::fs::copy(
+        root().join("scenes/cornell-lights.bin"),
+        dir.join("cornell-lights.bin"),
+    )
+    .unwrap();
+    let path = dir.join("cornell-lights.gltf");
+    std::fs::write(&path, serde_json::to_vec(json).unwrap()).unwrap();
+    let (ok, stderr) = lanterna(&["info", path.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    (path, stderr)
+}
+
 #[test]
 fn emissive_factor_above_one_loads_with_a_warning() {
     // The RTXDI Bistro puts brightness in emissiveFactor without the strength extension.
@@ -176,15 +191,7 @@ fn emissive_factor_above_one_loads_with_a_warning() {
         }
     }
     assert!(changed > 0);
-    std::fs::copy(
-        root().join("scenes/cornell-lights.bin"),
-        dir.path().join("cornell-lights.bin"),
-    )
-    .unwrap();
-    let path = dir.path().join("cornell-lights.gltf");
-    std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
-    let (ok, stderr) = lanterna(&["info", path.to_str().unwrap()]);
-    assert!(ok, "{stderr}");
+    let (path, stderr) = info_of_edited_cornell(dir.path(), &json);
     assert!(
         stderr.contains("exceeds 1 without KHR_materials_emissive_strength"),
         "no warning:\n{stderr}"
@@ -209,15 +216,7 @@ fn an_unsupported_extension_loads_with_a_warning_naming_it() {
     ]);
     json["materials"][0]["extensions"]["KHR_materials_transmission"] =
         serde_json::json!({ "transmissionFactor": 1.0 });
-    std::fs::copy(
-        root().join("scenes/cornell-lights.bin"),
-        dir.path().join("cornell-lights.bin"),
-    )
-    .unwrap();
-    let path = dir.path().join("cornell-lights.gltf");
-    std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
-    let (ok, stderr) = lanterna(&["info", path.to_str().unwrap()]);
-    assert!(ok, "{stderr}");
+    let (_, stderr) = info_of_edited_cornell(dir.path(), &json);
     assert!(
         stderr.contains("KHR_materials_transmission, which lanterna does not support"),
         "no warning:\n{stderr}"
