@@ -131,10 +131,10 @@ DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
     warp.x = reuse_choice(warp.x, d.bsdf_fraction, ds.guided);
     float lobe = warp.x;  // bsdf_sample takes the specular lobe when lobe < spec_prob
     warp.x = reuse_choice(warp.x, d.bsdf.spec_prob, lobe >= d.bsdf.spec_prob);
-    vec4 u = vec4(lobe, warp, 0.0);
+    vec3 u = vec3(lobe, warp);
     if (!ds.guided) {
         vec3 wi_local;
-        bool ok = bsdf_sample(s.bsdf, d.bsdf, u.xyz, wi_local);
+        bool ok = bsdf_sample(s.bsdf, d.bsdf, u, wi_local);
         ds.wi = ok ? surface_to_world(s, wi_local) : s.n;
         if (!ok) {
             ds.valid = false;
