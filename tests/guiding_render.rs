@@ -138,52 +138,56 @@ fn saved_tree_renders_the_same_image() {
     testing::assert_no_validation_errors();
 }
 
-/// The default output (`late-passes`) is the render phase and the last four training
-/// passes: its film is one contiguous range of sample indices ending where the budget
-/// ends, every sample counted once, and it agrees with pt (as the render phase alone
-/// does).
+/// The default output (`all-passes`) is every training pass and the render phase: its
+/// film is the budget's whole range of sample indices, every sample counted once. It
+/// and `late-passes` (the render phase and the last four training passes: a range
+/// ending where the budget ends) agree with pt, as the render phase alone does.
 #[test]
-fn late_passes_cover_the_last_training_passes_and_agree_with_pt() {
+fn kept_passes_cover_their_sample_ranges_and_agree_with_pt() {
     use lanterna::render::run::{run_method, Budget};
     use lanterna::render::GuidedOutput;
     use std::sync::atomic::AtomicBool;
     let t = testing::generated(Kind::CornellLights, &Options::default());
-    let s = testing::settings(Method::Guided, 16, 16);
-    assert_eq!(s.guiding.output, GuidedOutput::LatePasses, "the default");
-    let mut r = testing::test_renderer_on(testing::device(), &t.scene, &t.camera, &s);
+    let mut s = testing::settings(Method::Guided, 16, 16);
+    assert_eq!(s.guiding.output, GuidedOutput::AllPasses, "the default");
     let (first, spp) = (1000, 256);
-    let out = run_method(
-        &mut r,
-        Budget::Spp(spp),
-        first,
-        &AtomicBool::new(false),
-        &mut |_| {},
-    )
-    .unwrap();
-    let its = out.guiding.as_ref().unwrap().iterations.clone();
-    let trained: u64 = its.iter().map(|i| i.spp).sum();
-    let late: u64 = its.iter().rev().take(4).map(|i| i.spp).sum();
-    assert_eq!(its.len(), 6, "1 + 2 + … + 32 spp train 256");
-    assert_eq!(
-        out.film.spp,
-        late + (spp - trained),
-        "late passes + render phase"
-    );
-    assert_eq!(out.film.sample_offset + out.film.spp, first + spp);
-    assert!(
-        out.combined.is_none(),
-        "the film's exact sums are the image"
-    );
+    for output in [GuidedOutput::AllPasses, GuidedOutput::LatePasses] {
+        s.guiding.output = output;
+        let mut r = testing::test_renderer_on(testing::device(), &t.scene, &t.camera, &s);
+        let out = run_method(
+            &mut r,
+            Budget::Spp(spp),
+            first,
+            &AtomicBool::new(false),
+            &mut |_| {},
+        )
+        .unwrap();
+        let its = out.guiding.as_ref().unwrap().iterations.clone();
+        let trained: u64 = its.iter().map(|i| i.spp).sum();
+        let late: u64 = its.iter().rev().take(4).map(|i| i.spp).sum();
+        assert_eq!(its.len(), 6, "1 + 2 + … + 32 spp train 256");
+        let kept = match output {
+            GuidedOutput::AllPasses => spp,
+            _ => late + (spp - trained),
+        };
+        assert_eq!(out.film.spp, kept, "{output:?}: passes kept");
+        assert_eq!(out.film.sample_offset + out.film.spp, first + spp);
+        assert!(
+            out.combined.is_none(),
+            "the film's exact sums are the image"
+        );
+    }
 
     let mut pt = testing::settings(Method::Pt, 16, 16);
     pt.seed = 61;
     let a = render_batches(&t.scene, &t.camera, pt, 12, 64);
-    for (i, output) in [GuidedOutput::LatePasses, GuidedOutput::RenderPhase]
-        .into_iter()
-        .enumerate()
-    {
+    for (output, seed) in [
+        (GuidedOutput::LatePasses, 62),
+        (GuidedOutput::RenderPhase, 63),
+        (GuidedOutput::AllPasses, 64),
+    ] {
         let mut s = testing::settings(Method::Guided, 16, 16);
-        s.seed = 62 + i as u32;
+        s.seed = seed;
         s.guiding.output = output;
         let b = run_batches(&t.scene, &t.camera, s, 12, 64);
         testing::assert_same_expectation(&a, &b, 4, ALPHA);

@@ -134,7 +134,8 @@ class Renderer:
             ``strategy`` ("mis"/"nee"/"bsdf"), ``hide_emitters``, ``guiding_threshold``,
             ``guiding_memory`` (MiB), ``spatial_filter`` ("nearest", the default, or "jitter"),
             ``directional_filter`` ("box"/"nearest"), ``guided_output``
-            ("late-passes"/"render-phase"/"inverse-variance"), ``learn_lights`` (bool,
+            ("all-passes", the default, "late-passes", "render-phase" or
+            "inverse-variance"), ``learn_lights`` (bool,
             default True; False: the paper's light selection),
             ``light_mix`` (a probability, "learned", or "auto"/None), ``traversal`` ("auto"/"ray-query"/"software"); and
             ``validation`` (Vulkan validation layers),

@@ -176,12 +176,13 @@ pub struct EstimatorArgs {
     /// Guiding: directional filter of the training records.
     #[arg(long, value_enum, default_value = "box")]
     pub directional_filter: DirectionalFilterArg,
-    /// Guiding: which passes make the image: the render phase with the last four
-    /// training passes, every sample weighted equally (unbiased, exact film sums; the
-    /// default), the render phase alone, or all passes weighted by their inverse
+    /// Guiding: which passes make the image: every pass, training and render phase,
+    /// every sample weighted equally (unbiased, exact film sums over the whole range of
+    /// sample indices; the default), the render phase with the last four training
+    /// passes, the render phase alone, or all passes weighted by their inverse
     /// estimated variance (Müller et al.'s option; consistent rather than unbiased, and
     /// the EXR then has no exact film sums).
-    #[arg(long, value_enum, default_value = "late-passes")]
+    #[arg(long, value_enum, default_value = "all-passes")]
     pub guided_output: GuidedOutput,
     /// Guiding (the default): learn, per SD-tree leaf, which lights deliver NEE
     /// contributions (and so are visible and bright there), and choose lights from a

@@ -3,7 +3,8 @@
 //! with the tree frozen. Training and the final render use disjoint sample indices, so
 //! the final image's samples are independent of the data the tree learned from.
 //!
-//! The final image is the render phase alone by default. `GuidedOutput::InverseVariance`
+//! By default the final image is every pass's samples, weighted equally
+//! (`GuidedOutput::AllPasses`; the others are in `pass_output`). `GuidedOutput::InverseVariance`
 //! is Müller et al.'s alternative: every pass (the training iterations too, each rendered
 //! with the previous iteration's tree) is rendered as two halves, whose difference gives
 //! an unbiased estimate of that pass's mean pixel variance, and the passes' images are
@@ -254,7 +255,8 @@ pub fn run_guided(
         if iterations.is_empty() {
             renderer.clear_film()?;
         }
-        // With `LatePasses`, the passes kept so far (the film's own, the last, among them).
+        // With `AllPasses` or `LatePasses`, the passes kept so far (the film's own, the
+        // last, among them).
         let film = match kept.as_ref().and_then(|k| k.merged_so_far()) {
             Some(f) => f,
             None => renderer.film()?,

@@ -67,7 +67,7 @@ pub fn outcome_image(
     if interrupted_in_training {
         meta.extra.insert(
             "guiding.interrupted".into(),
-            "in training: the image is the last training pass (with --guided-output late-passes, the last passes)".into(),
+            "in training: the image is the training passes so far (with --guided-output late-passes the last four, with render-phase the last one)".into(),
         );
     }
     match &out.combined {
