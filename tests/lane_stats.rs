@@ -129,3 +129,51 @@ fn lavapipe_runs_four_lanes_unless_told_otherwise() {
         "--lavapipe-lanes over the variable"
     );
 }
+
+/// The vector width, in bits, of the CPU device a 4×4 `lanterna render` of `method` ran
+/// on (lavapipe names its device "llvmpipe (LLVM …, N bits)"), with the given extra
+/// arguments and `LP_NATIVE_VECTOR_WIDTH`; None without a CPU device.
+fn render_width(method: &str, args: &[&str], width_variable: Option<&str>) -> Option<u32> {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell-lights.gltf");
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_lanterna"));
+    cmd.args(args)
+        .args([
+            "render", scene, "--width", "4", "--height", "4", "--spp", "1",
+        ])
+        .args(["--method", method, "--no-png", "-o"])
+        .arg(dir.path().join("out.exr"));
+    match width_variable {
+        Some(v) => cmd.env("LP_NATIVE_VECTOR_WIDTH", v),
+        None => cmd.env_remove("LP_NATIVE_VECTOR_WIDTH"),
+    };
+    let out = cmd.output().expect("run lanterna render");
+    assert!(out.status.success(), "{method} {args:?}: {out:?}");
+    let log = String::from_utf8_lossy(&out.stderr);
+    let device = log.lines().find(|l| l.contains("device: llvmpipe"))?;
+    let bits = device.split(" bits").next()?.rsplit(' ').next()?;
+    Some(bits.parse().expect("the width in the device's name"))
+}
+
+/// `ris` renders with 8 lanes (its candidates keep them busy; 12–18 % faster there),
+/// the other methods with 4, unless the user chose a width.
+#[test]
+fn ris_renders_take_eight_lanes_unless_told_otherwise() {
+    let Some(ris) = render_width("ris", &[], None) else {
+        eprintln!("no CPU Vulkan device: nothing to check");
+        return;
+    };
+    assert_eq!(ris, 256, "ris: 8 lanes of 32 bits");
+    assert_eq!(render_width("pt", &[], None), Some(128), "pt: 4 lanes");
+    assert_eq!(render_width("guided-ris", &[], None), Some(128));
+    assert_eq!(
+        render_width("ris", &[], Some("128")),
+        Some(128),
+        "the user's variable stays"
+    );
+    assert_eq!(
+        render_width("ris", &["--lavapipe-lanes", "4"], None),
+        Some(128),
+        "the flag decides"
+    );
+}
