@@ -1,0 +1,40 @@
+// The BSDF (inc/bsdf.glsl) of one material at one outgoing direction, for the tests in
+// tests/bsdf.rs: mode 0 samples a direction from each input's uniform numbers (xyz) and
+// returns it with the density and f·cosθ that bsdf_eval_pdf gives it; mode 1 evaluates
+// f·cosθ and the density at each input direction.
+#version 460
+#include "../inc/bsdf.glsl"
+
+struct BsdfCase {
+    vec3 base_color;
+    float metallic;
+    vec3 f0_dielectric;
+    float alpha;
+    vec3 wo;
+    float specular;
+};
+
+layout(local_size_x = 64) in;
+layout(set = 0, binding = TEST_BINDING_IN, scalar) readonly buffer In { vec4 items[]; };
+layout(set = 0, binding = TEST_BINDING_AUX, scalar) readonly buffer Aux { BsdfCase bsdf_case; };
+layout(set = 0, binding = TEST_BINDING_OUT, scalar) buffer Out { vec4 results[]; };
+layout(push_constant, scalar) uniform Push { uint count; uint mode; } pc;
+
+void main() {
+    uint t = gl_GlobalInvocationID.x;
+    if (t >= pc.count) return;
+    BsdfParams p;
+    p.base_color = bsdf_case.base_color;
+    p.metallic = bsdf_case.metallic;
+    p.alpha = bsdf_case.alpha;
+    p.specular = bsdf_case.specular;
+    p.f0_dielectric = bsdf_case.f0_dielectric;
+    BsdfWo c = bsdf_at(p, bsdf_case.wo);
+    vec3 wi = items[t].xyz;
+    bool valid = true;
+    if (pc.mode == 0u) valid = bsdf_sample(p, c, items[t].xyz, wi);
+    float pdf;
+    vec3 f = bsdf_eval_pdf(p, c, wi, pdf);
+    results[2u * t] = vec4(wi, valid ? pdf : -1.0);
+    results[2u * t + 1u] = vec4(f, 0.0);
+}
