@@ -191,6 +191,23 @@ struct Grid {
 }
 
 impl Grid {
+    /// The grid of the integrals: cells of 0.12° in θ by 0.23° in φ (a GGX lobe of
+    /// α = 0.05 spans dozens of them).
+    fn fine() -> Grid {
+        Grid {
+            n_theta: 768,
+            n_phi: 1536,
+        }
+    }
+    /// Calls `f(row, column, solid angle)` for every cell, in the order of `items`.
+    fn for_each_cell(&self, mut f: impl FnMut(usize, usize, f64)) {
+        for i in 0..self.n_theta {
+            let dw = self.solid_angle(i);
+            for j in 0..self.n_phi {
+                f(i, j, dw);
+            }
+        }
+    }
     fn dir(&self, i: usize, j: usize) -> [f64; 3] {
         let t = (i as f64 + 0.5) / self.n_theta as f64 * PI / 2.0;
         let p = (j as f64 + 0.5) / self.n_phi as f64 * 2.0 * PI;
@@ -273,10 +290,7 @@ fn bsdf_matches_the_gltf_formulas() {
 
 #[test]
 fn bsdf_density_is_normalised_and_sampling_follows_it() {
-    let grid = Grid {
-        n_theta: 768,
-        n_phi: 1536,
-    };
+    let grid = Grid::fine();
     let cells = grid.items();
     // χ² bins: blocks of 24 × 48 grid cells (32 × 32 bins).
     let (bt, bp) = (32usize, 32usize);
@@ -296,14 +310,11 @@ fn bsdf_density_is_normalised_and_sampling_follows_it() {
         let eval = run(&c, 1, &cells);
         let mut expected = vec![0.0f64; bt * bp + 1];
         let mut integral = 0.0;
-        for i in 0..grid.n_theta {
-            let dw = grid.solid_angle(i);
-            for j in 0..grid.n_phi {
-                let p = eval[i * grid.n_phi + j].pdf * dw;
-                integral += p;
-                expected[(i * bt / grid.n_theta) * bp + j * bp / grid.n_phi] += p;
-            }
-        }
+        grid.for_each_cell(|i, j, dw| {
+            let p = eval[i * grid.n_phi + j].pdf * dw;
+            integral += p;
+            expected[(i * bt / grid.n_theta) * bp + j * bp / grid.n_phi] += p;
+        });
         // Samples: rejected ones (below the surface) are the last bin.
         let drawn = run(&c, 0, &us);
         let mut observed = vec![0u64; bt * bp + 1];
@@ -355,10 +366,7 @@ fn bsdf_density_is_normalised_and_sampling_follows_it() {
 
 #[test]
 fn white_metal_reflects_at_most_all_light() {
-    let grid = Grid {
-        n_theta: 768,
-        n_phi: 1536,
-    };
+    let grid = Grid::fine();
     let cells = grid.items();
     for (alpha, wo) in [
         (0.05, unit([0.1, 0.0, 0.99])),
@@ -375,12 +383,7 @@ fn white_metal_reflects_at_most_all_light() {
         };
         let eval = run(&c, 1, &cells);
         let mut albedo = 0.0;
-        for i in 0..grid.n_theta {
-            let dw = grid.solid_angle(i);
-            for j in 0..grid.n_phi {
-                albedo += eval[i * grid.n_phi + j].f[1] * dw;
-            }
-        }
+        grid.for_each_cell(|i, j, dw| albedo += eval[i * grid.n_phi + j].f[1] * dw);
         eprintln!(
             "white metal α {alpha}, cosθo {:.2}: albedo {albedo:.4}",
             wo[2]
