@@ -140,9 +140,15 @@ struct PathInfo {
 vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo info) {
     info = PathInfo(vec3(0.0), vec3(0.0), 0.0, vec3(0.0), 0.0, 0.0, INVALID_INDEX, 0.0, 0.0);
     vec3 origin, dir;
-    camera_ray(pixel, stratified_pixel_sample(rng.key.x, rng.key.y, rng.key.z), origin, dir);
-    TRACE2("camera ray o=%v3f d=%v3f\n", origin, dir);
-    rays.camera += 1u;
+    // K camera rays (--emission-rays): ray k of sample i is at position K·i + k of the
+    // pixel's stratified sequence, so the K·N rays of N samples are one stratified set.
+    // Rays 1 … K−1 come first and add only the emission they see; ray 0 then starts
+    // the path. The emission seen directly is their mean: each ray's is an unbiased
+    // estimate of it, and the path from ray 0 one of the light it reflects. K = 1 is
+    // the plain estimator, with the same pixel positions.
+    uint emission_rays = max(params.emission_rays, 1u);
+    uint camera_k = emission_rays > 1u ? 1u : 0u;  // the next camera ray to trace
+    vec3 seen_emission = vec3(0.0);                  // emission rays 1 … K−1 saw
 
     VertexRecord rec[GUIDE_MAX_RECORDED_VERTICES];
     uint recorded = 0u;
@@ -162,7 +168,16 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
     // (odd steps) and its NEE shadow ray (even steps). One call site keeps one copy of
     // the traversal in the kernel (every call is inlined): lavapipe compiles it about 4×
     // faster than with a call per ray kind, at the same speed (bench/README.md).
-    for (uint step = 0u;; ++step) {
+    // `stay`: the step is not over (the camera step traces its K rays in turn).
+    bool stay = false;
+    for (uint step = 0u;; step += stay ? 0u : 1u) {
+        stay = false;
+        if (step == 0u) {
+            camera_ray(pixel, stratified_pixel_sample(rng.key.x, emission_rays * rng.key.y + camera_k, rng.key.z),
+                       origin, dir);
+            TRACE3("camera ray %u o=%v3f d=%v3f\n", camera_k, origin, dir);
+            rays.camera += 1u;
+        }
         bool shadow_step = step > 0u && (step & 1u) == 0u;
         uint depth = (step + 1u) / 2u;  // the vertex whose rays these are (0: the camera)
         Ray ray = shadow_step ? nee.shadow : Ray(origin, dir, FLT_MAX);
@@ -178,16 +193,25 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
             next = hit;
             if (hit.valid) ns = make_surface(hit, dir);
         }
+        if (step == 0u && camera_k != 0u) {
+            // An emission ray: what it sees directly, then the next camera ray.
+            if (next.valid) seen_emission += ns.emission;
+            camera_k = (camera_k + 1u) % emission_rays;
+            stay = true;
+            continue;
+        }
         if (step == 0u) {
+            vec3 seen = params.hide_emitters != 0u ? vec3(0.0)
+                                                   : (seen_emission + (next.valid ? ns.emission : vec3(0.0))) / float(emission_rays);
             if (!next.valid) {
                 TRACE0("  miss\n");
-                return vec3(0.0);
+                return seen;
             }
             info.albedo = ns.bsdf.base_color;
             info.normal = ns.n;
             info.depth = next.t;
             info.position = ns.p;
-            L = params.hide_emitters != 0u ? vec3(0.0) : ns.emission;
+            L = seen;
         } else if (!shadow_step) {
             // The direction sample's hit is known: choose NEE's light (RIS takes an
             // emitter hit there as a candidate); its shadow ray is the next step.

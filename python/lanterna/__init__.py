@@ -131,7 +131,8 @@ class Renderer:
             ``bsdf_fraction``, ``train_fraction``, ``record_nee`` (bool),
             ``guide_target`` ("all"/"indirect"/"contribution"), ``guide_density``
             ("radiance"/"variance-aware"),
-            ``strategy`` ("mis"/"nee"/"bsdf"), ``hide_emitters``, ``guiding_threshold``,
+            ``strategy`` ("mis"/"nee"/"bsdf"), ``hide_emitters``, ``emission_rays`` (camera
+            rays per sample, 1–64), ``guiding_threshold``,
             ``guiding_memory`` (MiB), ``spatial_filter`` ("nearest", the default, or "jitter"),
             ``directional_filter`` ("box"/"nearest"), ``guided_output``
             ("all-passes", the default, "late-passes", "render-phase" or

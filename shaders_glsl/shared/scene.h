@@ -138,6 +138,7 @@ struct FrameParams {
     uint strategy;             // STRATEGY_*: MIS, or one technique alone (debugging, tests)
     uint aov_first_sample;     // the sample whose choices AOV_SELECTED_LIGHT shows
     uint hide_emitters;        // 1: emission seen directly by the camera is not counted
+    uint emission_rays;        // camera rays per sample (raygen.glsl; 1: the plain estimator)
 };
 
 // Push constants of one dispatch: a tile of pixels and a range of sample indices.

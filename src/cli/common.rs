@@ -162,6 +162,12 @@ pub struct EstimatorArgs {
     /// `hide_emitters`); the light they cast still counts.
     #[arg(long)]
     pub hide_emitters: bool,
+    /// Camera rays per sample: the path continues from the first; the others, each at
+    /// its own stratified position in the pixel, add only the emission they see directly.
+    /// Cuts the pixel-coverage noise of small emitters in view (string lights, lamps) at
+    /// the cost of a camera ray each (README, Rendering); 1 is the plain estimator.
+    #[arg(long, default_value_t = 1)]
+    pub emission_rays: u32,
     /// Guiding: c in the spatial split threshold c·√(spp of the next iteration / 4)
     /// (Müller et al.'s 12000), for a 1280×720 image: it is scaled by the square root of
     /// the image's pixel count relative to that, since records per leaf scale with it.
@@ -240,6 +246,7 @@ impl EstimatorArgs {
             ris_candidates: self.ris_candidates,
             strategy: self.strategy,
             hide_emitters: self.hide_emitters,
+            emission_rays: self.emission_rays,
             guiding: GuidingSettings {
                 bsdf_fraction: self.bsdf_fraction.unwrap_or(0.5),
                 learn_selection: self.bsdf_fraction.is_none(),

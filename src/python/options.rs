@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 /// The keyword options `Renderer` accepts besides its named parameters.
-pub const OPTIONS: [&str; 20] = [
+pub const OPTIONS: [&str; 21] = [
     "rr_depth",
     "source",
     "ris_candidates",
@@ -22,6 +22,7 @@ pub const OPTIONS: [&str; 20] = [
     "guide_density",
     "strategy",
     "hide_emitters",
+    "emission_rays",
     "guiding_threshold",
     "guiding_memory",
     "spatial_filter",
@@ -104,6 +105,7 @@ pub fn apply(
                 settings.strategy = value_enum::<Strategy>(&flag, &v.extract::<String>()?)?
             }
             "hide_emitters" => settings.hide_emitters = v.extract()?,
+            "emission_rays" => settings.emission_rays = v.extract()?,
             "guiding_threshold" => settings.guiding.spatial_threshold = v.extract()?,
             "guiding_memory" => {
                 let mib: u64 = v.extract()?;

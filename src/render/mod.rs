@@ -282,6 +282,7 @@ impl Renderer {
             },
             aov_first_sample: self.film_offset as u32,
             hide_emitters: u32::from(s.hide_emitters),
+            emission_rays: s.emission_rays,
         }
     }
 

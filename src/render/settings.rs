@@ -206,6 +206,11 @@ pub struct RenderSettings {
     /// Emitters seen directly by the camera contribute nothing (Mitsuba's
     /// `hide_emitters`); light they send into the scene still counts.
     pub hide_emitters: bool,
+    /// Camera rays per sample (`--emission-rays`): the path continues from the first;
+    /// the others, each at its own stratified position in the pixel, add only the
+    /// emission they see. 1: one camera ray, the plain estimator.
+    #[serde(default = "one")]
+    pub emission_rays: u32,
     /// Vertical field of view in degrees replacing the camera's (`--fov`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fov_degrees: Option<f32>,
@@ -239,6 +244,7 @@ impl Default for RenderSettings {
             ris_candidates: 32,
             strategy: Strategy::Mis,
             hide_emitters: false,
+            emission_rays: 1,
             fov_degrees: None,
             exposure: 0.0,
             aovs: false,
@@ -253,6 +259,12 @@ impl Default for RenderSettings {
 pub const MAX_PIXELS: u64 = 1 << 28;
 /// The most RIS candidates per NEE (each costs a light sample per path vertex).
 pub const MAX_RIS_CANDIDATES: u32 = 1024;
+/// Most camera rays per sample (`--emission-rays`).
+pub const MAX_EMISSION_RAYS: u32 = 64;
+
+fn one() -> u32 {
+    1
+}
 /// The largest |--exposure| in stops (2^±64 spans every f32 radiance).
 pub const MAX_EXPOSURE: f32 = 64.0;
 
@@ -305,6 +317,13 @@ impl RenderSettings {
                 "--ris-candidates",
                 self.ris_candidates.to_string(),
                 format!("must be in 1..={MAX_RIS_CANDIDATES}"),
+            );
+        }
+        if !(1..=MAX_EMISSION_RAYS).contains(&self.emission_rays) {
+            return bad(
+                "--emission-rays",
+                self.emission_rays.to_string(),
+                format!("must be in 1..={MAX_EMISSION_RAYS}"),
             );
         }
         if let Some(fov) = self.fov_degrees {
@@ -479,6 +498,8 @@ mod tests {
             ),
             ("--max-depth", Box::new(|s| s.max_depth = 0)),
             ("--ris-candidates", Box::new(|s| s.ris_candidates = 0)),
+            ("--emission-rays", Box::new(|s| s.emission_rays = 0)),
+            ("--emission-rays", Box::new(|s| s.emission_rays = 65)),
             ("--width/--height", Box::new(|s| s.width = 0)),
             (
                 "--width/--height",
