@@ -284,6 +284,25 @@ impl Batches {
 /// Two renders agree in expectation: Welch's t-test per block and channel, with the
 /// family-wise significance `alpha` split over all comparisons (Šidák). Returns the
 /// smallest p-value and where it was, or an error describing the worst block.
+/// Welch tests of the whole image's mean, per channel, between two sets of batches of the
+/// same image: an error that scales the whole image (a weight, a missing term) shows here
+/// first. `what` names the comparison in the failure message.
+pub fn assert_same_image_mean(a: &Batches, b: &Batches, alpha: f64, what: &str) {
+    let wa = a.region_estimates(0, 0, a.width, a.height);
+    let wb = b.region_estimates(0, 0, b.width, b.height);
+    for c in 0..3 {
+        let p = crate::stats::welch(&wa[c], &wb[c]);
+        let (ma, mb) = (
+            crate::stats::mean_var(&wa[c]).0,
+            crate::stats::mean_var(&wb[c]).0,
+        );
+        assert!(
+            p > alpha,
+            "{what}: image means {ma} vs {mb} (channel {c}), p = {p:.2e}"
+        );
+    }
+}
+
 pub fn assert_same_expectation(a: &Batches, b: &Batches, block: u32, alpha: f64) -> f64 {
     let ea = a.block_estimates(block);
     let eb = b.block_estimates(block);
