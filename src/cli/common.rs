@@ -165,7 +165,9 @@ pub struct EstimatorArgs {
     /// Camera rays per sample: the path continues from the first; the others, each at
     /// its own stratified position in the pixel, add only the emission they see directly.
     /// Cuts the pixel-coverage noise of small emitters in view (string lights, lamps) at
-    /// the cost of a camera ray each (README, Rendering); 1 is the plain estimator.
+    /// the cost of a camera ray each (README, Rendering); 1 is the plain estimator. The
+    /// camera positions are indexed K × sample index in 32 bits: beyond sample 2³²/K they
+    /// repeat earlier samples' positions.
     #[arg(long, default_value_t = 1)]
     pub emission_rays: u32,
     /// Guiding: c in the spatial split threshold c·√(spp of the next iteration / 4)
