@@ -65,6 +65,40 @@ void camera_ray(uvec2 pixel, vec2 jitter, out vec3 origin, out vec3 dir) {
     dir = normalize(mat3(params.camera_to_world) * d);
 }
 
+// Small emitters seen directly (src/render/pixel_emitters.rs). Their emission through a
+// pixel is ∫ Le·V over the part of their image inside it; the pixel's list holds that
+// part as triangles. One is chosen (by its cdf), a point drawn uniformly inside it, and
+// the camera ray through the point counts Le · area / probability if it reaches that
+// very light triangle first. Camera rays that hit such a triangle count nothing, so each
+// emitter's share is estimated once. Bulbs far smaller than a pixel then cost one ray
+// and no coverage noise.
+bool is_pixel_emitter(uint light_tri) {
+    return params.pixel_emitters != 0u && light_tri != INVALID_INDEX &&
+           (pixel_emitter_flags[light_tri >> 5u] & (1u << (light_tri & 31u))) != 0u;
+}
+
+// The pixel's piece for sample `key` and the image point inside it; false: no pieces.
+bool pixel_emitter_point(uint pixel_index, uvec3 key, out uint piece, out vec2 point) {
+    piece = INVALID_INDEX;
+    point = vec2(0.0);
+    if (params.pixel_emitters == 0u || params.hide_emitters != 0u) return false;
+    uint lo = pixel_emitter_offsets[pixel_index];
+    uint hi = pixel_emitter_offsets[pixel_index + 1u];
+    if (lo == hi) return false;
+    float u = float(pcg4d(uvec4(key, 0x91ec5e7u)).x >> 8u) * (1.0 / 16777216.0);
+    while (hi - lo > 1u) {  // the first piece whose cdf exceeds u
+        uint mid = (lo + hi) / 2u;
+        if (pixel_emitters[mid - 1u].cdf > u) hi = mid;
+        else lo = mid;
+    }
+    piece = lo;
+    PixelEmitter e = pixel_emitters[piece];
+    vec2 v = stratified_sample_2d(key.x, key.y, key.z, PIXEL_EMITTER_DIM);
+    float r = sqrt(v.x);
+    point = (1.0 - r) * e.a + r * (1.0 - v.y) * e.b + r * v.y * e.c;
+    return true;
+}
+
 void record_path(VertexRecord rec[GUIDE_MAX_RECORDED_VERTICES], uint count, inout Rng rng) {
     // Incident radiance along each vertex's direction, from the back of the path:
     // L_in(k) = emitted(k) + nee(k+1) + weight(k+1) · L_in(k+1). Two versions: l_rec
@@ -149,6 +183,11 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
     uint emission_rays = max(params.emission_rays, 1u);
     uint camera_k = emission_rays > 1u ? 1u : 0u;  // the next camera ray to trace
     vec3 seen_emission = vec3(0.0);                  // emission rays 1 … K−1 saw
+    // The pixel-emitter ray comes first, where the pixel has small emitters.
+    uint piece;
+    vec2 piece_point;
+    bool emitter_ray = pixel_emitter_point(pixel.y * params.width + pixel.x, rng.key, piece, piece_point);
+    vec3 seen_pieces = vec3(0.0);  // what it found, weighted
 
     VertexRecord rec[GUIDE_MAX_RECORDED_VERTICES];
     uint recorded = 0u;
@@ -173,9 +212,14 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
     for (uint step = 0u;; step += stay ? 0u : 1u) {
         stay = false;
         if (step == 0u) {
-            camera_ray(pixel, stratified_pixel_sample(rng.key.x, emission_rays * rng.key.y + camera_k, rng.key.z),
-                       origin, dir);
-            TRACE3("camera ray %u o=%v3f d=%v3f\n", camera_k, origin, dir);
+            if (emitter_ray) {
+                camera_ray(uvec2(0u), piece_point, origin, dir);
+                TRACE3("pixel-emitter ray: piece %u point %v2f d=%v3f\n", piece, piece_point, dir);
+            } else {
+                camera_ray(pixel, stratified_pixel_sample(rng.key.x, emission_rays * rng.key.y + camera_k, rng.key.z),
+                           origin, dir);
+                TRACE3("camera ray %u o=%v3f d=%v3f\n", camera_k, origin, dir);
+            }
             rays.camera += 1u;
         }
         bool shadow_step = step > 0u && (step & 1u) == 0u;
@@ -193,16 +237,26 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
             next = hit;
             if (hit.valid) ns = make_surface(hit, dir);
         }
+        if (step == 0u && emitter_ray) {
+            // The pixel-emitter ray counts only the light triangle it aimed at.
+            PixelEmitter e = pixel_emitters[piece];
+            if (next.valid && ns.light_tri == e.light_tri) seen_pieces = ns.emission * e.scale;
+            TRACE2("  reached its emitter: %u, contribution %v3f\n", uint(next.valid && ns.light_tri == e.light_tri), seen_pieces);
+            emitter_ray = false;
+            stay = true;
+            continue;
+        }
+        // Emission seen by camera rays, less the small emitters' (the ray above has them).
+        vec3 seen_here = next.valid && !is_pixel_emitter(ns.light_tri) ? ns.emission : vec3(0.0);
         if (step == 0u && camera_k != 0u) {
             // An emission ray: what it sees directly, then the next camera ray.
-            if (next.valid) seen_emission += ns.emission;
+            seen_emission += seen_here;
             camera_k = (camera_k + 1u) % emission_rays;
             stay = true;
             continue;
         }
         if (step == 0u) {
-            vec3 seen = params.hide_emitters != 0u ? vec3(0.0)
-                                                   : (seen_emission + (next.valid ? ns.emission : vec3(0.0))) / float(emission_rays);
+            vec3 seen = params.hide_emitters != 0u ? vec3(0.0) : (seen_emission + seen_here) / float(emission_rays) + seen_pieces;
             if (!next.valid) {
                 TRACE0("  miss\n");
                 return seen;

@@ -256,6 +256,7 @@ fn emission_rays_keep_the_expectation_and_cut_the_coverage_noise() {
         let mut s = testing::settings(method, 16, 16);
         s.max_depth = 3;
         s.emission_rays = k;
+        s.pixel_emitters = false; // the extra ray of pixel emitters would blur the counts
         s.seed = seed;
         s
     };
@@ -287,26 +288,106 @@ fn emission_rays_keep_the_expectation_and_cut_the_coverage_noise() {
     let variance = |k| {
         let mut s = settings(Method::Pt, k, 75);
         s.max_depth = 1;
-        let b = render_batches(&t.scene, &t.camera, s, 64, 4);
-        let mean = b.mean();
-        let n = b.images.len() as f64;
-        mean.iter()
-            .enumerate()
-            .map(|(i, &m)| {
-                b.images
-                    .iter()
-                    .map(|img| (img[i] as f64 - m).powi(2))
-                    .sum::<f64>()
-                    / (n - 1.0)
-            })
-            .sum::<f64>()
-            / mean.len() as f64
+        mean_pixel_variance(&render_batches(&t.scene, &t.camera, s, 64, 4))
     };
     let (v1, v4) = (variance(1), variance(4));
     eprintln!("emission seen directly, 4 spp: variance {v1:.4e} with one camera ray, {v4:.4e} with four ({:.3}×)", v4 / v1);
     assert!(
         v4 < 0.5 * v1,
         "4 emission rays: per-pixel variance {v4:.3e} against {v1:.3e} with one"
+    );
+    testing::assert_no_validation_errors();
+}
+
+/// The variance of a pixel's batch estimates, averaged over pixels and channels.
+fn mean_pixel_variance(b: &Batches) -> f64 {
+    let mean = b.mean();
+    let n = b.images.len() as f64;
+    mean.iter()
+        .enumerate()
+        .map(|(i, &m)| {
+            b.images
+                .iter()
+                .map(|img| (img[i] as f64 - m).powi(2))
+                .sum::<f64>()
+                / (n - 1.0)
+        })
+        .sum::<f64>()
+        / mean.len() as f64
+}
+
+/// Small emitters seen directly, sampled inside their pixels (`pixel_emitters.rs`),
+/// against the plain camera-ray estimator on `cornell-lights` at 16×16, where most of
+/// the coloured lamps are a few pixels or less and some sit behind a blocker: the same
+/// expectation per 4×4 block and in the image mean (depth 3, `pt` and `ris`), and at
+/// depth 1 (emission seen directly and nothing else) a per-pixel variance far below the
+/// plain estimator's (measured 10⁻³¹ against 11.7: every lamp of the scene is in the set,
+/// and where it is seen its pieces are estimated exactly). Seen to fail with the camera
+/// rays still counting the set's triangles (mean high), with the piece's weight
+/// (area / probability) left out (mean 10× high), and with the piece's point taken at
+/// a triangle corner (mean low: rays graze the edges).
+#[test]
+fn pixel_emitters_keep_the_expectation_and_remove_the_coverage_noise() {
+    use lanterna::render::RenderStats;
+    use std::sync::atomic::AtomicBool;
+    let t = testing::generated(Kind::CornellLights, &Options::default());
+    let settings = |method, on, depth, seed| {
+        let mut s = testing::settings(method, 16, 16);
+        s.max_depth = depth;
+        s.pixel_emitters = on;
+        s.seed = seed;
+        s
+    };
+    let a = render_batches(
+        &t.scene,
+        &t.camera,
+        settings(Method::Pt, false, 3, 81),
+        12,
+        64,
+    );
+    for (method, seed) in [(Method::Pt, 82), (Method::Ris, 83)] {
+        let b = render_batches(&t.scene, &t.camera, settings(method, true, 3, seed), 12, 64);
+        testing::assert_same_expectation(&a, &b, 4, ALPHA);
+        testing::assert_same_image_mean(&a, &b, ALPHA, &format!("{method:?}, pixel emitters"));
+    }
+
+    // The set is not empty: some pixels trace their pixel-emitter ray.
+    let mut r = testing::test_renderer_on(
+        testing::device(),
+        &t.scene,
+        &t.camera,
+        &settings(Method::Pt, true, 3, 84),
+    );
+    let mut stats = RenderStats::default();
+    r.render_samples(
+        0,
+        4,
+        false,
+        &AtomicBool::new(false),
+        &mut |_| {},
+        &mut stats,
+    )
+    .unwrap();
+    let extra = stats.camera_rays - 4 * 16 * 16;
+    assert!(extra > 4 * 8, "{extra} pixel-emitter rays in 4 spp");
+
+    let variance = |on, seed| {
+        mean_pixel_variance(&render_batches(
+            &t.scene,
+            &t.camera,
+            settings(Method::Pt, on, 1, seed),
+            48,
+            4,
+        ))
+    };
+    let (plain, pieces) = (variance(false, 85), variance(true, 86));
+    eprintln!(
+        "emission seen directly, 4 spp: variance {plain:.4e} with camera rays, {pieces:.4e} with pixel emitters ({:.3}×)",
+        pieces / plain
+    );
+    assert!(
+        pieces < 0.5 * plain,
+        "pixel emitters: per-pixel variance {pieces:.3e} against {plain:.3e} with camera rays"
     );
     testing::assert_no_validation_errors();
 }

@@ -100,6 +100,9 @@ const uint RNG_PAIR_DIRECTION = 0u;    // the direction: its warp, and (reused) 
 const uint RNG_PAIR_LIGHT = 1u;        // light model and triangle (RIS: its strata offset)
 const uint RNG_PAIR_LIGHT_POINT = 2u;  // the point on the light triangle
 const uint RNG_PAIRS_PER_VERTEX = 3u;
+// The stratified dimension of the point a pixel-emitter ray aims at (raygen.glsl), far
+// from those of the path's vertices.
+const uint PIXEL_EMITTER_DIM = 0x7fffffffu;
 
 // Each number is uniform, whatever the vertex and pair, so every estimator stays
 // unbiased; across the samples of a pixel they are stratified, which is worth most where

@@ -27,6 +27,9 @@ layout(set = 0, binding = BINDING_MODEL_ALIAS, scalar) readonly buffer ModelAlia
 layout(set = 0, binding = BINDING_TRIANGLE_ALIAS, scalar) readonly buffer TriangleAliasBuffer { AliasEntry triangle_alias[]; };
 layout(set = 0, binding = BINDING_PUNCTUAL_LIGHTS, scalar) readonly buffer PunctualBuffer { PunctualLight punctual_lights[]; };
 layout(set = 0, binding = BINDING_TRIANGLE_LIGHT_INDEX, scalar) readonly buffer TriangleLightIndexBuffer { uint triangle_light_index[]; };
+layout(set = 0, binding = BINDING_PIXEL_EMITTER_OFFSETS, scalar) readonly buffer PixelEmitterOffsetBuffer { uint pixel_emitter_offsets[]; };
+layout(set = 0, binding = BINDING_PIXEL_EMITTERS, scalar) readonly buffer PixelEmitterBuffer { PixelEmitter pixel_emitters[]; };
+layout(set = 0, binding = BINDING_PIXEL_EMITTER_FLAGS, scalar) readonly buffer PixelEmitterFlagBuffer { uint pixel_emitter_flags[]; };
 layout(set = 0, binding = BINDING_FILM, scalar) buffer FilmBuffer { uint64_t film[]; };
 layout(set = 0, binding = BINDING_AOV, scalar) buffer AovBuffer { float aov[]; };
 layout(set = 0, binding = BINDING_STATS, scalar) buffer StatsBuffer { uint64_t stats[]; };

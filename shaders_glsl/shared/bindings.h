@@ -36,7 +36,12 @@
 #define BINDING_TRACE_HITS 27
 // Compact light-triangle records for light sampling (LightCandidateTriangle).
 #define BINDING_LIGHT_CANDIDATES 28
-#define BINDING_COUNT 29
+// Small emitters seen directly, sampled inside the pixels they cover (pixel_emitters.rs):
+// per pixel an offset into the pieces, the pieces, and a bit per light triangle.
+#define BINDING_PIXEL_EMITTER_OFFSETS 29
+#define BINDING_PIXEL_EMITTERS 30
+#define BINDING_PIXEL_EMITTER_FLAGS 31
+#define BINDING_COUNT 32
 
 // Upper bound on bindless textures in one scene.
 #define MAX_TEXTURES 8192

@@ -139,6 +139,19 @@ struct FrameParams {
     uint aov_first_sample;     // the sample whose choices AOV_SELECTED_LIGHT shows
     uint hide_emitters;        // 1: emission seen directly by the camera is not counted
     uint emission_rays;        // camera rays per sample (raygen.glsl; 1: the plain estimator)
+    uint pixel_emitters;       // 1: small emitters seen directly are sampled in their pixels
+};
+
+// The part of a small emissive triangle's image that lies in one pixel, or one triangle
+// of it (src/render/pixel_emitters.rs). Corners are in image coordinates: pixel (x, y)
+// spans [x, x + 1) × [y, y + 1), y down, as camera_ray reads them.
+struct PixelEmitter {
+    vec2 a;
+    vec2 b;
+    vec2 c;
+    float cdf;                 // cumulative selection probability in the pixel's list (last: 1)
+    float scale;               // the piece's area over its selection probability
+    uint light_tri;            // the light triangle it is part of
 };
 
 // Push constants of one dispatch: a tile of pixels and a range of sample indices.

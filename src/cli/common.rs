@@ -170,6 +170,12 @@ pub struct EstimatorArgs {
     /// repeat earlier samples' positions.
     #[arg(long, default_value_t = 1)]
     pub emission_rays: u32,
+    /// Leave small emitters seen directly to the camera rays. By default, emissive
+    /// triangles whose image is at most 16 pixels are sampled inside each pixel they cover:
+    /// one ray per sample reaches them, without the coverage noise of sub-pixel lamps
+    /// (README, Rendering).
+    #[arg(long)]
+    pub no_pixel_emitters: bool,
     /// Guiding: c in the spatial split threshold c·√(spp of the next iteration / 4)
     /// (Müller et al.'s 12000), for a 1280×720 image: it is scaled by the square root of
     /// the image's pixel count relative to that, since records per leaf scale with it.
@@ -249,6 +255,7 @@ impl EstimatorArgs {
             strategy: self.strategy,
             hide_emitters: self.hide_emitters,
             emission_rays: self.emission_rays,
+            pixel_emitters: !self.no_pixel_emitters,
             guiding: GuidingSettings {
                 bsdf_fraction: self.bsdf_fraction.unwrap_or(0.5),
                 learn_selection: self.bsdf_fraction.is_none(),

@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 /// The keyword options `Renderer` accepts besides its named parameters.
-pub const OPTIONS: [&str; 21] = [
+pub const OPTIONS: [&str; 22] = [
     "rr_depth",
     "source",
     "ris_candidates",
@@ -23,6 +23,7 @@ pub const OPTIONS: [&str; 21] = [
     "strategy",
     "hide_emitters",
     "emission_rays",
+    "pixel_emitters",
     "guiding_threshold",
     "guiding_memory",
     "spatial_filter",
@@ -106,6 +107,7 @@ pub fn apply(
             }
             "hide_emitters" => settings.hide_emitters = v.extract()?,
             "emission_rays" => settings.emission_rays = v.extract()?,
+            "pixel_emitters" => settings.pixel_emitters = v.extract()?,
             "guiding_threshold" => settings.guiding.spatial_threshold = v.extract()?,
             "guiding_memory" => {
                 let mib: u64 = v.extract()?;

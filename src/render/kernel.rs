@@ -87,6 +87,12 @@ impl Renderer {
             (gpu::BINDING_OUTLIERS, &self.outliers),
             (gpu::BINDING_TRACE_RAYS, &self.trace_rays),
             (gpu::BINDING_TRACE_HITS, &self.trace_hits),
+            (
+                gpu::BINDING_PIXEL_EMITTER_OFFSETS,
+                &self.pixel_emitter_offsets,
+            ),
+            (gpu::BINDING_PIXEL_EMITTERS, &self.pixel_emitter_pieces),
+            (gpu::BINDING_PIXEL_EMITTER_FLAGS, &self.pixel_emitter_flags),
         ];
         let mut table: Vec<(u32, Bound<'_>)> = buffers
             .into_iter()

@@ -22,6 +22,7 @@ mod kernel;
 mod limits;
 pub mod output;
 mod pass_output;
+mod pixel_emitters;
 mod readback;
 pub mod run;
 pub mod runner;
@@ -151,6 +152,10 @@ pub struct Renderer {
     stats: Buffer,
     aov: Buffer,
     outliers: Buffer,
+    /// Small emitters seen directly, per pixel (`pixel_emitters.rs`).
+    pixel_emitter_offsets: Buffer,
+    pixel_emitter_pieces: Buffer,
+    pixel_emitter_flags: Buffer,
     guide: GuideBuffers,
     /// A trained SD-tree to render with instead of training (`--load-guiding`).
     pub preloaded_tree: Option<crate::guiding::SdTree>,
@@ -205,6 +210,30 @@ impl Renderer {
         let aov = Buffer::zeroed(&device, aov_floats * 4, usage, "aovs")?;
         let outliers = Buffer::zeroed(&device, outlier_floats * 4, usage, "outliers")?;
         let guide = GuideBuffers::empty(&device)?;
+        let emitters = pixel_emitters::build(&camera, settings.width, settings.height, lights);
+        log::info!(
+            "pixel emitters: {} light triangles in {} pieces over {} pixels",
+            emitters.triangles,
+            emitters.pieces.len(),
+            emitters.pixels
+        );
+        let or_placeholder = |data: &[u8], name: &str| -> Result<Buffer> {
+            Ok(if data.is_empty() {
+                Buffer::zeroed(&device, 64, usage, name)?
+            } else {
+                Buffer::from_slice(&device, data, usage, name)?
+            })
+        };
+        let pixel_emitter_offsets = or_placeholder(
+            bytemuck::cast_slice(&emitters.offsets),
+            "pixel emitter offsets",
+        )?;
+        let pixel_emitter_pieces = or_placeholder(
+            bytemuck::cast_slice(&emitters.pieces),
+            "pixel emitter pieces",
+        )?;
+        let pixel_emitter_flags =
+            or_placeholder(bytemuck::cast_slice(&emitters.flags), "pixel emitter flags")?;
 
         let mut r = Renderer {
             device,
@@ -228,6 +257,9 @@ impl Renderer {
             stats,
             aov,
             outliers,
+            pixel_emitter_offsets,
+            pixel_emitter_pieces,
+            pixel_emitter_flags,
             guide,
             preloaded_tree: None,
             bounds: (scene.bounds_min, scene.bounds_max),
@@ -283,6 +315,7 @@ impl Renderer {
             aov_first_sample: self.film_offset as u32,
             hide_emitters: u32::from(s.hide_emitters),
             emission_rays: s.emission_rays,
+            pixel_emitters: u32::from(s.pixel_emitters),
         }
     }
 

@@ -211,6 +211,10 @@ pub struct RenderSettings {
     /// emission they see. 1: one camera ray, the plain estimator.
     #[serde(default = "one")]
     pub emission_rays: u32,
+    /// Small emitters seen directly are sampled inside the pixels they cover
+    /// (`--no-pixel-emitters` turns it off; `pixel_emitters.rs`).
+    #[serde(default = "yes")]
+    pub pixel_emitters: bool,
     /// Vertical field of view in degrees replacing the camera's (`--fov`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fov_degrees: Option<f32>,
@@ -245,6 +249,7 @@ impl Default for RenderSettings {
             strategy: Strategy::Mis,
             hide_emitters: false,
             emission_rays: 1,
+            pixel_emitters: true,
             fov_degrees: None,
             exposure: 0.0,
             aovs: false,
@@ -264,6 +269,9 @@ pub const MAX_EMISSION_RAYS: u32 = 64;
 
 fn one() -> u32 {
     1
+}
+fn yes() -> bool {
+    true
 }
 /// The largest |--exposure| in stops (2^±64 spans every f32 radiance).
 pub const MAX_EXPOSURE: f32 = 64.0;
