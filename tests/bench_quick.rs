@@ -140,7 +140,9 @@ fn quick_bench_writes_results() {
             check_spread(&m["rays_per_s"], &what);
             check_spread(&m["wall_seconds"], &what);
             check_spread(&m["gpu_seconds"], &what);
-            assert_eq!(num(&m["camera_rays_per_sample"], &what), 1.0, "{what}");
+            // One camera ray per sample, and one more in pixels with small emitters.
+            let camera = num(&m["camera_rays_per_sample"], &what);
+            assert!((1.0..=2.0).contains(&camera), "{what}: {camera}");
             assert!(num(&m["bounce_rays_per_sample"], &what) > 0.0, "{what}");
             assert!(num(&m["shadow_rays_per_sample"], &what) > 0.0, "{what}");
             assert_eq!(m["nonfinite_samples"], 0, "{what}");
