@@ -241,7 +241,10 @@ fn learned_light_selection_agrees_with_pt() {
         let t = testing::generated(kind, &options);
         let mut pt = testing::settings(Method::Pt, w, h);
         pt.seed = 51;
-        let a = render_batches(&t.scene, &t.camera, pt, 12, 48);
+        // pt's batches take 4× the samples: near the street's lamps its rare bright NEE
+        // samples make 48-spp batch means skewed (seed 51 drew none of them in one
+        // block, 3.5 % low at p = 10⁻⁶), which the t-test would read as a difference.
+        let a = render_batches(&t.scene, &t.camera, pt, 12, 192);
         for (i, method) in [Method::Guided, Method::GuidedRis].into_iter().enumerate() {
             let mut s = testing::settings(method, w, h);
             s.seed = 52 + i as u32;
@@ -251,7 +254,8 @@ fn learned_light_selection_agrees_with_pt() {
                 s.guiding.light_mix = lanterna::guiding::MAX_LIGHT_MIX;
             }
             let b = run_batches(&t.scene, &t.camera, s, 12, 48);
-            testing::assert_same_expectation(&a, &b, 4, ALPHA);
+            let p = testing::assert_same_expectation(&a, &b, 4, ALPHA);
+            eprintln!("{kind:?} {method:?}: worst block p = {p:.2e}");
         }
     }
     testing::assert_no_validation_errors();
