@@ -373,8 +373,9 @@ void main() {
         g_trace = pixel_index == params.debug_pixel && (params.debug_sample == INVALID_INDEX || sample_index == params.debug_sample);
         TRACE3("--- pixel (%u, %u) sample %u\n", pixel.x, pixel.y, sample_index);
         PathInfo info;
+        uint camera_rays_before = rays.camera;  // emission and pixel-emitter rays are steps too
         vec3 L = trace_path(pixel, rng, rays, info);
-        lane_stats_path(1u + uint(info.directions));
+        lane_stats_path(rays.camera - camera_rays_before + uint(info.directions));
         if (!all_finite(L) || any(lessThan(L, vec3(0.0)))) {
             nonfinite += 1u;
             continue;
