@@ -169,10 +169,11 @@ struct PathInfo {
     uint selected_light;
     float guided;
     float directions;
+    uint camera_rays;  // emission and pixel-emitter rays too (each a path-loop step)
 };
 
 vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo info) {
-    info = PathInfo(vec3(0.0), vec3(0.0), 0.0, vec3(0.0), 0.0, 0.0, INVALID_INDEX, 0.0, 0.0);
+    info = PathInfo(vec3(0.0), vec3(0.0), 0.0, vec3(0.0), 0.0, 0.0, INVALID_INDEX, 0.0, 0.0, 0u);
     vec3 origin, dir;
     // K camera rays (--emission-rays): ray k of sample i is at position K·i + k of the
     // pixel's stratified sequence, so the K·N rays of N samples are one stratified set.
@@ -221,6 +222,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
                 TRACE3("camera ray %u o=%v3f d=%v3f\n", camera_k, origin, dir);
             }
             rays.camera += 1u;
+            info.camera_rays += 1u;
         }
         bool shadow_step = step > 0u && (step & 1u) == 0u;
         uint depth = (step + 1u) / 2u;  // the vertex whose rays these are (0: the camera)
@@ -373,9 +375,8 @@ void main() {
         g_trace = pixel_index == params.debug_pixel && (params.debug_sample == INVALID_INDEX || sample_index == params.debug_sample);
         TRACE3("--- pixel (%u, %u) sample %u\n", pixel.x, pixel.y, sample_index);
         PathInfo info;
-        uint camera_rays_before = rays.camera;  // emission and pixel-emitter rays are steps too
         vec3 L = trace_path(pixel, rng, rays, info);
-        lane_stats_path(rays.camera - camera_rays_before + uint(info.directions));
+        lane_stats_path(info.camera_rays + uint(info.directions));
         if (!all_finite(L) || any(lessThan(L, vec3(0.0)))) {
             nonfinite += 1u;
             continue;

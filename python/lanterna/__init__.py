@@ -132,7 +132,8 @@ class Renderer:
             ``guide_target`` ("all"/"indirect"/"contribution"), ``guide_density``
             ("radiance"/"variance-aware"),
             ``strategy`` ("mis"/"nee"/"bsdf"), ``hide_emitters``, ``emission_rays`` (camera
-            rays per sample, 1–64), ``guiding_threshold``,
+            rays per sample, 1–64), ``pixel_emitters`` (bool, default True: small
+            emitters seen directly are sampled inside their pixels), ``guiding_threshold``,
             ``guiding_memory`` (MiB), ``spatial_filter`` ("nearest", the default, or "jitter"),
             ``directional_filter`` ("box"/"nearest"), ``guided_output``
             ("all-passes", the default, "late-passes", "render-phase" or
