@@ -197,14 +197,20 @@ fn lanterna_batches(
         .collect()
 }
 
-fn compare(export_dir: &Path, exrs: &[PathBuf], spp: u64, json: &Path) -> serde_json::Value {
+/// Runs scripts/mitsuba_compare.py: 8 Mitsuba runs of `mitsuba_spp` against `exrs`.
+fn compare(
+    export_dir: &Path,
+    exrs: &[PathBuf],
+    mitsuba_spp: u64,
+    json: &Path,
+) -> serde_json::Value {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/mitsuba_compare.py");
     let python = lanterna::testing::mitsuba_python().expect("a Python that imports mitsuba");
     let out = Command::new(python)
         .arg(&script)
         .arg(export_dir)
         .args(exrs)
-        .args(["--runs", "8", "--mitsuba-spp", &spp.to_string()])
+        .args(["--runs", "8", "--mitsuba-spp", &mitsuba_spp.to_string()])
         .args(["--alpha", &ALPHA.to_string(), "--json"])
         .arg(json)
         .output()
@@ -328,6 +334,53 @@ fn lanterna_agrees_with_mitsuba_on_the_matte_street() {
             report["blocks"]
         );
     }
+}
+
+/// Pixel emitters against Mitsuba: the matte street with its sub-pixel string-light
+/// bulbs in view, depth 1 (emission seen directly and nothing else), so that the image is
+/// exactly what pixel emitters estimate. lanterna's pixels are nearly exact (the bulbs
+/// are integrated over their image in the pixel); Mitsuba's camera rays find the bulbs by
+/// chance, so it takes 512× the samples, and only the image mean and 8×8 blocks are
+/// asserted (single pixels are rare events for Mitsuba, see the test above). Seen to fail
+/// with the piece weight left out of the kernel, and with camera rays still counting the
+/// pieces' triangles.
+#[test]
+fn pixel_emitters_agree_with_mitsuba_on_the_bulbs_in_view() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/street-matte.gltf");
+    let loaded = session::load_scene(&path).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("export");
+    let lights = LightTable::build(&loaded.scene).expect("light table");
+    let cam = session::choose_camera(&loaded.scene, None, &CameraOverride::default()).unwrap();
+    let options = ExportOptions {
+        width: 48,
+        height: 27,
+        max_depth: 1,
+        spp: 16,
+        seed: 0,
+        hide_emitters: false,
+    };
+    export_mitsuba::export(&loaded.scene, &lights, &cam, &options, &dir).expect("export");
+    if !mitsuba_available() {
+        println!("skipped the renders: no Python here imports mitsuba (scripts/setup --mitsuba)");
+        return;
+    }
+    let spp = 32;
+    let exrs = lanterna_batches(&loaded.scene, Method::Pt, &options, 8, spp, tmp.path());
+    let report = compare(&dir, &exrs, 512 * spp, &tmp.path().join("report.json"));
+    let mean_p = report["mean"]["p"].as_array().unwrap();
+    println!(
+        "pixel emitters: mean {}, blocks min p {}, pixels min p {}",
+        report["mean"], report["blocks"]["min_p"], report["pixels"]["min_p"]
+    );
+    let channel_alpha = 1.0 - (1.0 - ALPHA).powf(1.0 / 3.0);
+    assert!(
+        mean_p.iter().all(|p| p.as_f64().unwrap() >= channel_alpha)
+            && report["blocks"]["agree"].as_bool().unwrap(),
+        "pixel emitters: lanterna and Mitsuba disagree:\nmean {}\nblocks {}",
+        report["mean"],
+        report["blocks"]
+    );
 }
 
 /// KHR_texture_transform on base colour and emissive textures: the transforms are set on
