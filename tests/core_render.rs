@@ -319,13 +319,15 @@ fn mean_pixel_variance(b: &Batches) -> f64 {
 /// Small emitters seen directly, sampled inside their pixels (`pixel_emitters.rs`),
 /// against the plain camera-ray estimator on `cornell-lights` at 16×16, where most of
 /// the coloured lamps are a few pixels or less and some sit behind a blocker: the same
-/// expectation per 4×4 block and in the image mean (depth 3, `pt` and `ris`), and at
+/// expectation per 4×4 block and in the image mean (depth 3, `pt` and `ris`; depth 1
+/// through an orthographic camera, which has its own projection), and at
 /// depth 1 (emission seen directly and nothing else) a per-pixel variance far below the
 /// plain estimator's (measured 10⁻³¹ against 11.7: every lamp of the scene is in the set,
 /// and where it is seen its pieces are estimated exactly). Seen to fail with the camera
 /// rays still counting the set's triangles (mean high), with the piece's weight
-/// (area / probability) left out (mean 10× high), and with the piece's point taken at
-/// a triangle corner (mean low: rays graze the edges).
+/// (area / probability) left out (mean 10× high), with the piece's point taken at
+/// a triangle corner (mean low: rays graze the edges), and with the orthographic
+/// projection flipped vertically (lamps lost).
 #[test]
 fn pixel_emitters_keep_the_expectation_and_remove_the_coverage_noise() {
     use lanterna::render::RenderStats;
@@ -350,6 +352,22 @@ fn pixel_emitters_keep_the_expectation_and_remove_the_coverage_noise() {
         testing::assert_same_expectation(&a, &b, 4, ALPHA);
         testing::assert_same_image_mean(&a, &b, ALPHA, &format!("{method:?}, pixel emitters"));
     }
+
+    // An orthographic view of the same box (its own projection to the image), depth 1.
+    let mut ortho = t.camera.clone();
+    let half = 0.3 * (t.scene.bounds_max - t.scene.bounds_min).max_element();
+    ortho.projection = lanterna::scene::Projection::Orthographic {
+        xmag: half,
+        ymag: half,
+    };
+    let a = render_batches(&t.scene, &ortho, settings(Method::Pt, false, 1, 87), 12, 64);
+    let b = render_batches(&t.scene, &ortho, settings(Method::Pt, true, 1, 88), 12, 64);
+    assert!(
+        mean_pixel_variance(&b) < 0.5 * mean_pixel_variance(&a),
+        "orthographic: pixel emitters found no lamp in view"
+    );
+    testing::assert_same_expectation(&a, &b, 4, ALPHA);
+    testing::assert_same_image_mean(&a, &b, ALPHA, "orthographic, pixel emitters");
 
     // The set is not empty: some pixels trace their pixel-emitter ray.
     let mut r = testing::test_renderer_on(
