@@ -156,6 +156,8 @@ pub struct Renderer {
     pixel_emitter_offsets: Buffer,
     pixel_emitter_pieces: Buffer,
     pixel_emitter_flags: Buffer,
+    /// Whether any pixel has pieces (else the kernel never reads the lists).
+    has_pixel_emitters: bool,
     guide: GuideBuffers,
     /// A trained SD-tree to render with instead of training (`--load-guiding`).
     pub preloaded_tree: Option<crate::guiding::SdTree>,
@@ -210,7 +212,8 @@ impl Renderer {
         let aov = Buffer::zeroed(&device, aov_floats * 4, usage, "aovs")?;
         let outliers = Buffer::zeroed(&device, outlier_floats * 4, usage, "outliers")?;
         let guide = GuideBuffers::empty(&device)?;
-        let emitters = pixel_emitters::build(&camera, settings.width, settings.height, lights);
+        let emitters =
+            pixel_emitters::build(&camera, settings.width, settings.height, &lights.triangles);
         log::info!(
             "pixel emitters: {} light triangles in {} pieces over {} pixels",
             emitters.triangles,
@@ -260,6 +263,7 @@ impl Renderer {
             pixel_emitter_offsets,
             pixel_emitter_pieces,
             pixel_emitter_flags,
+            has_pixel_emitters: !emitters.pieces.is_empty(),
             guide,
             preloaded_tree: None,
             bounds: (scene.bounds_min, scene.bounds_max),
@@ -315,7 +319,7 @@ impl Renderer {
             aov_first_sample: self.film_offset as u32,
             hide_emitters: u32::from(s.hide_emitters),
             emission_rays: s.emission_rays,
-            pixel_emitters: u32::from(s.pixel_emitters),
+            pixel_emitters: u32::from(s.pixel_emitters && self.has_pixel_emitters),
         }
     }
 

@@ -22,20 +22,21 @@
 //! [`MAX_TRIANGLE_PIXELS`] on screen or past the memory cap stay with the camera rays.
 
 use crate::gpu;
-use crate::lights::LightTable;
 use crate::scene::{Camera, Projection};
 use glam::{DMat4, DVec2, DVec3};
 
 /// Emissive triangles whose image covers at most this many pixels are sampled in their
 /// pixels; larger ones have coverage noise only along their edges.
 pub const MAX_TRIANGLE_PIXELS: f64 = 16.0;
-/// At most this many pieces (36 bytes each); triangles beyond stay with the camera rays.
-pub const MAX_PIECES: usize = 1 << 22;
+/// At most this many pieces (36 bytes each on the device); triangles beyond stay with
+/// the camera rays.
+pub const MAX_PIECES: usize = 1 << 20;
 
 /// The per-pixel lists the kernel reads (`BINDING_PIXEL_EMITTER_*`).
 #[derive(Clone, Debug, Default)]
 pub struct PixelEmitters {
     /// Per pixel (y · width + x) the first piece of its list; one more entry at the end.
+    /// Empty when there are no pieces (the kernel is then told to skip the lists).
     pub offsets: Vec<u32>,
     pub pieces: Vec<gpu::PixelEmitter>,
     /// One bit per light triangle: in the set (camera rays leave its emission out).
@@ -139,15 +140,20 @@ fn clip_to_pixel(t: [DVec2; 3], x: f64, y: f64) -> Vec<DVec2> {
     clip(&poly, |p| y + 1.0 - p.y)
 }
 
-/// The lists for `camera` at `width` × `height`.
-pub fn build(camera: &Camera, width: u32, height: u32, lights: &LightTable) -> PixelEmitters {
+/// The lists for `camera` at `width` × `height` over the light table's triangles.
+pub fn build(
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    light_triangles: &[gpu::LightTriangle],
+) -> PixelEmitters {
     let map = ImageMap::new(camera, width, height);
     let pixel_count = width as usize * height as usize;
     // (pixel, corners, area, light triangle, selection weight) of every piece.
     let mut pieces: Vec<(u32, [DVec2; 3], f64, u32, f64)> = Vec::new();
-    let mut flags = vec![0u32; lights.triangles.len().div_ceil(32)];
+    let mut flags = vec![0u32; light_triangles.len().div_ceil(32)];
     let mut triangles = 0;
-    for (index, t) in lights.triangles.iter().enumerate() {
+    for (index, t) in light_triangles.iter().enumerate() {
         let corners = [t.p0, t.p1, t.p2].map(|p| DVec3::from(p.map(f64::from)));
         let normal = DVec3::from(t.normal.map(f64::from));
         if t.two_sided == 0 && !map.faces_camera(corners[0], normal) {
@@ -204,6 +210,9 @@ pub fn build(camera: &Camera, width: u32, height: u32, lights: &LightTable) -> P
         flags[index / 32] |= 1 << (index % 32);
         triangles += 1;
     }
+    if pieces.is_empty() {
+        return PixelEmitters::default();
+    }
     pieces.sort_by_key(|p| p.0);
 
     let mut offsets = vec![0u32; pixel_count + 1];
@@ -253,6 +262,111 @@ pub fn build(camera: &Camera, width: u32, height: u32, lights: &LightTable) -> P
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::{Mat4, Vec3};
+
+    /// A one-sided emissive triangle with corners `p`, facing +z (toward a camera on +z).
+    fn triangle(p: [Vec3; 3], two_sided: bool) -> gpu::LightTriangle {
+        let mut t: gpu::LightTriangle = bytemuck::Zeroable::zeroed();
+        t.p0 = p[0].into();
+        t.p1 = p[1].into();
+        t.p2 = p[2].into();
+        let n = (p[1] - p[0]).cross(p[2] - p[0]);
+        t.normal = n.normalize().into();
+        t.area = 0.5 * n.length();
+        t.two_sided = two_sided as u32;
+        t.power = 1.0;
+        t
+    }
+
+    fn camera() -> Camera {
+        // At +z looking down -z, 90° vertical field of view.
+        Camera {
+            name: "test".into(),
+            to_world: Mat4::from_translation(Vec3::new(0.0, 0.0, 5.0)),
+            projection: Projection::Perspective {
+                yfov: std::f32::consts::FRAC_PI_2,
+                aspect: None,
+            },
+        }
+    }
+
+    /// Only small triangles wholly in front of the camera and facing it are in the set;
+    /// their pieces lie in their pixels, and area = weight × probability sums to the
+    /// triangle's image. Seen to fail with the facing test removed.
+    #[test]
+    fn a_small_triangle_is_cut_into_its_pixels_and_weighted_by_area() {
+        // 16×16 image over [-5, 5]² at z = 0: a pixel is 0.625 units wide.
+        let small = triangle(
+            [
+                Vec3::new(0.1, 0.1, 0.0),
+                Vec3::new(1.3, 0.2, 0.0),
+                Vec3::new(0.4, 1.1, 0.0),
+            ],
+            false,
+        );
+        let facing_away = triangle(
+            [
+                Vec3::new(0.1, 0.1, 0.0),
+                Vec3::new(0.4, 1.1, 0.0),
+                Vec3::new(1.3, 0.2, 0.0),
+            ],
+            false,
+        );
+        let behind = triangle(
+            [
+                Vec3::new(0.1, 0.1, 6.0),
+                Vec3::new(1.3, 0.2, 6.0),
+                Vec3::new(0.4, 1.1, 6.0),
+            ],
+            true,
+        );
+        let large = triangle(
+            [
+                Vec3::new(-4.0, -4.0, 0.0),
+                Vec3::new(4.0, -4.0, 0.0),
+                Vec3::new(0.0, 4.0, 0.0),
+            ],
+            false,
+        );
+        let e = build(&camera(), 16, 16, &[small, facing_away, behind, large]);
+        assert_eq!(e.triangles, 1, "only the small triangle facing the camera");
+        assert_eq!(e.flags, vec![1]);
+        assert_eq!(e.offsets.len(), 16 * 16 + 1);
+        assert_eq!(*e.offsets.last().unwrap() as usize, e.pieces.len());
+        // Image area of the triangle, in pixels: world area / 0.625².
+        let expected = 0.5 * (1.2f64 * 1.0 - 0.1 * 0.3) / (0.625 * 0.625);
+        let mut area = 0.0;
+        for p in 0..16 * 16 {
+            let list = &e.pieces[e.offsets[p] as usize..e.offsets[p + 1] as usize];
+            if list.is_empty() {
+                continue;
+            }
+            let (x, y) = ((p % 16) as f32, (p / 16) as f32);
+            assert_eq!(list.last().unwrap().cdf, 1.0);
+            for (k, piece) in list.iter().enumerate() {
+                for c in [piece.a, piece.b, piece.c] {
+                    assert!(
+                        c[0] >= x - 1e-4 && c[0] <= x + 1.0 + 1e-4,
+                        "{c:?} outside pixel {p}"
+                    );
+                    assert!(
+                        c[1] >= y - 1e-4 && c[1] <= y + 1.0 + 1e-4,
+                        "{c:?} outside pixel {p}"
+                    );
+                }
+                // One radiance: probability ∝ area, so area = scale × probability.
+                let before = if k == 0 { 0.0 } else { list[k - 1].cdf };
+                area += (piece.scale * (piece.cdf - before)) as f64;
+            }
+        }
+        assert!(
+            (area - expected).abs() < 1e-4 * expected,
+            "{area} vs {expected}"
+        );
+        // Nothing to sample: no lists at all.
+        let none = build(&camera(), 16, 16, &[facing_away, behind, large]);
+        assert!(none.pieces.is_empty() && none.offsets.is_empty());
+    }
 
     #[test]
     fn a_triangle_clipped_to_pixels_keeps_its_area() {
