@@ -3,10 +3,11 @@
 //! bound is a t-test on independent batches (disjoint sample ranges) at a stated
 //! significance, never a tolerance tuned to one run.
 
-use lanterna::render::{Method, Strategy};
+use lanterna::render::{Method, RenderSettings, RenderStats, Strategy};
 use lanterna::scene::generate::{Kind, Options};
 use lanterna::testing::{self, Batches};
 use lanterna::{stats, testing::render_batches};
+use std::sync::atomic::AtomicBool;
 
 /// Family-wise significance of each test's comparisons.
 const ALPHA: f64 = 1e-3;
@@ -186,8 +187,7 @@ fn alpha_masked_geometry_lets_light_through_its_holes() {
 #[test]
 fn same_seed_same_image_and_chunks_equal_one_run() {
     use lanterna::lights::LightTable;
-    use lanterna::render::{RenderStats, Renderer};
-    use std::sync::atomic::AtomicBool;
+    use lanterna::render::Renderer;
     let t = testing::generated(Kind::CornellLights, &Options::default());
     let lights = LightTable::build(&t.scene).unwrap();
     let cancel = AtomicBool::new(false);
@@ -249,8 +249,6 @@ fn same_seed_same_image_and_chunks_equal_one_run() {
 /// unchanged) and with rays 1 … K−1's emission dropped (image mean low).
 #[test]
 fn emission_rays_keep_the_expectation_and_cut_the_coverage_noise() {
-    use lanterna::render::RenderStats;
-    use std::sync::atomic::AtomicBool;
     let t = testing::generated(Kind::CornellLights, &Options::default());
     let settings = |method, k, seed| {
         let mut s = testing::settings(method, 16, 16);
@@ -267,18 +265,7 @@ fn emission_rays_keep_the_expectation_and_cut_the_coverage_noise() {
         testing::assert_same_image_mean(&a, &b, ALPHA, &format!("{method:?}, 4 emission rays"));
     }
 
-    let s = settings(Method::Pt, 4, 74);
-    let mut r = testing::test_renderer_on(testing::device(), &t.scene, &t.camera, &s);
-    let mut stats = RenderStats::default();
-    r.render_samples(
-        0,
-        8,
-        false,
-        &AtomicBool::new(false),
-        &mut |_| {},
-        &mut stats,
-    )
-    .unwrap();
+    let stats = render_stats(&t, settings(Method::Pt, 4, 74), 8);
     assert_eq!(
         stats.camera_rays,
         4 * 8 * 16 * 16,
@@ -297,6 +284,22 @@ fn emission_rays_keep_the_expectation_and_cut_the_coverage_noise() {
         "4 emission rays: per-pixel variance {v4:.3e} against {v1:.3e} with one"
     );
     testing::assert_no_validation_errors();
+}
+
+/// The counters of one render of samples [0, spp) of `t` with `s`.
+fn render_stats(t: &testing::TestScene, s: RenderSettings, spp: u64) -> RenderStats {
+    let mut r = testing::test_renderer_on(testing::device(), &t.scene, &t.camera, &s);
+    let mut stats = RenderStats::default();
+    r.render_samples(
+        0,
+        spp,
+        false,
+        &AtomicBool::new(false),
+        &mut |_| {},
+        &mut stats,
+    )
+    .unwrap();
+    stats
 }
 
 /// The variance of a pixel's batch estimates, averaged over pixels and channels.
@@ -330,8 +333,6 @@ fn mean_pixel_variance(b: &Batches) -> f64 {
 /// projection flipped vertically (lamps lost).
 #[test]
 fn pixel_emitters_keep_the_expectation_and_remove_the_coverage_noise() {
-    use lanterna::render::RenderStats;
-    use std::sync::atomic::AtomicBool;
     let t = testing::generated(Kind::CornellLights, &Options::default());
     let settings = |method, on, depth, seed| {
         let mut s = testing::settings(method, 16, 16);
@@ -370,22 +371,7 @@ fn pixel_emitters_keep_the_expectation_and_remove_the_coverage_noise() {
     testing::assert_same_image_mean(&a, &b, ALPHA, "orthographic, pixel emitters");
 
     // The set is not empty: some pixels trace their pixel-emitter ray.
-    let mut r = testing::test_renderer_on(
-        testing::device(),
-        &t.scene,
-        &t.camera,
-        &settings(Method::Pt, true, 3, 84),
-    );
-    let mut stats = RenderStats::default();
-    r.render_samples(
-        0,
-        4,
-        false,
-        &AtomicBool::new(false),
-        &mut |_| {},
-        &mut stats,
-    )
-    .unwrap();
+    let stats = render_stats(&t, settings(Method::Pt, true, 3, 84), 4);
     let extra = stats.camera_rays - 4 * 16 * 16;
     assert!(extra > 4 * 8, "{extra} pixel-emitter rays in 4 spp");
 

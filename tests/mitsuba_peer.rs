@@ -290,27 +290,9 @@ fn lanterna_agrees_with_mitsuba_on_a_lambertian_scene() {
 /// below this budget's power. Emitters seen directly are hidden on both sides.
 #[test]
 fn lanterna_agrees_with_mitsuba_on_the_matte_street() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/street-matte.gltf");
-    let loaded = session::load_scene(&path).unwrap();
-    let tmp = tempfile::tempdir().unwrap();
-    let dir = tmp.path().join("export");
     // Emitters seen directly hidden on both sides: the sub-pixel bulbs the camera sees
     // would otherwise dominate the noise and hide errors in the light they cast.
-    let lights = LightTable::build(&loaded.scene).expect("light table");
-    let cam = session::choose_camera(&loaded.scene, None, &CameraOverride::default()).unwrap();
-    let options = ExportOptions {
-        width: 48,
-        height: 27,
-        max_depth: 4,
-        spp: 16,
-        seed: 0,
-        hide_emitters: true,
-    };
-    export_mitsuba::export(&loaded.scene, &lights, &cam, &options, &dir).expect("export");
-    let manifest: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join(export_mitsuba::MANIFEST)).unwrap())
-            .unwrap();
-    assert_eq!(manifest["exact"], true, "{}", manifest["approximations"]);
+    let (loaded, tmp, dir, options) = export_street_matte(4, true);
     if !mitsuba_available() {
         println!("skipped the renders: no Python here imports mitsuba (scripts/setup --mitsuba)");
         return;
@@ -319,21 +301,59 @@ fn lanterna_agrees_with_mitsuba_on_the_matte_street() {
     for method in [Method::Pt, Method::Ris] {
         let exrs = lanterna_batches(&loaded.scene, method, &options, 8, spp, tmp.path());
         let report = compare(&dir, &exrs, spp, &tmp.path().join("report.json"));
-        let mean_p = report["mean"]["p"].as_array().unwrap();
-        println!(
-            "{method}: mean p {mean_p:?}, blocks min p {}, pixels min p {}",
-            report["blocks"]["min_p"], report["pixels"]["min_p"]
-        );
-        // Šidák over the three channels, as the script's image-mean family.
-        let channel_alpha = 1.0 - (1.0 - ALPHA).powf(1.0 / 3.0);
-        assert!(
-            mean_p.iter().all(|p| p.as_f64().unwrap() >= channel_alpha)
-                && report["blocks"]["agree"].as_bool().unwrap(),
-            "{method}: lanterna and Mitsuba disagree:\nmean {}\nblocks {}",
-            report["mean"],
-            report["blocks"]
-        );
+        assert_mean_and_blocks_agree(&report, &method.to_string());
     }
+}
+
+/// `scenes/street-matte.gltf` exported at 48×27 into a temporary folder (checked exact):
+/// the loaded scene, the folder (kept alive), the export folder and the options.
+fn export_street_matte(
+    max_depth: u32,
+    hide_emitters: bool,
+) -> (
+    session::LoadedScene,
+    tempfile::TempDir,
+    PathBuf,
+    ExportOptions,
+) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/street-matte.gltf");
+    let loaded = session::load_scene(&path).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("export");
+    let lights = LightTable::build(&loaded.scene).expect("light table");
+    let cam = session::choose_camera(&loaded.scene, None, &CameraOverride::default()).unwrap();
+    let options = ExportOptions {
+        width: 48,
+        height: 27,
+        max_depth,
+        spp: 16,
+        seed: 0,
+        hide_emitters,
+    };
+    export_mitsuba::export(&loaded.scene, &lights, &cam, &options, &dir).expect("export");
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join(export_mitsuba::MANIFEST)).unwrap())
+            .unwrap();
+    assert_eq!(manifest["exact"], true, "{}", manifest["approximations"]);
+    (loaded, tmp, dir, options)
+}
+
+/// The comparison script's image mean (Šidák over the three channels, as its image-mean
+/// family) and 8×8 blocks agree; pixels are reported only.
+fn assert_mean_and_blocks_agree(report: &serde_json::Value, what: &str) {
+    let mean_p = report["mean"]["p"].as_array().unwrap();
+    println!(
+        "{what}: mean {}, blocks min p {}, pixels min p {}",
+        report["mean"], report["blocks"]["min_p"], report["pixels"]["min_p"]
+    );
+    let channel_alpha = 1.0 - (1.0 - ALPHA).powf(1.0 / 3.0);
+    assert!(
+        mean_p.iter().all(|p| p.as_f64().unwrap() >= channel_alpha)
+            && report["blocks"]["agree"].as_bool().unwrap(),
+        "{what}: lanterna and Mitsuba disagree:\nmean {}\nblocks {}",
+        report["mean"],
+        report["blocks"]
+    );
 }
 
 /// Pixel emitters against Mitsuba: the matte street with its sub-pixel string-light
@@ -346,21 +366,7 @@ fn lanterna_agrees_with_mitsuba_on_the_matte_street() {
 /// pieces' triangles.
 #[test]
 fn pixel_emitters_agree_with_mitsuba_on_the_bulbs_in_view() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/street-matte.gltf");
-    let loaded = session::load_scene(&path).unwrap();
-    let tmp = tempfile::tempdir().unwrap();
-    let dir = tmp.path().join("export");
-    let lights = LightTable::build(&loaded.scene).expect("light table");
-    let cam = session::choose_camera(&loaded.scene, None, &CameraOverride::default()).unwrap();
-    let options = ExportOptions {
-        width: 48,
-        height: 27,
-        max_depth: 1,
-        spp: 16,
-        seed: 0,
-        hide_emitters: false,
-    };
-    export_mitsuba::export(&loaded.scene, &lights, &cam, &options, &dir).expect("export");
+    let (loaded, tmp, dir, options) = export_street_matte(1, false);
     if !mitsuba_available() {
         println!("skipped the renders: no Python here imports mitsuba (scripts/setup --mitsuba)");
         return;
@@ -368,19 +374,7 @@ fn pixel_emitters_agree_with_mitsuba_on_the_bulbs_in_view() {
     let spp = 32;
     let exrs = lanterna_batches(&loaded.scene, Method::Pt, &options, 8, spp, tmp.path());
     let report = compare(&dir, &exrs, 512 * spp, &tmp.path().join("report.json"));
-    let mean_p = report["mean"]["p"].as_array().unwrap();
-    println!(
-        "pixel emitters: mean {}, blocks min p {}, pixels min p {}",
-        report["mean"], report["blocks"]["min_p"], report["pixels"]["min_p"]
-    );
-    let channel_alpha = 1.0 - (1.0 - ALPHA).powf(1.0 / 3.0);
-    assert!(
-        mean_p.iter().all(|p| p.as_f64().unwrap() >= channel_alpha)
-            && report["blocks"]["agree"].as_bool().unwrap(),
-        "pixel emitters: lanterna and Mitsuba disagree:\nmean {}\nblocks {}",
-        report["mean"],
-        report["blocks"]
-    );
+    assert_mean_and_blocks_agree(&report, "pixel emitters");
 }
 
 /// KHR_texture_transform on base colour and emissive textures: the transforms are set on
