@@ -19,7 +19,8 @@
 //! inside one pixel has no variance left at all.
 //!
 //! Triangles facing away (one-sided emission), crossing the camera plane, larger than
-//! [`MAX_TRIANGLE_PIXELS`] on screen or past the memory cap stay with the camera rays.
+//! [`MAX_TRIANGLE_PIXELS`] on screen, with a bounding box over [`MAX_BOX_PIXELS`] (long
+//! slivers), or past the memory cap stay with the camera rays.
 
 use crate::gpu;
 use crate::scene::{Camera, Projection};
@@ -28,6 +29,9 @@ use glam::{DMat4, DVec2, DVec3};
 /// Emissive triangles whose image covers at most this many pixels are sampled in their
 /// pixels; larger ones have coverage noise only along their edges.
 pub const MAX_TRIANGLE_PIXELS: f64 = 16.0;
+/// Triangles whose image's bounding box spans more pixels than this stay with the camera
+/// rays: a long sliver of small area would otherwise be clipped against a large box.
+pub const MAX_BOX_PIXELS: f64 = 64.0;
 /// At most this many pieces (36 bytes each on the device); triangles beyond stay with
 /// the camera rays.
 pub const MAX_PIECES: usize = 1 << 20;
@@ -178,6 +182,9 @@ pub fn build(
             hi.x.floor().min(map.size.x - 1.0),
             hi.y.floor().min(map.size.y - 1.0),
         );
+        if (x1 - x0 + 1.0) * (y1 - y0 + 1.0) > MAX_BOX_PIXELS {
+            continue;
+        }
         // Radiance ∝ power / area: brighter emitters are chosen more often.
         let radiance = t.power as f64 / t.area as f64;
         let weight = if radiance.is_finite() && radiance > 0.0 {
@@ -290,9 +297,11 @@ mod tests {
         }
     }
 
-    /// Only small triangles wholly in front of the camera and facing it are in the set;
+    /// Only small triangles (in area and in extent) wholly in front of the camera and
+    /// facing it are in the set;
     /// their pieces lie in their pixels, and area = weight × probability sums to the
-    /// triangle's image. Seen to fail with the facing test removed.
+    /// triangle's image. Seen to fail with the facing test removed and with the box
+    /// limit removed.
     #[test]
     fn a_small_triangle_is_cut_into_its_pixels_and_weighted_by_area() {
         // 16×16 image over [-5, 5]² at z = 0: a pixel is 0.625 units wide.
@@ -328,7 +337,21 @@ mod tests {
             ],
             false,
         );
-        let e = build(&camera(), 16, 16, &[small, facing_away, behind, large]);
+        // Small in area (1.2 pixels²) but 13 pixels long: its box spans 13 × 13 pixels.
+        let sliver = triangle(
+            [
+                Vec3::new(-4.0, -4.0, 0.0),
+                Vec3::new(4.0, 4.0, 0.0),
+                Vec3::new(-3.9, -4.0, 0.0),
+            ],
+            true,
+        );
+        let e = build(
+            &camera(),
+            16,
+            16,
+            &[small, facing_away, behind, large, sliver],
+        );
         assert_eq!(e.triangles, 1, "only the small triangle facing the camera");
         assert_eq!(e.flags, vec![1]);
         assert_eq!(e.offsets.len(), 16 * 16 + 1);
