@@ -78,8 +78,8 @@ bool is_pixel_emitter(uint light_tri) {
 }
 
 // The pixel's piece for sample `key` and the image point inside it; false: no pieces.
-bool pixel_emitter_point(uint pixel_index, uvec3 key, out uint piece, out vec2 point) {
-    piece = INVALID_INDEX;
+bool pixel_emitter_point(uint pixel_index, uvec3 key, out PixelEmitter piece, out vec2 point) {
+    piece = PixelEmitter(vec2(0.0), vec2(0.0), vec2(0.0), 0.0, 0.0, INVALID_INDEX);
     point = vec2(0.0);
     if (params.pixel_emitters == 0u || params.hide_emitters != 0u) return false;
     uint lo = pixel_emitter_offsets[pixel_index];
@@ -91,11 +91,10 @@ bool pixel_emitter_point(uint pixel_index, uvec3 key, out uint piece, out vec2 p
         if (pixel_emitters[mid - 1u].cdf > u) hi = mid;
         else lo = mid;
     }
-    piece = lo;
-    PixelEmitter e = pixel_emitters[piece];
+    piece = pixel_emitters[lo];
     vec2 v = stratified_sample_2d(key.x, key.y, key.z, PIXEL_EMITTER_DIM);
     float r = sqrt(v.x);
-    point = (1.0 - r) * e.a + r * (1.0 - v.y) * e.b + r * v.y * e.c;
+    point = (1.0 - r) * piece.a + r * (1.0 - v.y) * piece.b + r * v.y * piece.c;
     return true;
 }
 
@@ -185,7 +184,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
     uint camera_k = emission_rays > 1u ? 1u : 0u;  // the next camera ray to trace
     vec3 seen_emission = vec3(0.0);                  // emission rays 1 … K−1 saw
     // The pixel-emitter ray comes first, where the pixel has small emitters.
-    uint piece;
+    PixelEmitter piece;
     vec2 piece_point;
     bool emitter_ray = pixel_emitter_point(pixel.y * params.width + pixel.x, rng.key, piece, piece_point);
     vec3 seen_pieces = vec3(0.0);  // what it found, weighted
@@ -215,7 +214,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
         if (step == 0u) {
             if (emitter_ray) {
                 camera_ray(uvec2(0u), piece_point, origin, dir);
-                TRACE3("pixel-emitter ray: piece %u point %v2f d=%v3f\n", piece, piece_point, dir);
+                TRACE3("pixel-emitter ray: light triangle %u point %v2f d=%v3f\n", piece.light_tri, piece_point, dir);
             } else {
                 camera_ray(pixel, stratified_pixel_sample(rng.key.x, emission_rays * rng.key.y + camera_k, rng.key.z),
                            origin, dir);
@@ -241,15 +240,16 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
         }
         if (step == 0u && emitter_ray) {
             // The pixel-emitter ray counts only the light triangle it aimed at.
-            PixelEmitter e = pixel_emitters[piece];
-            if (next.valid && ns.light_tri == e.light_tri) seen_pieces = ns.emission * e.scale;
-            TRACE2("  reached its emitter: %u, contribution %v3f\n", uint(next.valid && ns.light_tri == e.light_tri), seen_pieces);
+            bool reached = next.valid && ns.light_tri == piece.light_tri;
+            if (reached) seen_pieces = ns.emission * piece.scale;
+            TRACE2("  reached its emitter: %u, contribution %v3f\n", uint(reached), seen_pieces);
             emitter_ray = false;
             stay = true;
             continue;
         }
         // Emission seen by camera rays, less the small emitters' (the ray above has them).
-        vec3 seen_here = next.valid && !is_pixel_emitter(ns.light_tri) ? ns.emission : vec3(0.0);
+        vec3 seen_here = vec3(0.0);
+        if (step == 0u && next.valid && !is_pixel_emitter(ns.light_tri)) seen_here = ns.emission;
         if (step == 0u && camera_k != 0u) {
             // An emission ray: what it sees directly, then the next camera ray.
             seen_emission += seen_here;

@@ -171,6 +171,28 @@ pub fn test_renderer_on(
     .expect("renderer")
 }
 
+/// A renderer on the test device after rendering samples [0, `spp`) with `settings`, and
+/// the render's counters (the film holds those samples).
+pub fn render_once(
+    scene: &Scene,
+    camera: &Camera,
+    settings: &RenderSettings,
+    spp: u64,
+) -> (Renderer, RenderStats) {
+    let mut r = test_renderer(scene, camera, settings);
+    let mut stats = RenderStats::default();
+    r.render_samples(
+        0,
+        spp,
+        false,
+        &AtomicBool::new(false),
+        &mut |_| {},
+        &mut stats,
+    )
+    .expect("render");
+    (r, stats)
+}
+
 /// The kernels tests render with: built in, or, when `LANTERNA_TEST_SHADER_DIR` names a
 /// copy of `shaders_glsl/`, compiled from it — the way to inject a defect into the
 /// estimators and see which tests fail, without rebuilding.

@@ -3,7 +3,7 @@
 //! bound is a t-test on independent batches (disjoint sample ranges) at a stated
 //! significance, never a tolerance tuned to one run.
 
-use lanterna::render::{Method, RenderSettings, RenderStats, Strategy};
+use lanterna::render::{Method, RenderStats, Strategy};
 use lanterna::scene::generate::{Kind, Options};
 use lanterna::testing::{self, Batches};
 use lanterna::{stats, testing::render_batches};
@@ -265,7 +265,7 @@ fn emission_rays_keep_the_expectation_and_cut_the_coverage_noise() {
         testing::assert_same_image_mean(&a, &b, ALPHA, &format!("{method:?}, 4 emission rays"));
     }
 
-    let stats = render_stats(&t, settings(Method::Pt, 4, 74), 8);
+    let (_, stats) = testing::render_once(&t.scene, &t.camera, &settings(Method::Pt, 4, 74), 8);
     assert_eq!(
         stats.camera_rays,
         4 * 8 * 16 * 16,
@@ -284,22 +284,6 @@ fn emission_rays_keep_the_expectation_and_cut_the_coverage_noise() {
         "4 emission rays: per-pixel variance {v4:.3e} against {v1:.3e} with one"
     );
     testing::assert_no_validation_errors();
-}
-
-/// The counters of one render of samples [0, spp) of `t` with `s`.
-fn render_stats(t: &testing::TestScene, s: RenderSettings, spp: u64) -> RenderStats {
-    let mut r = testing::test_renderer_on(testing::device(), &t.scene, &t.camera, &s);
-    let mut stats = RenderStats::default();
-    r.render_samples(
-        0,
-        spp,
-        false,
-        &AtomicBool::new(false),
-        &mut |_| {},
-        &mut stats,
-    )
-    .unwrap();
-    stats
 }
 
 /// The variance of a pixel's batch estimates, averaged over pixels and channels.
@@ -371,7 +355,8 @@ fn pixel_emitters_keep_the_expectation_and_remove_the_coverage_noise() {
     testing::assert_same_image_mean(&a, &b, ALPHA, "orthographic, pixel emitters");
 
     // The set is not empty: some pixels trace their pixel-emitter ray.
-    let stats = render_stats(&t, settings(Method::Pt, true, 3, 84), 4);
+    let (_, stats) =
+        testing::render_once(&t.scene, &t.camera, &settings(Method::Pt, true, 3, 84), 4);
     let extra = stats.camera_rays - 4 * 16 * 16;
     assert!(extra > 4 * 8, "{extra} pixel-emitter rays in 4 spp");
 

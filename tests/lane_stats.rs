@@ -7,7 +7,6 @@
 use lanterna::render::{LaneCounts, Method, RenderStats, TraversalKind};
 use lanterna::scene::generate::{Kind, Options};
 use lanterna::testing;
-use std::sync::atomic::AtomicBool;
 
 /// Film sums and stats of `spp` samples of `kind` at 8×8, `pt`, depth 4.
 fn render(kind: Kind, lane_stats: bool, spp: u64) -> (Vec<u64>, RenderStats, TraversalKind) {
@@ -15,17 +14,7 @@ fn render(kind: Kind, lane_stats: bool, spp: u64) -> (Vec<u64>, RenderStats, Tra
     let mut s = testing::settings(Method::Pt, 8, 8);
     s.max_depth = 4;
     s.lane_stats = lane_stats;
-    let mut r = testing::test_renderer_on(testing::device(), &t.scene, &t.camera, &s);
-    let mut stats = RenderStats::default();
-    r.render_samples(
-        0,
-        spp,
-        false,
-        &AtomicBool::new(false),
-        &mut |_| {},
-        &mut stats,
-    )
-    .expect("render");
+    let (r, stats) = testing::render_once(&t.scene, &t.camera, &s, spp);
     (r.film().unwrap().sums, stats, r.traversal.kind)
 }
 

@@ -220,23 +220,13 @@ impl Renderer {
             emitters.pieces.len(),
             emitters.pixels
         );
-        let or_placeholder = |data: &[u8], name: &str| -> Result<Buffer> {
-            Ok(if data.is_empty() {
-                Buffer::zeroed(&device, 64, usage, name)?
-            } else {
-                Buffer::from_slice(&device, data, usage, name)?
-            })
-        };
-        let pixel_emitter_offsets = or_placeholder(
-            bytemuck::cast_slice(&emitters.offsets),
-            "pixel emitter offsets",
-        )?;
-        let pixel_emitter_pieces = or_placeholder(
-            bytemuck::cast_slice(&emitters.pieces),
-            "pixel emitter pieces",
-        )?;
+        // Empty lists make 16-byte buffers the kernel never reads (`has_pixel_emitters`).
+        let pixel_emitter_offsets =
+            Buffer::from_slice(&device, &emitters.offsets, usage, "pixel emitter offsets")?;
+        let pixel_emitter_pieces =
+            Buffer::from_slice(&device, &emitters.pieces, usage, "pixel emitter pieces")?;
         let pixel_emitter_flags =
-            or_placeholder(bytemuck::cast_slice(&emitters.flags), "pixel emitter flags")?;
+            Buffer::from_slice(&device, &emitters.flags, usage, "pixel emitter flags")?;
 
         let mut r = Renderer {
             device,
