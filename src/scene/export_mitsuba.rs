@@ -16,6 +16,7 @@ mod files;
 mod geometry;
 mod materials;
 mod textures;
+mod uv_cover;
 mod writer;
 mod xml;
 
@@ -143,6 +144,7 @@ pub fn export(
         textures: HashMap::new(),
         approximations: Vec::new(),
         warnings: Vec::new(),
+        sampled_emitters: 0,
         // Far above float resolution at the scene's coordinates (so Mitsuba always
         // orders the sheets), far below a pixel (so silhouettes do not move).
         epsilon: 4e-6

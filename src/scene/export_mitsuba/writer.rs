@@ -27,6 +27,9 @@ pub(super) struct Writer<'a> {
     pub(super) textures: HashMap<(i32, [u32; 3]), (String, bool)>,
     pub(super) approximations: Vec<String>,
     pub(super) warnings: Vec<String>,
+    /// Emitters Mitsuba may sample (area emitters of nonzero sampling weight; punctual
+    /// lights): it refuses a scene without one.
+    pub(super) sampled_emitters: usize,
     /// Gap between the two sheets of a double-sided emitter.
     pub(super) epsilon: f32,
 }
@@ -175,6 +178,12 @@ impl Writer<'_> {
             }
             xml.push_str(&self.punctual_xml(i, l)?);
             emitters += 1;
+            self.sampled_emitters += 1;
+        }
+        if emitters > 0 && self.sampled_emitters == 0 {
+            xml.push_str(
+                "  <!-- Every emitter has sampling weight 0 and Mitsuba needs one it may sample: this one emits nothing. -->\n  <emitter type=\"point\">\n    <point name=\"position\" x=\"0\" y=\"0\" z=\"0\"/>\n    <rgb name=\"intensity\" value=\"0\"/>\n  </emitter>\n",
+            );
         }
         if emitters == 0 {
             return Err(ExportError::Invalid(format!(
