@@ -604,6 +604,10 @@ fn wrong_values_are_refused() {
             "--train-fraction",
         ),
         (
+            &["--method", "guided", "--guide-history", "1.5"],
+            "--guide-history",
+        ),
+        (
             &["--method", "guided", "--guiding-threshold", "0"],
             "--guiding-threshold",
         ),

@@ -130,7 +130,8 @@ class Renderer:
             ``rr_depth``, ``source`` ("uniform"/"power"), ``ris_candidates``,
             ``bsdf_fraction``, ``train_fraction``, ``record_nee`` (bool),
             ``guide_target`` ("all"/"indirect"/"contribution"), ``guide_density``
-            ("radiance"/"variance-aware"),
+            ("radiance"/"variance-aware"), ``guide_history`` (0–1, weight of the earlier
+            training iterations in each refit; default 0),
             ``strategy`` ("mis"/"nee"/"bsdf"), ``hide_emitters``, ``emission_rays`` (camera
             rays per sample, 1–64), ``pixel_emitters`` (bool, default True: small
             emitters seen directly are sampled inside their pixels), ``guiding_threshold``,

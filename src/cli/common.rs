@@ -147,6 +147,12 @@ pub struct EstimatorArgs {
     /// the square root of its second moment (variance-aware, Rath et al. 2020).
     #[arg(long, value_enum, default_value = "radiance")]
     pub guide_density: lanterna::guiding::GuideDensity,
+    /// Guiding: weight of the earlier training iterations' statistics in each refit of
+    /// the SD-tree, per record, against the iteration just finished: 0 rebuilds every
+    /// tree from the last iteration alone (Müller et al.), 1 from every training record
+    /// so far, equally (quadtrees and learned light tables).
+    #[arg(long, default_value_t = lanterna::render::DEFAULT_GUIDE_HISTORY)]
+    pub guide_history: f32,
     /// Guiding: share of the budget (spp, or time with --time) spent training.
     #[arg(long, default_value_t = 0.3)]
     pub train_fraction: f32,
@@ -261,6 +267,7 @@ impl EstimatorArgs {
                 learn_selection: self.bsdf_fraction.is_none(),
                 target: self.guide_target,
                 density: self.guide_density,
+                history: self.guide_history,
                 train_fraction: self.train_fraction,
                 record_nee: !self.no_record_nee,
                 spatial_filter: match self.spatial_filter {

@@ -119,6 +119,10 @@ pub struct GuidingConfig {
     pub target: GuideTarget,
     /// Which statistic of it the quadtrees follow.
     pub density: GuideDensity,
+    /// Weight of the earlier iterations' statistics in each refit, relative to the
+    /// finished iteration's (per record): 0 builds each sampling tree from the last
+    /// iteration alone (Müller et al.), 1 from every training record so far, equally.
+    pub history: f32,
 }
 
 /// Largest light mix: the source distribution keeps 5 % of the selection, so every
@@ -146,6 +150,7 @@ impl Default for GuidingConfig {
             learn_selection: false,
             target: GuideTarget::All,
             density: GuideDensity::Radiance,
+            history: 0.0,
         }
     }
 }

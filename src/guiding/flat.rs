@@ -581,6 +581,7 @@ impl SdTree {
                 training_weight,
                 lights: Arc::new(lights),
                 light_mix,
+                lights_total: 0.0,
                 light_training: Vec::new(),
                 light_second: 0.0,
                 selection: super::SelectionState::restored(g.bsdf_fraction),

@@ -491,6 +491,42 @@ impl QuadTree {
         total
     }
 
+    /// Add `scale` × the energy `prior` (a built tree: every quadrant holds its subtree's
+    /// total) has in each of this tree's leaf cells to that cell's sum, before `build`.
+    /// Where this tree is finer than `prior`, a prior cell's energy is shared evenly by
+    /// area; where it is coarser, a cell takes the whole subtree's total. The total
+    /// added is `scale × prior.total()`.
+    pub(crate) fn add_prior(&mut self, prior: &QuadTree, scale: f32) {
+        #[derive(Clone, Copy)]
+        enum Source {
+            Node(usize),
+            Uniform(f64),
+        }
+        if scale.is_nan() || scale <= 0.0 || prior.is_empty() {
+            return;
+        }
+        let scale = f64::from(scale);
+        let mut stack = vec![(0usize, Source::Node(0))];
+        while let Some((n, source)) = stack.pop() {
+            for q in 0..4 {
+                let (energy, below) = match source {
+                    Source::Node(o) => {
+                        let e = f64::from(prior.nodes[o].sum[q]);
+                        match prior.nodes[o].child[q] {
+                            0 => (e, Source::Uniform(e * 0.25)),
+                            c => (e, Source::Node(c as usize)),
+                        }
+                    }
+                    Source::Uniform(e) => (e, Source::Uniform(e * 0.25)),
+                };
+                match self.nodes[n].child[q] {
+                    0 => self.nodes[n].sum[q] += (scale * energy) as f32,
+                    c => stack.push((c as usize, below)),
+                }
+            }
+        }
+    }
+
     /// The topology of the next training tree (all sums zero): a quadrant is
     /// subdivided while its share of this tree's energy exceeds `rho` and its node is
     /// above level `max_depth`. Quadrants that were leaves here subdivide as if their
@@ -612,6 +648,55 @@ mod tests {
         }
         assert_eq!(tree.build(), 0);
         assert!((f64::from(tree.total()) - expected).abs() < 1e-4 * expected);
+    }
+
+    /// The prior keeps its energy and where it lies: every cell of the new tree, finer
+    /// or coarser than the prior's, gets the prior's mass over that cell's area.
+    #[test]
+    fn prior_is_added_by_area_into_finer_and_coarser_cells() {
+        let prior = trained_tree(4);
+        // A topology unlike the prior's: uniform depth 3 with one corner refined to depth
+        // 7 (finer than the prior there) and no cell finer than 1/8 elsewhere (coarser).
+        let mut tree = QuadTree::initial(0.02, 3);
+        let mut n = 0;
+        while tree.nodes[n].child[0] != 0 {
+            n = tree.nodes[n].child[0] as usize;
+        }
+        for _ in 0..4 {
+            let index = tree.nodes.len();
+            tree.nodes.push(QuadNode::default());
+            tree.nodes[n].child[0] = index as u32;
+            n = index;
+        }
+        assert_eq!(tree.depth(), 7);
+        tree.add_prior(&prior, 0.5);
+        let added: f64 = tree
+            .nodes
+            .iter()
+            .flat_map(|node| node.sum)
+            .map(f64::from)
+            .sum();
+        let expected = 0.5 * f64::from(prior.total());
+        assert!(
+            (added - expected).abs() < 1e-5 * expected,
+            "{added} vs {expected}"
+        );
+        tree.build();
+        for cell in tree.cells() {
+            let lo = [f64::from(cell.origin[0]), f64::from(cell.origin[1])];
+            let s = f64::from(cell.size);
+            let want = prior.mass_in_rect(lo, [lo[0] + s, lo[1] + s]);
+            assert!(
+                (cell.prob - want).abs() < 1e-4 * want + 1e-7,
+                "cell {:?} size {s}: {} vs {want}",
+                cell.origin,
+                cell.prob
+            );
+        }
+        // Nothing is added from an empty prior.
+        let mut fresh = QuadTree::initial(0.01, 20);
+        fresh.add_prior(&QuadTree::empty(), 1.0);
+        assert!(fresh.is_empty());
     }
 
     #[test]

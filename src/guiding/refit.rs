@@ -48,8 +48,30 @@ impl SdTree {
         // over with the refined topology.
         let density = self.config.density;
         let initial_mix = self.config.light_mix;
-        let per_leaf = super::parallel::map_mut(&mut self.leaves, |_, leaf| {
+        let history = self.config.history;
+        // The share of the earlier statistics that fell in each leaf's box: the leaves
+        // split from one leaf since the last refit share its sampling tree and light
+        // table, each holding 2^-k of them after k halvings, so 1 / (leaves sharing it).
+        let mut sharing: std::collections::HashMap<*const super::QuadTree, u32> =
+            std::collections::HashMap::new();
+        for leaf in &self.leaves {
+            *sharing
+                .entry(std::sync::Arc::as_ptr(&leaf.sampling))
+                .or_default() += 1;
+        }
+        let shares: Vec<f32> = self
+            .leaves
+            .iter()
+            .map(|l| 1.0 / sharing[&std::sync::Arc::as_ptr(&l.sampling)] as f32)
+            .collect();
+        let per_leaf = super::parallel::map_mut(&mut self.leaves, |i, leaf| {
             let mut built = std::mem::take(&mut leaf.training);
+            let share = shares[i];
+            // The earlier iterations' statistics, as the sampling tree holds them, join
+            // this iteration's with weight `history` (0: Müller et al.'s reset).
+            if history > 0.0 && density == GuideDensity::Radiance {
+                built.add_prior(&leaf.sampling, history * share);
+            }
             let dropped = match density {
                 GuideDensity::Radiance => built.build(),
                 GuideDensity::VarianceAware => built.build_second_moment(),
@@ -59,16 +81,29 @@ impl SdTree {
             leaf.sampling = std::sync::Arc::new(built);
             leaf.sampling_weight = leaf.training_weight;
             leaf.training_weight = 0.0;
-            // Light tables := this iteration's contributions, normalised.
+            // Light tables := this iteration's contributions (with the earlier ones'
+            // under `history`), normalised.
             let mut recorded = std::mem::take(&mut leaf.light_training);
             let mut table: Vec<(u32, f32)> = recorded
                 .drain(..)
                 .filter(|s| s.value.is_finite() && s.value > 0.0)
                 .map(|s| (s.model, s.value))
                 .collect();
+            let earlier = history * share * leaf.lights_total;
+            if earlier > 0.0 {
+                for &(model, p) in leaf.lights.iter() {
+                    match table.iter_mut().find(|e| e.0 == model) {
+                        Some(e) => e.1 += earlier * p,
+                        None => table.push((model, earlier * p)),
+                    }
+                }
+            }
+            table.sort_by(|a, b| b.1.total_cmp(&a.1));
+            // The GPU holds GUIDE_LIGHT_SLOTS models per leaf: keep the strongest.
+            table.truncate(crate::gpu::GUIDE_LIGHT_SLOTS as usize);
             let total: f32 = table.iter().map(|&(_, v)| v).sum();
             table.iter_mut().for_each(|e| e.1 /= total);
-            table.sort_by(|a, b| b.1.total_cmp(&a.1));
+            leaf.lights_total = if table.is_empty() { 0.0 } else { total };
             // A leaf without a table samples the source alone; its next table starts
             // at the configured mix.
             if table.is_empty() {
@@ -167,6 +202,7 @@ impl SdTree {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::guiding::light_mix::LightSums;
     use crate::guiding::GuidingConfig;
     use glam::Vec3;
 
@@ -279,6 +315,73 @@ mod tests {
         // A second iteration without records: sampling becomes empty (uniform) again.
         t.refit(4);
         assert!(t.leaves()[0].sampling.is_empty());
+    }
+
+    #[test]
+    fn history_carries_earlier_iterations_by_their_share_of_the_box() {
+        let config = GuidingConfig {
+            spatial_filter: crate::guiding::SpatialFilter::Nearest,
+            history: 1.0,
+            ..GuidingConfig::default()
+        };
+        let record_dir = |t: &mut SdTree, dir: Vec3, n: u32| {
+            for _ in 0..n {
+                let rec = crate::gpu::GuideRecord::new(Vec3::ZERO, dir, 1.0, 1.0);
+                t.record(&rec, [0.5; 3]);
+            }
+        };
+        let (up, down) = (Vec3::new(0.3, 0.4, 0.866), Vec3::new(-0.6, 0.0, -0.8));
+        // Iteration 0: 2c records towards `up`, and light 7 the only one seen; the
+        // leaf splits once (the halves hold c each, at the bar), so each half inherits
+        // half of what the parent learned.
+        let mut t = tree(&config);
+        record_dir(&mut t, up, 24000);
+        t.leaves[0].light_training = vec![LightSums {
+            model: 7,
+            value: 10.0,
+            second: 10.0,
+        }];
+        assert_eq!(t.refit(4).splits, 1);
+        // Iteration 1: 1,000 records towards `down` and light 3 with twice the light,
+        // all in the half holding the origin.
+        let here = t.find_leaf(Vec3::ZERO) as usize;
+        record_dir(&mut t, down, 1000);
+        t.leaves[here].light_training = vec![LightSums {
+            model: 3,
+            value: 10.0,
+            second: 10.0,
+        }];
+        t.refit(8);
+        for (i, l) in t.leaves().iter().enumerate() {
+            let own = if i == here { 1000.0 } else { 0.0 };
+            let total = l.sampling.total();
+            assert!(
+                (total / (12000.0 + own) - 1.0).abs() < 1e-4,
+                "leaf {i}: {total}"
+            );
+            // Both iterations' directions: a cell holding a share s of the mass has
+            // density at least s / 4π.
+            let floor = |mass: f32| 0.999 * mass / total / (4.0 * std::f32::consts::PI);
+            assert!(l.sampling.pdf(up) >= floor(12000.0), "leaf {i}");
+            assert!(l.sampling.pdf(down) >= floor(own), "leaf {i}");
+        }
+        let lights = &t.leaves()[here].lights;
+        assert_eq!(lights.len(), 2, "{lights:?}");
+        // Light 7's 10 with share ½, light 3's 10: 1/3 and 2/3.
+        assert_eq!(lights[0].0, 3);
+        assert!((lights[0].1 - 2.0 / 3.0).abs() < 1e-5, "{lights:?}");
+        assert!((lights[1].1 - 1.0 / 3.0).abs() < 1e-5, "{lights:?}");
+        // Without history the refit forgets: Müller et al.'s reset.
+        let mut t = tree(&GuidingConfig {
+            history: 0.0,
+            ..config
+        });
+        record_dir(&mut t, up, 100);
+        t.refit(2);
+        record_dir(&mut t, down, 100);
+        t.refit(4);
+        assert!((t.leaves()[0].sampling.total() - 100.0).abs() < 1e-3);
+        assert!(t.leaves()[0].sampling.pdf(up) < t.leaves()[0].sampling.pdf(down));
     }
 
     #[test]

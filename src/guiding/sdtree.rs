@@ -43,6 +43,9 @@ pub struct Leaf {
     /// Probability of choosing the light model from `lights` rather than from the source
     /// distribution (per leaf: `light_mix::choose_mix`, or the configured one).
     pub light_mix: f32,
+    /// The sum of the estimates `lights` was normalised from (its weight as a prior for
+    /// `GuidingConfig::history`; not saved: a loaded tree renders frozen).
+    pub lights_total: f32,
     /// Per light model, the NEE estimates recorded this iteration (sum and square sum).
     pub light_training: Vec<LightSums>,
     /// Σ v² over all of this iteration's NEE estimates in the leaf.
@@ -90,6 +93,7 @@ impl SdTree {
             training_weight: 0.0,
             lights: Arc::new(Vec::new()),
             light_mix: config.light_mix,
+            lights_total: 0.0,
             light_training: Vec::new(),
             light_second: 0.0,
             selection: SelectionState::new(config.bsdf_fraction),

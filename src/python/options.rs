@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 /// The keyword options `Renderer` accepts besides its named parameters.
-pub const OPTIONS: [&str; 22] = [
+pub const OPTIONS: [&str; 23] = [
     "rr_depth",
     "source",
     "ris_candidates",
@@ -20,6 +20,7 @@ pub const OPTIONS: [&str; 22] = [
     "record_nee",
     "guide_target",
     "guide_density",
+    "guide_history",
     "strategy",
     "hide_emitters",
     "emission_rays",
@@ -100,6 +101,7 @@ pub fn apply(
                 settings.guiding.density =
                     value_enum::<crate::guiding::GuideDensity>(&flag, &v.extract::<String>()?)?
             }
+            "guide_history" => settings.guiding.history = v.extract()?,
             "train_fraction" => settings.guiding.train_fraction = v.extract()?,
             "record_nee" => settings.guiding.record_nee = v.extract()?,
             "strategy" => {

@@ -89,6 +89,7 @@ pub fn guiding_config(renderer: &Renderer) -> GuidingConfig {
         learn_selection: g.learn_selection,
         target: g.target,
         density: g.density,
+        history: g.history,
         ..GuidingConfig::default()
     }
 }

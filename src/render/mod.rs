@@ -38,7 +38,7 @@ pub use guided::{train, GuidingOutcome, IterationStats, Training, TrainingPlan};
 pub use readback::Outlier;
 pub use settings::{
     GuidedOutput, GuidingSettings, LightMix, LightSource, Method, RenderSettings, SettingsError,
-    Strategy,
+    Strategy, DEFAULT_GUIDE_HISTORY,
 };
 pub use traversal::{Traversal, TraversalChoice, TraversalKind};
 

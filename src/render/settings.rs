@@ -108,6 +108,9 @@ pub enum GuidedOutput {
     InverseVariance,
 }
 
+/// Default `--guide-history` (README, Path guiding: "Training history").
+pub const DEFAULT_GUIDE_HISTORY: f32 = 0.0;
+
 /// The options of the guided methods.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GuidingSettings {
@@ -149,6 +152,11 @@ pub struct GuidingSettings {
     /// Which statistic of the target the quadtrees follow (`--guide-density`).
     #[serde(default)]
     pub density: GuideDensity,
+    /// Weight of the earlier training iterations' statistics in each refit, per record,
+    /// against the finished iteration's (`--guide-history`; 0: Müller et al.'s reset).
+    /// Settings written before the option existed read as 0, what they rendered with.
+    #[serde(default)]
+    pub history: f32,
 }
 
 impl Default for GuidingSettings {
@@ -181,6 +189,7 @@ impl Default for GuidingSettings {
             // `Indirect` wins only on gap (README, Path guiding).
             target: GuideTarget::All,
             density: GuideDensity::Radiance,
+            history: DEFAULT_GUIDE_HISTORY,
         }
     }
 }
@@ -442,6 +451,7 @@ impl GuidingSettings {
         };
         fraction("--bsdf-fraction", self.bsdf_fraction, 1.0)?;
         fraction("--train-fraction", self.train_fraction, 1.0)?;
+        fraction("--guide-history", self.history, 1.0)?;
         fraction("--light-mix", self.light_mix, crate::guiding::MAX_LIGHT_MIX)?;
         if !(self.spatial_threshold.is_finite() && self.spatial_threshold > 0.0) {
             return Err(SettingsError {
@@ -486,6 +496,11 @@ mod tests {
             (
                 "--train-fraction",
                 Box::new(|s| s.guiding.train_fraction = f32::NAN),
+            ),
+            ("--guide-history", Box::new(|s| s.guiding.history = -0.5)),
+            (
+                "--guide-history",
+                Box::new(|s| s.guiding.history = f32::NAN),
             ),
             (
                 "--guiding-threshold",
