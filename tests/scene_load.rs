@@ -278,3 +278,83 @@ fn the_street_scene_loads_with_its_generated_counts() {
         .fold((f32::MAX, 0f32), |(a, b), &p| (a.min(p), b.max(p)));
     assert!(hi / lo > 1000.0, "light powers span only {}×", hi / lo);
 }
+
+/// COLOR_0 reaches the scene per primitive: float RGB and normalised 16-bit RGBA read
+/// as linear [0, 1] colours, primitives without colours marked so, and the colours in
+/// the content hash (a saved SD-tree or reference names the scene it was made for).
+#[test]
+fn vertex_colours_load_per_primitive_and_change_the_hash() {
+    let path = root().join("tests/data/mitsuba/colors.gltf");
+    let scene = load(&path);
+    let coloured: Vec<_> = scene
+        .primitives
+        .iter()
+        .filter(|p| p.color_offset != lanterna::gpu::INVALID_INDEX)
+        .collect();
+    // Floor, wall and emitter; not the box.
+    assert_eq!(coloured.len(), 3);
+    assert_eq!(scene.primitives.len(), 4);
+    assert_eq!(scene.colors.len(), 12);
+    let colours_of = |mesh: usize| {
+        let p = scene
+            .primitives
+            .iter()
+            .find(|p| p.name == format!("mesh #{mesh} primitive 0"))
+            .unwrap();
+        &scene.colors[p.color_offset as usize..][..4]
+    };
+    let floor = colours_of(0);
+    assert_eq!(floor[0], [0.9, 0.1, 0.1, 1.0]);
+    let wall = colours_of(1);
+    // 0.3 went out as 19,660 / 65,535 (Python rounds 19,660.5 to even).
+    assert_eq!(wall[2], [1.0, 19660.0 / 65535.0, 1.0, 1.0]);
+    // The same file with other colours is another scene.
+    let tmp = tempfile::tempdir().unwrap();
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    json["meshes"][0]["primitives"][0]["attributes"]
+        .as_object_mut()
+        .unwrap()
+        .remove("COLOR_0");
+    let edited = tmp.path().join("colors.gltf");
+    std::fs::write(&edited, json.to_string()).unwrap();
+    let without = load(&edited);
+    assert_eq!(without.colors.len(), 8);
+    assert_ne!(without.hash, scene.hash);
+}
+
+/// COLOR_0's alpha multiplies the base alpha: an alpha-masked wall whose vertex alphas
+/// are 0 is cut out everywhere (the box of the same material, without colours, stays),
+/// so the image must match the scene without the wall (8×8 blocks, Welch, 8 batches of
+/// 32 spp each). Seen to fail with the colour's alpha left out of the alpha test.
+#[test]
+fn vertex_colour_alpha_cuts_out_a_masked_surface() {
+    let path = root().join("tests/data/mitsuba/colors.gltf");
+    let mut masked = load(&path);
+    let wall = masked
+        .primitives
+        .iter()
+        .position(|p| p.name == "mesh #1 primitive 0")
+        .unwrap();
+    let material = masked.primitives[wall].material;
+    masked.materials[material as usize].alpha_mode = lanterna::gpu::ALPHA_MODE_MASK;
+    masked.materials[material as usize].alpha_cutoff = 0.5;
+    for p in masked
+        .primitives
+        .iter_mut()
+        .filter(|p| p.material == material)
+    {
+        p.opaque = false;
+    }
+    let offset = masked.primitives[wall].color_offset as usize;
+    for c in &mut masked.colors[offset..offset + 4] {
+        c[3] = 0.0;
+    }
+    let mut without = load(&path);
+    without.instances.retain(|i| i.primitive != wall as u32);
+    let camera = masked.cameras[0].clone();
+    let settings = testing::settings(Method::Pt, 32, 32);
+    let a = render_batches(&masked, &camera, settings.clone(), 8, 32);
+    let b = render_batches(&without, &camera, settings, 8, 32);
+    testing::assert_same_expectation(&a, &b, 8, 1e-3);
+}

@@ -16,6 +16,14 @@ vec2 interpolate_uv(uvec3 v, vec3 w, uint set) {
     return w.x * vertices[v.x].uv0 + w.y * vertices[v.y].uv0 + w.z * vertices[v.z].uv0;
 }
 
+// The interpolated COLOR_0 of an instance's triangle with global vertex indices v (white
+// without vertex colours): it multiplies the base colour and its alpha.
+vec4 interpolate_color(Instance inst, uvec3 v, vec3 w) {
+    if (inst.color_offset == INVALID_INDEX) return vec4(1.0);
+    uvec3 c = v - inst.vertex_offset + inst.color_offset;
+    return w.x * vertex_colors[c.x] + w.y * vertex_colors[c.y] + w.z * vertex_colors[c.z];
+}
+
 // KHR_texture_transform: offset · rotation · scale applied to a UV.
 // The rotation (rare) is skipped when it is zero: sin() and cos() are costly on CPU
 // devices, and with c = 1, s = 0 the rotation is the identity anyway.

@@ -109,7 +109,7 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     make_basis(n, s.t, s.b);
 
     // Material.
-    vec4 base = m.base_color;
+    vec4 base = m.base_color * interpolate_color(inst, vi, w);
     if (m.base_color_tex.index >= 0)
         base *= sample_texture(m.base_color_tex, m.base_color_tex.uv_set == 1u ? s.uv1 : s.uv0);
     float metallic = m.metallic;

@@ -16,6 +16,7 @@ layout(set = 0, binding = BINDING_TLAS) uniform accelerationStructureEXT tlas;
 #endif
 layout(set = 0, binding = BINDING_PARAMS, scalar) readonly buffer ParamsBuffer { FrameParams params; };
 layout(set = 0, binding = BINDING_VERTICES, scalar) readonly buffer VertexBuffer { Vertex vertices[]; };
+layout(set = 0, binding = BINDING_VERTEX_COLORS, scalar) readonly buffer VertexColorBuffer { vec4 vertex_colors[]; };
 layout(set = 0, binding = BINDING_INDICES, scalar) readonly buffer IndexBuffer { uint indices[]; };
 layout(set = 0, binding = BINDING_INSTANCES, scalar) readonly buffer InstanceBuffer { Instance instances[]; };
 layout(set = 0, binding = BINDING_MATERIALS, scalar) readonly buffer MaterialBuffer { Material materials[]; };

@@ -41,7 +41,9 @@
 #define BINDING_PIXEL_EMITTER_OFFSETS 29
 #define BINDING_PIXEL_EMITTERS 30
 #define BINDING_PIXEL_EMITTER_FLAGS 31
-#define BINDING_COUNT 32
+// Vertex colours (glTF COLOR_0, linear RGBA) of the primitives that have them.
+#define BINDING_VERTEX_COLORS 32
+#define BINDING_COUNT 33
 
 // Upper bound on bindless textures in one scene.
 #define MAX_TEXTURES 8192

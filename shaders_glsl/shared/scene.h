@@ -27,7 +27,8 @@ struct Instance {
     uint light_index_offset;  // into the triangle→light map, INVALID_INDEX if not emissive
     uint light_model;         // INVALID_INDEX if not emissive
     uint flags;               // INSTANCE_FLAG_*
-    float pad;
+    uint color_offset;        // into vertex_colors for the primitive's first vertex
+                              // (COLOR_0), INVALID_INDEX without vertex colours
 };
 
 // A texture reference with its KHR_texture_transform.

@@ -20,6 +20,8 @@ use std::time::Instant;
 /// Device-side copy of a scene.
 pub struct GpuScene {
     pub vertices: Buffer,
+    /// `Scene::colors` (at least one element's worth, unread, when empty).
+    pub vertex_colors: Buffer,
     pub indices: Buffer,
     pub instances: Buffer,
     pub materials: Buffer,
@@ -82,6 +84,7 @@ impl GpuScene {
         };
         let vertices = Buffer::from_slice(device, &scene.vertices, geometry_usage, "vertices")?;
         let indices = Buffer::from_slice(device, &scene.indices, geometry_usage, "indices")?;
+        let vertex_colors = Buffer::from_slice(device, &scene.colors, STORAGE, "vertex colours")?;
 
         // Small instanced meshes are copied into world space and merged into shared
         // BLASes; the instance buffer lists them first, in merge order.
@@ -112,7 +115,7 @@ impl GpuScene {
                     light_index_offset,
                     light_model,
                     flags,
-                    pad: 0.0,
+                    color_offset: p.color_offset,
                 }
             })
             .collect();
@@ -237,6 +240,7 @@ impl GpuScene {
         );
         Ok(GpuScene {
             vertices,
+            vertex_colors,
             indices,
             instances,
             materials,

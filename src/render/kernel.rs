@@ -61,6 +61,7 @@ impl Renderer {
         let buffers = [
             (gpu::BINDING_PARAMS, &self.params),
             (gpu::BINDING_VERTICES, &g.vertices),
+            (gpu::BINDING_VERTEX_COLORS, &g.vertex_colors),
             (gpu::BINDING_INDICES, &g.indices),
             (gpu::BINDING_INSTANCES, &g.instances),
             (gpu::BINDING_MATERIALS, &g.materials),

@@ -174,6 +174,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         roots.into_iter().map(|n| (n, Mat4::IDENTITY, 0)).collect();
 
     let mut vertices = Vec::new();
+    let mut colors = Vec::new();
     let mut indices = Vec::new();
     let mut primitives: Vec<MeshPrimitive> = Vec::new();
     let mut primitive_ids: HashMap<(usize, usize), Option<u32>> = HashMap::new();
@@ -275,6 +276,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
                         &mut Geometry {
                             root: document.as_json(),
                             vertices: &mut vertices,
+                            colors: &mut colors,
                             indices: &mut indices,
                             budget: &mut budget,
                         },
@@ -336,6 +338,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let mut scene = Scene {
         path: path.to_path_buf(),
         vertices,
+        colors,
         indices,
         primitives,
         instances,
@@ -482,6 +485,15 @@ fn content_hash(scene: &Scene) -> String {
         }
     };
     eat(bytemuck::cast_slice(&scene.vertices));
+    // Vertex colours only where there are any: scenes without keep their hashes (and
+    // the references and saved trees made for them stay valid).
+    eat(bytemuck::cast_slice(&scene.colors));
+    for (i, p) in scene.primitives.iter().enumerate() {
+        if p.color_offset != crate::gpu::INVALID_INDEX {
+            eat(&(i as u32).to_le_bytes());
+            eat(&p.color_offset.to_le_bytes());
+        }
+    }
     eat(bytemuck::cast_slice(&scene.indices));
     eat(bytemuck::cast_slice(&scene.materials));
     for i in &scene.instances {

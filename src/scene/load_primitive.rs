@@ -12,6 +12,7 @@ pub(super) struct Geometry<'a> {
     /// The document's JSON, for the checks of `gltf_check`.
     pub root: &'a gltf::json::Root,
     pub vertices: &'a mut Vec<gpu::Vertex>,
+    pub colors: &'a mut Vec<[f32; 4]>,
     pub indices: &'a mut Vec<u32>,
     pub budget: &'a mut sources::Budget,
 }
@@ -67,7 +68,13 @@ pub(super) fn load_primitive(
         .get(&gltf::Semantic::Positions)
         .map_or(0, |a| a.count() as u64);
     let index_count = prim.indices().map_or(vertex_count, |a| a.count() as u64);
-    let reading = 2 * (vertex_count * std::mem::size_of::<gpu::Vertex>() as u64 + index_count * 4);
+    let colour_bytes = if prim.get(&gltf::Semantic::Colors(0)).is_some() {
+        16
+    } else {
+        0
+    };
+    let per_vertex = std::mem::size_of::<gpu::Vertex>() as u64 + colour_bytes;
+    let reading = 2 * (vertex_count * per_vertex + index_count * 4);
     if reading > out.budget.left() {
         return Err(format!(
             "{name}: {vertex_count} vertices and {index_count} indices would take the scene past the input limit"
@@ -103,8 +110,19 @@ pub(super) fn load_primitive(
     {
         return Err(format!("{name} has attributes of different lengths"));
     }
-    if prim.get(&gltf::Semantic::Colors(0)).is_some() {
-        warnings.push(format!("{name}: COLOR_0 vertex colours are ignored"));
+    // COLOR_0 multiplies the base colour (RGB, or RGBA whose alpha multiplies the base
+    // alpha); normalised integers are read as [0, 1]. Further colour sets have no role.
+    let colors: Option<Vec<[f32; 4]>> = reader.read_colors(0).map(|r| r.into_rgba_f32().collect());
+    if let Some(c) = &colors {
+        if c.len() != n {
+            return Err(format!("{name} has attributes of different lengths"));
+        }
+        if c.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(format!("{name} has non-finite vertex colours (COLOR_0)"));
+        }
+    }
+    if prim.get(&gltf::Semantic::Colors(1)).is_some() {
+        warnings.push(format!("{name}: COLOR_1 and later colour sets are ignored"));
     }
     let raw_indices: Vec<u32> = match reader.read_indices() {
         Some(r) => r.into_u32().collect(),
@@ -140,7 +158,8 @@ pub(super) fn load_primitive(
         .map_or(default_material, |i| i as u32);
     let opaque = materials[material as usize].alpha_mode == gpu::ALPHA_MODE_OPAQUE;
 
-    let bytes = n * std::mem::size_of::<gpu::Vertex>() + tri_count * 3 * 4;
+    let color_bytes = colors.as_ref().map_or(0, |c| c.len() * 16);
+    let bytes = n * std::mem::size_of::<gpu::Vertex>() + color_bytes + tri_count * 3 * 4;
     out.budget.take(bytes as u64, &name)?;
     if out.vertices.len() + n > u32::MAX as usize
         || out.indices.len() + 3 * tri_count > u32::MAX as usize
@@ -149,6 +168,17 @@ pub(super) fn load_primitive(
             "{name}: the scene has more than 2^32 vertices or indices"
         ));
     }
+    if out.colors.len() + colors.as_ref().map_or(0, Vec::len) >= u32::MAX as usize {
+        return Err(format!("{name}: the scene has 2^32 vertex colours or more"));
+    }
+    let color_offset = match colors {
+        Some(c) => {
+            let offset = out.colors.len() as u32;
+            out.colors.extend(c);
+            offset
+        }
+        None => gpu::INVALID_INDEX,
+    };
     let (vertices, indices) = (&mut *out.vertices, &mut *out.indices);
     let vertex_offset = vertices.len() as u32;
     let index_offset = indices.len() as u32;
@@ -181,6 +211,7 @@ pub(super) fn load_primitive(
         triangle_count: tri_count as u32,
         material,
         opaque,
+        color_offset,
         name,
     }))
 }

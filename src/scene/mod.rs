@@ -67,6 +67,9 @@ pub struct MeshPrimitive {
     pub material: u32,
     /// No alpha testing needed (alpha mode OPAQUE).
     pub opaque: bool,
+    /// First of the primitive's `vertex_count` entries in `Scene::colors` (its COLOR_0,
+    /// which multiplies the base colour), or `INVALID_INDEX` without vertex colours.
+    pub color_offset: u32,
     /// `mesh name / primitive index`, for messages.
     pub name: String,
 }
@@ -84,6 +87,8 @@ pub struct Instance {
 pub struct Scene {
     pub path: PathBuf,
     pub vertices: Vec<gpu::Vertex>,
+    /// Linear RGBA vertex colours (glTF COLOR_0) of the primitives that have them.
+    pub colors: Vec<[f32; 4]>,
     pub indices: Vec<u32>,
     pub primitives: Vec<MeshPrimitive>,
     pub instances: Vec<Instance>,

@@ -37,7 +37,8 @@ impl SceneStats {
         let buffers = size(
             scene.vertices.len(),
             std::mem::size_of::<crate::gpu::Vertex>(),
-        ) + size(scene.indices.len(), 4)
+        ) + size(scene.colors.len(), 16)
+            + size(scene.indices.len(), 4)
             + size(
                 scene.instances.len(),
                 std::mem::size_of::<crate::gpu::Instance>() + 64,

@@ -1,7 +1,7 @@
 //! The binary files a Mitsuba export writes besides the XML: triangle meshes as binary
-//! little-endian PLY (positions, optional vertex normals and texture coordinates, one
-//! `vertex_indices` list per face) and linear float images as PFM (used where texel
-//! values must reach Mitsuba exactly, unquantised and unclamped).
+//! little-endian PLY (positions, optional vertex normals, texture coordinates and
+//! colours, one `vertex_indices` list per face) and linear float images as PFM (used
+//! where texel values must reach Mitsuba exactly, unquantised and unclamped).
 
 use std::io::Write;
 
@@ -13,6 +13,8 @@ pub struct PlyMesh {
     pub normals: Vec<[f32; 3]>,
     /// Empty, or one texture coordinate per vertex.
     pub uvs: Vec<[f32; 2]>,
+    /// Empty, or one linear RGB colour per vertex (Mitsuba's `vertex_color` attribute).
+    pub colors: Vec<[f32; 3]>,
     pub faces: Vec<[u32; 3]>,
 }
 
@@ -22,6 +24,7 @@ impl PlyMesh {
         let n = self.positions.len();
         let with_normals = self.normals.len() == n && n > 0;
         let with_uvs = self.uvs.len() == n && n > 0;
+        let with_colors = self.colors.len() == n && n > 0;
         let mut header = String::from("ply\nformat binary_little_endian 1.0\n");
         header.push_str("comment written by lanterna scene export-mitsuba\n");
         header.push_str(&format!("element vertex {n}\n"));
@@ -36,10 +39,14 @@ impl PlyMesh {
         if with_uvs {
             header.push_str("property float u\nproperty float v\n");
         }
+        if with_colors {
+            header.push_str("property float r\nproperty float g\nproperty float b\n");
+        }
         header.push_str(&format!("element face {}\n", self.faces.len()));
         header.push_str("property list uchar int vertex_indices\nend_header\n");
 
-        let per_vertex = 4 * (3 + 3 * with_normals as usize + 2 * with_uvs as usize);
+        let per_vertex =
+            4 * (3 + 3 * with_normals as usize + 2 * with_uvs as usize + 3 * with_colors as usize);
         let mut out = Vec::with_capacity(header.len() + n * per_vertex + self.faces.len() * 13);
         out.extend_from_slice(header.as_bytes());
         for i in 0..n {
@@ -50,6 +57,9 @@ impl PlyMesh {
             }
             if with_uvs {
                 self.uvs[i].iter().for_each(|&v| put(v));
+            }
+            if with_colors {
+                self.colors[i].iter().for_each(|&v| put(v));
             }
         }
         for f in &self.faces {

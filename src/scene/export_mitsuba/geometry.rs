@@ -63,6 +63,9 @@ pub(super) struct GroupKey {
     pub(super) material: u32,
     pub(super) emitter: bool,
     pub(super) smooth: bool,
+    /// The base colour is the material's factor × the vertex colours, written into the
+    /// PLY (Mitsuba's `vertex_color` attribute).
+    pub(super) colored: bool,
 }
 
 /// Append an instance's triangles in world space. Negative-determinant transforms flip
@@ -72,10 +75,20 @@ pub(super) fn append_instance(
     mesh: &mut PlyMesh,
     scene: &Scene,
     inst: &Instance,
-    smooth: bool,
+    key: GroupKey,
     plan: UvPlan,
 ) {
+    let smooth = key.smooth;
     let p = &scene.primitives[inst.primitive as usize];
+    if key.colored {
+        let factor = Vec3::from_slice(&scene.materials[p.material as usize].base_color[..3]);
+        let colours = &scene.colors[p.color_offset as usize..][..p.vertex_count as usize];
+        mesh.colors.extend(colours.iter().map(|c| {
+            (factor * Vec3::from_slice(&c[..3]))
+                .clamp(Vec3::ZERO, Vec3::ONE)
+                .to_array()
+        }));
+    }
     let base = mesh.positions.len() as u32;
     let normal_matrix = Mat3::from_mat4(inst.transform).inverse().transpose();
     let flipped = inst.transform.determinant() < 0.0;
@@ -123,6 +136,9 @@ pub(super) fn back_sheet(mesh: &PlyMesh, epsilon: f32) -> PlyMesh {
                 .push((Vec3::from(mesh.positions[i as usize]) - epsilon * n).into());
             if !mesh.uvs.is_empty() {
                 out.uvs.push(mesh.uvs[i as usize]);
+            }
+            if !mesh.colors.is_empty() {
+                out.colors.push(mesh.colors[i as usize]);
             }
         }
         out.faces.push([base, base + 1, base + 2]);

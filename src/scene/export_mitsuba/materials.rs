@@ -15,6 +15,15 @@ use crate::vk::TextureFormat;
 use glam::Mat3;
 use std::fmt::Write as _;
 
+/// The XML id of material `m`'s BSDF, with or without vertex colours.
+pub(super) fn bsdf_id(m: u32, vertex_colors: bool) -> String {
+    if vertex_colors {
+        format!("bsdf{m}-colors")
+    } else {
+        format!("bsdf{m}")
+    }
+}
+
 impl Writer<'_> {
     /// Which UV set the PLY of a material carries, and which transform is baked in.
     pub(super) fn uv_plan(&mut self, m: u32) -> UvPlan {
@@ -40,13 +49,24 @@ impl Writer<'_> {
         }
     }
 
-    pub(super) fn bsdf_xml(&mut self, m: u32, plan: UvPlan) -> Result<String, ExportError> {
+    /// The BSDF of material `m`; with `vertex_colors`, its base colour is the meshes'
+    /// `vertex_color` attribute (the factor baked in, see `append_instance`).
+    pub(super) fn bsdf_xml(
+        &mut self,
+        m: u32,
+        plan: UvPlan,
+        vertex_colors: bool,
+    ) -> Result<String, ExportError> {
         let mat =
             *self.scene.materials.get(m as usize).ok_or_else(|| {
                 ExportError::Invalid(format!("material index {m} is out of range"))
             })?;
         let name = self.material_name(m).to_string();
-        let colour = self.base_colour_xml(m, &mat, plan, "reflectance")?;
+        let colour = if vertex_colors {
+            "      <texture type=\"mesh_attribute\" name=\"reflectance\">\n        <string name=\"name\" value=\"vertex_color\"/>\n      </texture>\n".to_string()
+        } else {
+            self.base_colour_xml(m, &mat, plan, "reflectance")?
+        };
         if mat.alpha_mode != gpu::ALPHA_MODE_OPAQUE {
             self.approximations.push(format!(
                 "material `{name}`: alpha mode {} is not exported (Mitsuba sees it opaque)",
@@ -64,7 +84,11 @@ impl Writer<'_> {
         }
         let mut s = String::new();
         let _ = writeln!(s, "  <!-- material `{}` -->", xml_escape(&name));
-        let _ = writeln!(s, "  <bsdf type=\"twosided\" id=\"bsdf{m}\">");
+        let _ = writeln!(
+            s,
+            "  <bsdf type=\"twosided\" id=\"{}\">",
+            bsdf_id(m, vertex_colors)
+        );
         // glTF with specularFactor 0 and metallic 0 is exactly Lambertian (albedo/π).
         if mat.specular == 0.0 && mat.metallic == 0.0 {
             s.push_str("    <bsdf type=\"diffuse\">\n");

@@ -4,6 +4,7 @@
 
 use super::files::PlyMesh;
 use super::geometry::{append_instance, back_sheet, shading, GroupKey, Shading, UvPlan};
+use super::materials::bsdf_id;
 use super::xml::{integrator_xml, xml_escape};
 use super::{io_err, ExportError, ExportOptions};
 use crate::gpu;
@@ -95,13 +96,37 @@ impl Writer<'_> {
                     ));
                 }
             }
+            let colored = prim.color_offset != gpu::INVALID_INDEX;
+            let m = &scene.materials[prim.material as usize];
+            if colored && m.base_color_tex.index >= 0 {
+                self.approximations.push(format!(
+                    "mesh {}: its vertex colours are not exported with material `{}`'s base colour texture (Mitsuba has no product of textures)",
+                    prim.name,
+                    self.material_name(prim.material)
+                ));
+            } else if colored {
+                // Exact while factor × colour stays in [0, 1] at every vertex: lanterna
+                // clamps the interpolated product, Mitsuba interpolates the clamped one.
+                let colours =
+                    &scene.colors[prim.color_offset as usize..][..prim.vertex_count as usize];
+                let outside = colours
+                    .iter()
+                    .any(|c| (0..3).any(|k| !(0.0..=1.0).contains(&(m.base_color[k] * c[k]))));
+                if outside {
+                    self.approximations.push(format!(
+                        "mesh {}: base colour × vertex colour leaves [0, 1]; clamped per vertex",
+                        prim.name
+                    ));
+                }
+            }
             let key = GroupKey {
                 material: prim.material,
                 emitter,
                 smooth: curved && !emitter,
+                colored: colored && m.base_color_tex.index < 0,
             };
             let mesh = groups.entry(key).or_default();
-            append_instance(mesh, scene, inst, key.smooth, plan);
+            append_instance(mesh, scene, inst, key, plan);
             triangles += prim.triangle_count as u64;
         }
         if groups.keys().any(|k| k.smooth) {
@@ -113,12 +138,13 @@ impl Writer<'_> {
             );
         }
 
-        // BSDFs, one per material used.
-        let mut used: Vec<u32> = groups.keys().map(|k| k.material).collect();
+        // BSDFs, one per material used (with and without vertex colours).
+        let mut used: Vec<(u32, bool)> = groups.keys().map(|k| (k.material, k.colored)).collect();
+        used.sort_unstable();
         used.dedup();
-        for &m in &used {
+        for &(m, colored) in &used {
             let plan = plans[&m];
-            xml.push_str(&self.bsdf_xml(m, plan)?);
+            xml.push_str(&self.bsdf_xml(m, plan, colored)?);
         }
 
         let mut shapes = 0;
@@ -140,10 +166,11 @@ impl Writer<'_> {
             }
             for (sheet, suffix) in sheets {
                 let file = format!(
-                    "meshes/m{}{}{}{}.ply",
+                    "meshes/m{}{}{}{}{}.ply",
                     key.material,
                     if key.emitter { "-emitter" } else { "" },
                     if key.smooth { "-smooth" } else { "" },
+                    if key.colored { "-colors" } else { "" },
                     suffix
                 );
                 self.write(&file, &sheet.to_bytes())?;
@@ -162,7 +189,11 @@ impl Writer<'_> {
                 if !key.smooth {
                     xml.push_str("    <boolean name=\"face_normals\" value=\"true\"/>\n");
                 }
-                let _ = writeln!(xml, "    <ref id=\"bsdf{}\"/>", key.material);
+                let _ = writeln!(
+                    xml,
+                    "    <ref id=\"{}\"/>",
+                    bsdf_id(key.material, key.colored)
+                );
                 if let Some(r) = &radiance {
                     let _ = writeln!(xml, "    <emitter type=\"area\">\n{r}    </emitter>");
                     emitters += 1;

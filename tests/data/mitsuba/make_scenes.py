@@ -16,6 +16,9 @@ agree up to noise.
   texxform.gltf   floor and emissive panel textured with black/white texels (exact in
                   any sRGB decoder) for texture-transform checks
   smooth.gltf     a coarse sphere with smooth vertex normals (approximate export)
+  colors.gltf     COLOR_0 vertex colours (float RGB on the floor, normalised 16-bit RGBA
+                  times a base colour factor on the wall, a box of the wall's material
+                  without colours, colours on an emitter, which they must not tint)
   glossy.gltf     rough metal and rough dielectric panels (not Lambertian: the export
                   approximates them with `principled`; measures the gap, no exact check)
 
@@ -66,7 +69,8 @@ class Builder:
                                    count=count, type=typ, **kw))
         return len(self.accessors) - 1
 
-    def mesh(self, positions, indices, material, normals=None, uvs=None):
+    def mesh(self, positions, indices, material, normals=None, uvs=None, colors=None,
+             color_format="float"):
         attrs = {}
         mn = [min(p[i] for p in positions) for i in range(3)]
         mx = [max(p[i] for p in positions) for i in range(3)]
@@ -78,6 +82,16 @@ class Builder:
         if uvs:
             attrs["TEXCOORD_0"] = self._acc(b"".join(struct.pack("<2f", *t) for t in uvs),
                                             5126, len(uvs), "VEC2")
+        if colors:
+            n = len(colors[0])
+            typ = "VEC%d" % n
+            if color_format == "float":
+                data = b"".join(struct.pack("<%df" % n, *c) for c in colors)
+                attrs["COLOR_0"] = self._acc(data, 5126, len(colors), typ)
+            else:  # normalised unsigned short
+                data = b"".join(struct.pack("<%dH" % n, *(round(65535 * v) for v in c))
+                                for c in colors)
+                attrs["COLOR_0"] = self._acc(data, 5123, len(colors), typ, normalized=True)
         ind = self._acc(b"".join(struct.pack("<I", i) for i in indices), 5125, len(indices),
                         "SCALAR")
         self.meshes.append({"primitives": [{"attributes": attrs, "indices": ind,
@@ -373,6 +387,28 @@ def smooth_scene():
     b.write("smooth.gltf")
 
 
+def colors_scene():
+    b = Builder()
+    floor = b.lambert((1, 1, 1))
+    wall = b.lambert((0.9, 0.6, 1.0))
+    b.node(mesh=b.mesh([(-1.5, 0, 1.5), (1.5, 0, 1.5), (1.5, 0, -1.5), (-1.5, 0, -1.5)],
+                       [0, 1, 2, 0, 2, 3], floor,
+                       colors=[(0.9, 0.1, 0.1), (0.1, 0.8, 0.1), (0.1, 0.2, 0.9), (0.95, 0.95, 0.95)]))
+    b.node(mesh=b.mesh([(-1.5, 0, -1.5), (1.5, 0, -1.5), (1.5, 2.5, -1.5), (-1.5, 2.5, -1.5)],
+                       [0, 1, 2, 0, 2, 3], wall,
+                       colors=[(1, 1, 0.2, 1), (0.2, 1, 1, 1), (1, 0.3, 1, 1), (0.5, 0.5, 0.5, 1)],
+                       color_format="unorm16"))
+    b.node(mesh=b.box(wall), translation=[0.5, 0.35, -0.4], scale=[0.7, 0.7, 0.7])
+    light = b.lambert((0.3, 0.3, 0.3), emission=(1, 1, 1), strength=8)
+    b.node(mesh=b.mesh([(-0.5, 2.2, -0.5), (0.5, 2.2, -0.5), (0.5, 2.2, 0.5), (-0.5, 2.2, 0.5)],
+                       [0, 1, 2, 0, 2, 3], light,
+                       colors=[(0.1, 0.1, 0.1)] * 4))
+    eye = (0.3, 1.4, 3.2)
+    b.node(camera=b.camera(yfov=0.8), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.6, -0.3)))
+    b.write("colors.gltf")
+
+
 def glossy_scene():
     b = Builder()
     grey = b.lambert((0.6, 0.6, 0.6))
@@ -399,3 +435,4 @@ if __name__ == "__main__":
     texxform_scene()
     smooth_scene()
     glossy_scene()
+    colors_scene()
