@@ -381,6 +381,32 @@ fn pixel_emitters_agree_with_mitsuba_on_the_bulbs_in_view() {
 /// the loaded scene (the loader does not read them from files yet), the exporter maps
 /// them to Mitsuba's `to_uv` and bakes the emissive one into the texture coordinates.
 /// Texels are 0 or 255 only, which every sRGB decoder maps exactly.
+/// Renders 8 batches of `spp` with `method`, compares them with 8 Mitsuba runs of
+/// `mitsuba_spp` on the export in `dir`, and asserts that the export is exact and that
+/// the image mean, the blocks and the pixels agree.
+#[allow(clippy::too_many_arguments)]
+fn assert_agrees_exactly(
+    scene: &Scene,
+    method: Method,
+    options: &ExportOptions,
+    dir: &Path,
+    spp: u64,
+    mitsuba_spp: u64,
+    tmp: &Path,
+    what: &str,
+) {
+    let exrs = lanterna_batches(scene, method, options, 8, spp, tmp);
+    let report = compare(dir, &exrs, mitsuba_spp, &tmp.join("report.json"));
+    assert_eq!(report["exact"], true, "{}", report["approximations"]);
+    assert!(
+        report["agree"].as_bool().unwrap(),
+        "{what}: lanterna and Mitsuba disagree:\nmean {}\nblocks {}\npixels {}",
+        report["mean"],
+        report["blocks"],
+        report["pixels"]
+    );
+}
+
 #[test]
 fn texture_transforms_agree_with_mitsuba() {
     if !mitsuba_available() {
@@ -405,23 +431,25 @@ fn texture_transforms_agree_with_mitsuba() {
     let xml = std::fs::read_to_string(dir.join("scene.xml")).unwrap();
     assert_eq!(xml.matches("name=\"to_uv\"").count(), 2, "{xml}");
     let spp = 32;
-    let exrs = lanterna_batches(scene, Method::Pt, &options, 8, spp, tmp.path());
-    let report = compare(&dir, &exrs, spp, &tmp.path().join("report.json"));
-    assert_eq!(report["exact"], true, "{}", report["approximations"]);
-    assert!(
-        report["agree"].as_bool().unwrap(),
-        "lanterna and Mitsuba disagree:\nmean {}\nblocks {}\npixels {}",
-        report["mean"],
-        report["blocks"],
-        report["pixels"]
+    let what = "texture transforms";
+    assert_agrees_exactly(
+        scene,
+        Method::Pt,
+        &options,
+        &dir,
+        spp,
+        spp,
+        tmp.path(),
+        what,
     );
 }
 
 /// Textured emitters whose UV maps Mitsuba's texture-driven emitter sampling handles
 /// (a quarter of the texture, as a sign on an atlas) and does not (the texture repeated
 /// twice each way: Mitsuba would sample only the first copy but weigh all four by MIS
-/// as if sampled: seen to fail so, the image 2.3 % dark, blocks p ≈ 10⁻¹³). The export marks the second with sampling weight 0 so
-/// that Mitsuba finds its light by BSDF sampling alone; both must agree with lanterna.
+/// as if sampled: seen to fail so, the image 2.3 % dark, blocks p ≈ 10⁻¹³). The export
+/// marks the second with sampling weight 0 so that Mitsuba finds its light by BSDF
+/// sampling alone; both must agree with lanterna.
 #[test]
 fn partially_mapped_and_repeated_emissive_textures_agree_with_mitsuba() {
     if !mitsuba_available() {
@@ -442,15 +470,16 @@ fn partially_mapped_and_repeated_emissive_textures_agree_with_mitsuba() {
             "scale {scale}: {xml}"
         );
         let spp = 64;
-        let exrs = lanterna_batches(scene, Method::Ris, &options, 8, spp, tmp.path());
-        let report = compare(&dir, &exrs, 4 * spp, &tmp.path().join("report.json"));
-        assert_eq!(report["exact"], true, "{}", report["approximations"]);
-        assert!(
-            report["agree"].as_bool().unwrap(),
-            "scale {scale}: lanterna and Mitsuba disagree:\nmean {}\nblocks {}\npixels {}",
-            report["mean"],
-            report["blocks"],
-            report["pixels"]
+        let what = format!("scale {scale}");
+        assert_agrees_exactly(
+            scene,
+            Method::Ris,
+            &options,
+            &dir,
+            spp,
+            4 * spp,
+            tmp.path(),
+            &what,
         );
     }
 }
@@ -476,15 +505,16 @@ fn vertex_colours_agree_with_mitsuba() {
     assert_eq!(xml.matches("\"mesh_attribute\"").count(), 3, "{xml}");
     let spp = 32;
     for method in [Method::Pt, Method::Ris] {
-        let exrs = lanterna_batches(&loaded.scene, method, &options, 8, spp, tmp.path());
-        let report = compare(&dir, &exrs, 4 * spp, &tmp.path().join("report.json"));
-        assert_eq!(report["exact"], true, "{}", report["approximations"]);
-        assert!(
-            report["agree"].as_bool().unwrap(),
-            "{method}: lanterna and Mitsuba disagree:\nmean {}\nblocks {}\npixels {}",
-            report["mean"],
-            report["blocks"],
-            report["pixels"]
+        let what = method.name();
+        assert_agrees_exactly(
+            &loaded.scene,
+            method,
+            &options,
+            &dir,
+            spp,
+            4 * spp,
+            tmp.path(),
+            what,
         );
     }
 }

@@ -97,6 +97,7 @@ mod tests {
             positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
             normals: vec![],
             uvs: vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            colors: vec![],
             faces: vec![[0, 1, 2]],
         };
         let b = m.to_bytes();
@@ -108,6 +109,18 @@ mod tests {
         // The last face's indices.
         assert_eq!(&b[b.len() - 12..b.len() - 8], &0i32.to_le_bytes());
         assert_eq!(&b[b.len() - 4..], &2i32.to_le_bytes());
+        // Colours follow the texture coordinates as float r, g, b.
+        let coloured = PlyMesh {
+            colors: vec![[0.25, 0.5, 1.0]; 3],
+            ..m
+        };
+        let b = coloured.to_bytes();
+        let text = String::from_utf8_lossy(&b);
+        let end = text.find("end_header\n").unwrap() + "end_header\n".len();
+        assert!(text[..end]
+            .contains("property float v\nproperty float r\nproperty float g\nproperty float b\n"));
+        assert_eq!(b.len() - end, 3 * 8 * 4 + 13);
+        assert_eq!(&b[end + 5 * 4..end + 6 * 4], &0.25f32.to_le_bytes());
     }
 
     #[test]

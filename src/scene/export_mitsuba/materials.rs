@@ -7,22 +7,13 @@ use super::geometry::UvPlan;
 use super::textures::{average_colour, linear_texels};
 use super::uv_cover;
 use super::writer::Writer;
-use super::xml::{bitmap_xml, is_identity, rgb_xml, uv_matrix, xml_escape};
+use super::xml::{bitmap_xml, bsdf_id, is_identity, rgb_xml, uv_matrix, xml_escape};
 use super::ExportError;
 use crate::gpu;
 use crate::scene::TextureData;
 use crate::vk::TextureFormat;
 use glam::Mat3;
 use std::fmt::Write as _;
-
-/// The XML id of material `m`'s BSDF, with or without vertex colours.
-pub(super) fn bsdf_id(m: u32, vertex_colors: bool) -> String {
-    if vertex_colors {
-        format!("bsdf{m}-colors")
-    } else {
-        format!("bsdf{m}")
-    }
-}
 
 impl Writer<'_> {
     /// Which UV set the PLY of a material carries, and which transform is baked in.

@@ -4,8 +4,7 @@
 
 use super::files::PlyMesh;
 use super::geometry::{append_instance, back_sheet, shading, GroupKey, Shading, UvPlan};
-use super::materials::bsdf_id;
-use super::xml::{integrator_xml, xml_escape};
+use super::xml::{bsdf_id, integrator_xml, xml_escape};
 use super::{io_err, ExportError, ExportOptions};
 use crate::gpu;
 use crate::lights::LightTable;

@@ -100,6 +100,15 @@ pub(super) fn xml_escape(s: &str) -> String {
         .replace("--", "- -")
 }
 
+/// The XML id of material `m`'s BSDF, with or without vertex colours.
+pub(super) fn bsdf_id(m: u32, vertex_colors: bool) -> String {
+    if vertex_colors {
+        format!("bsdf{m}-colors")
+    } else {
+        format!("bsdf{m}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
