@@ -154,6 +154,16 @@ fn quad_bin() -> Vec<u8> {
     bin
 }
 
+/// Gives the quad signed-byte normals (accessor 2, not normalised) over its positions'
+/// bytes.
+fn byte_normals(j: &mut Value) {
+    j["accessors"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"bufferView": 0, "componentType": 5120, "count": 4, "type": "VEC3"}));
+    j["meshes"][0]["primitives"][0]["attributes"]["NORMAL"] = json!(2);
+}
+
 /// The quad scene, its JSON changed by `edit`.
 fn scene_with(edit: impl FnOnce(&mut Value)) -> Scene {
     let dir = tempfile::tempdir().unwrap();
@@ -654,6 +664,16 @@ fn wrong_values_are_refused() {
             scene_with(|j| j["cameras"][0]["perspective"]["yfov"] = json!(3.5)),
             "yfov",
         ),
+        // KHR_mesh_quantization: byte normals are unit vectors only when normalised,
+        // and without the extension they are not allowed at all.
+        (
+            scene_with(|j| {
+                j["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
+                byte_normals(j);
+            }),
+            "byte but not normalized",
+        ),
+        (scene_with(byte_normals), "NORMAL must be float VEC3"),
     ];
     for (s, says) in scenes {
         let before = snapshot(s.dir.path());

@@ -358,3 +358,21 @@ fn vertex_colour_alpha_cuts_out_a_masked_surface() {
     let b = render_batches(&without, &camera, settings, 8, 32);
     testing::assert_same_expectation(&a, &b, 8, 1e-3);
 }
+
+/// `KHR_mesh_quantization` (required by the file): `quantized.gltf` is `smooth.gltf`
+/// with the sphere's positions and normals as normalised shorts and the floor and wall
+/// as unsigned-byte corners sized by their nodes (one of them mirrored), so both must
+/// render the same image (8×8 blocks, Welch). Seen to fail with normalised shorts read
+/// as integers, and with the floor's bytes taken as normalised.
+#[test]
+fn quantized_attributes_render_like_floats() {
+    let dir = root().join("tests/data/mitsuba");
+    let floats = load(&dir.join("smooth.gltf"));
+    let quantized = load(&dir.join("quantized.gltf"));
+    assert_eq!(quantized.triangle_count(), floats.triangle_count());
+    let camera = floats.cameras[0].clone();
+    let settings = testing::settings(Method::Pt, 32, 32);
+    let a = render_batches(&floats, &camera, settings.clone(), 8, 32);
+    let b = render_batches(&quantized, &camera, settings, 8, 32);
+    testing::assert_same_expectation(&a, &b, 8, 1e-3);
+}

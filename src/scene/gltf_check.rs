@@ -36,6 +36,14 @@ pub(super) fn precheck(root: &json::Root) -> Result<(), String> {
     Ok(())
 }
 
+/// Whether the file uses `KHR_mesh_quantization` (integer positions, normals, tangents
+/// and texture coordinates).
+pub(super) fn uses_quantization(root: &json::Root) -> bool {
+    root.extensions_used.iter().any(|e| e == QUANTIZATION)
+}
+
+pub(super) const QUANTIZATION: &str = "KHR_mesh_quantization";
+
 /// Every buffer view lies inside its buffer's declared length (which the loaded data
 /// covers: the loader checks that separately).
 pub(super) fn check_views(root: &json::Root) -> Result<(), String> {
@@ -83,10 +91,19 @@ impl Role {
         }
     }
 
-    /// Whether the glTF spec allows this type and component type for the role.
-    fn allows(self, ty: Type, ct: ComponentType) -> bool {
-        use ComponentType::{F32, U16, U32, U8};
+    /// Whether the glTF spec allows this type and component type for the role
+    /// (`quantized`: the file uses `KHR_mesh_quantization`, which adds integer types).
+    fn allows(self, ty: Type, ct: ComponentType, quantized: bool) -> bool {
+        use ComponentType::{F32, I16, I8, U16, U32, U8};
         match self {
+            Role::Position if quantized => {
+                ty == Type::Vec3 && matches!(ct, F32 | I8 | U8 | I16 | U16)
+            }
+            Role::Normal if quantized => ty == Type::Vec3 && matches!(ct, F32 | I8 | I16),
+            Role::Tangent if quantized => ty == Type::Vec4 && matches!(ct, F32 | I8 | I16),
+            Role::TexCoord if quantized => {
+                ty == Type::Vec2 && matches!(ct, F32 | I8 | U8 | I16 | U16)
+            }
             Role::Position | Role::Normal => ty == Type::Vec3 && ct == F32,
             Role::Tangent => ty == Type::Vec4 && ct == F32,
             Role::TexCoord => ty == Type::Vec2 && matches!(ct, F32 | U8 | U16),
@@ -95,8 +112,16 @@ impl Role {
         }
     }
 
-    fn expected(self) -> &'static str {
+    fn expected(self, quantized: bool) -> &'static str {
         match self {
+            Role::Position if quantized => {
+                "VEC3 of float, byte, unsigned byte, short or unsigned short"
+            }
+            Role::Normal if quantized => "VEC3 of float, byte or short",
+            Role::Tangent if quantized => "VEC4 of float, byte or short",
+            Role::TexCoord if quantized => {
+                "VEC2 of float, byte, unsigned byte, short or unsigned short"
+            }
             Role::Position | Role::Normal => "float VEC3",
             Role::Tangent => "float VEC4",
             Role::TexCoord => "VEC2 of float, unsigned byte or unsigned short",
@@ -137,6 +162,7 @@ pub(super) fn check_accessor(
     role: Role,
     max_bytes: u64,
 ) -> Result<(), String> {
+    let quantized = uses_quantization(root);
     let what = format!("accessor {index} ({})", role.name());
     let acc = root
         .accessors
@@ -147,13 +173,21 @@ pub(super) fn check_accessor(
     else {
         return Err(format!("{what} has an invalid type"));
     };
-    if !role.allows(ty, ct) {
+    if !role.allows(ty, ct, quantized) {
         return Err(format!(
             "{what} is {} {}, but {} must be {}",
             component_name(ct),
             type_name(ty),
             role.name(),
-            role.expected()
+            role.expected(quantized)
+        ));
+    }
+    // Integer normals and tangents are unit vectors only as normalised integers.
+    let integer = ct != ComponentType::F32;
+    if integer && matches!(role, Role::Normal | Role::Tangent) && !acc.normalized {
+        return Err(format!(
+            "{what} is {} but not normalized",
+            component_name(ct)
         ));
     }
     let count = acc.count.0;

@@ -40,8 +40,12 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let gltf::Gltf { document, mut blob } =
         gltf::Gltf::from_slice_without_validation(&bytes).map_err(gltf_error)?;
     drop(bytes);
-    let root = document.into_json();
+    let mut root = document.into_json();
     gltf_check::precheck(&root).map_err(&invalid)?;
+    // The crate refuses required extensions it does not read itself; lanterna reads
+    // this one (load_primitive decodes the integer attributes).
+    root.extensions_required
+        .retain(|e| e != gltf_check::QUANTIZATION);
     let document = gltf::Document::from_json(root).map_err(gltf_error)?;
     gltf_check::check_views(document.as_json()).map_err(&invalid)?;
     let mut uris = sources::UriReader::new(path, options.allow_outside_uris, limit);
@@ -441,6 +445,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_ior",
     "KHR_materials_pbrSpecularGlossiness",
     "KHR_materials_specular",
+    "KHR_mesh_quantization",
     "KHR_texture_transform",
 ];
 

@@ -81,26 +81,28 @@ pub(super) fn load_primitive(
         ));
     }
     let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-    let positions: Vec<[f32; 3]> = reader
-        .read_positions()
-        .ok_or_else(|| format!("{name} has no POSITION data"))?
-        .collect();
+    let get = |b: gltf::Buffer<'_>| buffers.get(b.index()).map(|d| &d.0[..]);
+    let attribute = |semantic: gltf::Semantic| prim.get(&semantic);
+    let positions: Vec<[f32; 3]> = attribute(gltf::Semantic::Positions)
+        .and_then(|a| read_floats(a, get, false))
+        .ok_or_else(|| format!("{name} has no POSITION data"))?;
     if positions.iter().flatten().any(|v| !v.is_finite()) {
         return Err(format!("{name} has non-finite vertex positions"));
     }
     let n = positions.len();
-    let normals: Vec<[f32; 3]> = reader
-        .read_normals()
-        .map(|r| r.collect())
+    let normals: Vec<[f32; 3]> = attribute(gltf::Semantic::Normals)
+        .and_then(|a| read_floats(a, get, false))
         .unwrap_or_else(|| vec![[0.0; 3]; n]);
-    let tangents: Vec<[f32; 4]> = reader
-        .read_tangents()
-        .map(|r| r.collect())
+    let tangents: Vec<[f32; 4]> = attribute(gltf::Semantic::Tangents)
+        .and_then(|a| read_floats(a, get, false))
         .unwrap_or_else(|| vec![[0.0; 4]; n]);
+    // Core glTF allows only normalised integer texture coordinates; files that forget
+    // the flag read as normalised, as they always have. With KHR_mesh_quantization the
+    // flag decides (unnormalised ones come with a texture transform that scales them).
+    let lenient = !gltf_check::uses_quantization(root);
     let uv = |set: u32| -> Vec<[f32; 2]> {
-        reader
-            .read_tex_coords(set)
-            .map(|r| r.into_f32().collect())
+        attribute(gltf::Semantic::TexCoords(set))
+            .and_then(|a| read_floats(a, get, lenient))
             .unwrap_or_else(|| vec![[0.0; 2]; n])
     };
     let (uv0, uv1) = (uv(0), uv(1));
@@ -214,4 +216,68 @@ pub(super) fn load_primitive(
         color_offset,
         name,
     }))
+}
+
+/// The elements of a float or integer vertex attribute as floats: integer components
+/// (`KHR_mesh_quantization`, or the core spec's normalised texture coordinates) are
+/// mapped to [0, 1] or [−1, 1] when the accessor is normalized (the glTF spec's
+/// formulas) or `assume_normalized`, and taken as they are otherwise (the node
+/// transform or a texture transform then scales them). `None` when the data cannot be
+/// read.
+fn read_floats<'a, 's, const N: usize>(
+    accessor: gltf::Accessor<'a>,
+    get: impl Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+    assume_normalized: bool,
+) -> Option<Vec<[f32; N]>>
+where
+    [f32; N]: gltf::accessor::Item,
+    [i8; N]: gltf::accessor::Item,
+    [u8; N]: gltf::accessor::Item,
+    [i16; N]: gltf::accessor::Item,
+    [u16; N]: gltf::accessor::Item,
+{
+    use gltf::accessor::{DataType, Iter};
+    let normalized = accessor.normalized() || assume_normalized;
+    fn convert<T: Copy, const N: usize>(
+        iter: Iter<'_, [T; N]>,
+        f: impl Fn(T) -> f32,
+    ) -> Vec<[f32; N]>
+    where
+        [T; N]: gltf::accessor::Item,
+    {
+        iter.map(|e| e.map(&f)).collect()
+    }
+    Some(match accessor.data_type() {
+        DataType::F32 => Iter::<[f32; N]>::new(accessor, get)?.collect(),
+        DataType::I8 => convert(Iter::<[i8; N]>::new(accessor, get)?, |c| {
+            if normalized {
+                (c as f32 / 127.0).max(-1.0)
+            } else {
+                c as f32
+            }
+        }),
+        DataType::U8 => convert(Iter::<[u8; N]>::new(accessor, get)?, |c| {
+            if normalized {
+                c as f32 / 255.0
+            } else {
+                c as f32
+            }
+        }),
+        DataType::I16 => convert(Iter::<[i16; N]>::new(accessor, get)?, |c| {
+            if normalized {
+                (c as f32 / 32767.0).max(-1.0)
+            } else {
+                c as f32
+            }
+        }),
+        DataType::U16 => convert(Iter::<[u16; N]>::new(accessor, get)?, |c| {
+            if normalized {
+                c as f32 / 65535.0
+            } else {
+                c as f32
+            }
+        }),
+        // Refused by `gltf_check::check_accessor` for every vertex attribute.
+        DataType::U32 => return None,
+    })
 }

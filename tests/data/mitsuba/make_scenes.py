@@ -19,6 +19,10 @@ agree up to noise.
   colors.gltf     COLOR_0 vertex colours (float RGB on the floor, normalised 16-bit RGBA
                   times a base colour factor on the wall, a box of the wall's material
                   without colours, colours on an emitter, which they must not tint)
+  quantized.gltf  smooth.gltf with KHR_mesh_quantization (required): the sphere's
+                  positions and normals as normalised shorts, the floor and wall as
+                  unnormalised unsigned bytes scaled by their nodes, their texture
+                  coordinates as normalised unsigned bytes; must load as smooth.gltf does
   glossy.gltf     rough metal and rough dielectric panels (not Lambertian: the export
                   approximates them with `principled`; measures the gap, no exact check)
 
@@ -55,17 +59,21 @@ class Builder:
         self.images, self.textures, self.samplers = [], [], []
         self.lights = []
         self.roots = []
+        self.required = []
 
-    def _view(self, data):
+    def _view(self, data, stride=None):
         while len(self.bin) % 4:
             self.bin += b"\x00"
         off = len(self.bin)
         self.bin += data
-        self.views.append({"buffer": 0, "byteOffset": off, "byteLength": len(data)})
+        view = {"buffer": 0, "byteOffset": off, "byteLength": len(data)}
+        if stride:
+            view["byteStride"] = stride
+        self.views.append(view)
         return len(self.views) - 1
 
-    def _acc(self, data, comp, count, typ, **kw):
-        self.accessors.append(dict(bufferView=self._view(data), componentType=comp,
+    def _acc(self, data, comp, count, typ, stride=None, **kw):
+        self.accessors.append(dict(bufferView=self._view(data, stride), componentType=comp,
                                    count=count, type=typ, **kw))
         return len(self.accessors) - 1
 
@@ -190,7 +198,8 @@ class Builder:
     def write(self, name):
         used = ["KHR_materials_specular", "KHR_materials_emissive_strength"]
         g = {"asset": {"version": "2.0", "generator": "lanterna tests/data/mitsuba/make_scenes.py"},
-             "extensionsUsed": used + (["KHR_lights_punctual"] if self.lights else []),
+             "extensionsUsed": used + (["KHR_lights_punctual"] if self.lights else [])
+             + self.required,
              "buffers": [{"byteLength": len(self.bin), "uri": "data:application/octet-stream;base64,"
                           + base64.b64encode(bytes(self.bin)).decode()}],
              "bufferViews": self.views, "accessors": self.accessors, "meshes": self.meshes,
@@ -200,6 +209,8 @@ class Builder:
             g.update(images=self.images, textures=self.textures, samplers=self.samplers)
         if self.lights:
             g["extensions"] = {"KHR_lights_punctual": {"lights": self.lights}}
+        if self.required:
+            g["extensionsRequired"] = self.required
         with open(os.path.join(HERE, name), "w") as f:
             json.dump(g, f, separators=(",", ":"))
 
@@ -409,6 +420,68 @@ def colors_scene():
     b.write("colors.gltf")
 
 
+def sphere_geometry(rings=6, segs=12):
+    pos, idx = [], []
+    for i in range(rings + 1):
+        th = math.pi * i / rings
+        for j in range(segs + 1):
+            ph = 2 * math.pi * j / segs
+            pos.append([math.sin(th) * math.cos(ph), math.cos(th), math.sin(th) * math.sin(ph)])
+    for i in range(rings):
+        for j in range(segs):
+            a, c = i * (segs + 1) + j, (i + 1) * (segs + 1) + j
+            idx += [a, a + 1, c, a + 1, c + 1, c]
+    return pos, idx
+
+
+def quantized_scene():
+    """smooth.gltf's geometry in KHR_mesh_quantization's integer types."""
+    b = Builder()
+    b.required = ["KHR_mesh_quantization"]
+
+    def ind(indices):
+        return b._acc(b"".join(struct.pack("<I", i) for i in indices), 5125, len(indices),
+                      "SCALAR")
+
+    def short3(vs):
+        # Normalised shorts, padded to 8-byte elements (vertex data is 4-byte aligned).
+        data = b"".join(struct.pack("<3hxx", *(round(32767 * c) for c in v)) for v in vs)
+        return b._acc(data, 5122, len(vs), "VEC3", stride=8, normalized=True)
+
+    grey = b.lambert((0.6, 0.6, 0.6))
+    # Floor and wall: corners 0/1 as unsigned bytes, placed and sized by their nodes.
+    corners = [(0, 0, 1), (1, 0, 1), (1, 0, 0), (0, 0, 0)]
+    pos = b._acc(b"".join(struct.pack("<3Bx", *c) for c in corners), 5121, 4, "VEC3",
+                 stride=4, min=[0, 0, 0], max=[1, 0, 1])
+    uv = b._acc(b"".join(struct.pack("<2Bxx", *t) for t in [(0, 0), (255, 0), (255, 255), (0, 255)]),
+                5121, 4, "VEC2", stride=4, normalized=True)
+    quad = {"primitives": [{"attributes": {"POSITION": pos, "TEXCOORD_0": uv},
+                            "indices": ind([0, 1, 2, 0, 2, 3]), "material": grey}]}
+    b.meshes.append(quad)
+    floor = len(b.meshes) - 1
+    size = 2.0
+    b.node(mesh=floor, translation=[-size, 0, -size], scale=[2 * size, 1, 2 * size])
+    # The wall: the same quad turned up about x (its z becomes y), mirrored in z so that
+    # it faces the camera (a negative-determinant node flips the winding).
+    b.node(mesh=floor, translation=[-size, 0, -size], scale=[2 * size, 1, -2 * size],
+           rotation=[0.7071068, 0, 0, 0.7071068])
+    pos, idx = sphere_geometry()
+    sphere = {"primitives": [{"attributes": {
+        "POSITION": short3(pos), "NORMAL": short3(pos)}, "indices": ind(idx),
+        "material": b.lambert((0.8, 0.5, 0.3))}]}
+    b.accessors[sphere["primitives"][0]["attributes"]["POSITION"]].update(
+        min=[-1, -1, -1], max=[1, 1, 1])
+    b.meshes.append(sphere)
+    b.node(mesh=len(b.meshes) - 1, translation=[0, 0.7, -0.3], scale=[0.7, 0.7, 0.7])
+    light = b.lambert((0, 0, 0), emission=(1, 1, 1), strength=8)
+    b.node(mesh=b.quad((-0.5, 2.2, -0.5), (0.5, 2.2, -0.5), (0.5, 2.2, 0.5), (-0.5, 2.2, 0.5),
+                       light, uv=False))
+    eye = (0.3, 1.4, 3.2)
+    b.node(camera=b.camera(yfov=0.8), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.6, -0.3)))
+    b.write("quantized.gltf")
+
+
 def glossy_scene():
     b = Builder()
     grey = b.lambert((0.6, 0.6, 0.6))
@@ -436,3 +509,4 @@ if __name__ == "__main__":
     smooth_scene()
     glossy_scene()
     colors_scene()
+    quantized_scene()
