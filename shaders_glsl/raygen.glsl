@@ -344,7 +344,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
         ds = sample_direction(s, d, rng);
         info.directions += 1.0;
         if (ds.guided) info.guided += 1.0;
-        origin = offset_ray(s.p, s.ng);
+        origin = offset_ray(s.p, surface_side_normal(s, ds.wi));
         dir = ds.wi;
     }
     if (TRAINING) record_path(rec, recorded, rng);

@@ -1,14 +1,17 @@
 //! The glTF metallic-roughness BSDF (`shaders_glsl/inc/bsdf.glsl`) on the device, through
-//! the test kernel `tests/bsdf`, for dielectric, metallic, blended and coloured-specular
-//! materials from rough to glossy, at outgoing directions from normal to grazing:
+//! the test kernel `tests/bsdf`, for dielectric, metallic, blended, coloured-specular and
+//! thin transmitting materials from rough to glossy, at outgoing directions from normal
+//! to grazing:
 //!
-//! * f·cosθ equals the glTF specification's formulas (appendix B; KHR_materials_specular's
-//!   F0 and F90), written again below from the specification in its own form (the
-//!   visibility term V rather than Smith's Λ, the Fresnel term as F0/F90 interpolated by
-//!   metallic), at directions spread over the hemisphere;
-//! * the density is normalised: its integral over the upper hemisphere (a fine (θ, φ)
-//!   grid) plus the share of samples the kernel rejects (a visible normal reflected
-//!   below the surface) is one;
+//! * f·|cosθ| equals the glTF specification's formulas (appendix B; KHR_materials_specular's
+//!   F0 and F90; KHR_materials_transmission's tinted BTDF for a thin wall, the reflection
+//!   lobe at the incident direction mirrored through the surface), written again below
+//!   from the specification in its own form (the visibility term V rather than Smith's Λ,
+//!   the Fresnel term as F0/F90 interpolated by metallic), at directions spread over the
+//!   sphere;
+//! * the density is normalised: its integral over the upper hemisphere (the sphere for a
+//!   transmitting material; a fine (θ, φ) grid) plus the share of samples the kernel
+//!   rejects (a visible normal reflected to the wrong side of the surface) is one;
 //! * sampled directions follow the density: a χ² test over (θ, φ) bins whose expected
 //!   counts are the density's integrals over them, with the rejected samples as one more
 //!   bin;
@@ -35,6 +38,9 @@ struct Case {
     wo: [f64; 3],
     /// KHR_materials_specular factor: the dielectric F90.
     specular: f64,
+    /// KHR_materials_transmission factor: the share of the dielectric's diffuse lobe
+    /// that goes through the surface.
+    transmission: f64,
 }
 
 impl Case {
@@ -52,6 +58,7 @@ impl Case {
             self.wo[1],
             self.wo[2],
             self.specular,
+            self.transmission,
         ];
         v.iter().flat_map(|&x| (x as f32).to_le_bytes()).collect()
     }
@@ -79,6 +86,7 @@ fn cases() -> Vec<(&'static str, Case)> {
         alpha: 0.25,
         wo: oblique,
         specular: 1.0,
+        transmission: 0.0,
     };
     vec![
         ("rough plastic, oblique", plastic),
@@ -118,21 +126,61 @@ fn cases() -> Vec<(&'static str, Case)> {
                 alpha: 0.3,
                 wo: grazing,
                 specular: 0.8,
+                transmission: 0.0,
+            },
+        ),
+        (
+            "rough thin glass, oblique",
+            Case {
+                base_color: [0.9, 0.95, 0.8],
+                alpha: 0.2,
+                transmission: 1.0,
+                ..plastic
+            },
+        ),
+        (
+            "clear glass without reflection (specular 0), grazing",
+            Case {
+                base_color: [0.9, 0.6, 0.3],
+                f0: [0.0; 3],
+                alpha: 0.05,
+                wo: grazing,
+                specular: 0.0,
+                transmission: 1.0,
+                ..plastic
+            },
+        ),
+        (
+            "glossy half-transmitting half metal with coloured specular, near the normal",
+            Case {
+                base_color: [0.7, 0.5, 0.3],
+                metallic: 0.3,
+                f0: [0.8 * 0.04, 0.8 * 0.02, 0.8 * 0.08],
+                alpha: 0.1,
+                wo: near_normal,
+                specular: 0.8,
+                transmission: 0.6,
             },
         ),
     ]
 }
 
-/// f·cosθi of `c` toward `wi`, from the glTF specification (appendix B) with
+/// f·|cosθi| of `c` toward `wi`, from the glTF specification (appendix B) with
 /// KHR_materials_specular: F0 = mix(dielectric F0, base colour, metallic), F90 =
 /// mix(specular, 1, metallic); the dielectric's diffuse part is weighted by 1 − max(F).
+/// KHR_materials_transmission replaces the share `transmission` of the diffuse BRDF by
+/// the specular BTDF tinted by the base colour; for a thin wall that is D·V with the
+/// incident direction mirrored through the surface plane (the sample viewer's form).
 fn gltf_f_cos(c: &Case, wi: [f64; 3]) -> [f64; 3] {
     let wo = c.wo;
-    let (nl, nv) = (wi[2], wo[2]);
-    if nl <= 0.0 || nv <= 0.0 {
+    let nv = wo[2];
+    if wi[2] == 0.0 || nv <= 0.0 || (wi[2] < 0.0 && c.transmission == 0.0) {
         return [0.0; 3];
     }
-    let h = unit([wo[0] + wi[0], wo[1] + wi[1], wo[2] + wi[2]]);
+    let through = wi[2] < 0.0;
+    let l = [wi[0], wi[1], wi[2].abs()];
+    let nl = l[2];
+    let h = unit([wo[0] + l[0], wo[1] + l[1], wo[2] + l[2]]);
     let (nh, vh) = (h[2], dot(wo, h));
     let a2 = c.alpha * c.alpha;
     let d = a2 / (PI * (nh * nh * (a2 - 1.0) + 1.0).powi(2));
@@ -145,8 +193,14 @@ fn gltf_f_cos(c: &Case, wi: [f64; 3]) -> [f64; 3] {
     let fd_max = fd.iter().cloned().fold(0.0, f64::max);
     let mut out = [0.0; 3];
     for k in 0..3 {
+        if through {
+            let btdf = c.base_color[k] * d * v;
+            out[k] = (1.0 - c.metallic) * c.transmission * (1.0 - fd_max) * btdf * nl;
+            continue;
+        }
         let fm = c.base_color[k] + (1.0 - c.base_color[k]) * w;
-        let dielectric = c.base_color[k] / PI * (1.0 - fd_max) + fd[k] * d * v;
+        let diffuse = (1.0 - c.transmission) * c.base_color[k] / PI;
+        let dielectric = diffuse * (1.0 - fd_max) + fd[k] * d * v;
         let metal = fm * d * v;
         out[k] = ((1.0 - c.metallic) * dielectric + c.metallic * metal) * nl;
     }
@@ -219,36 +273,41 @@ impl Grid {
         let (t0, t1) = (i as f64 * dt, (i + 1) as f64 * dt);
         (t0.cos() - t1.cos()) * 2.0 * PI / self.n_phi as f64
     }
-    fn items(&self) -> Vec<[f32; 4]> {
+    /// The cells' directions, above the surface or (`below`) mirrored under it.
+    fn items(&self, below: bool) -> Vec<[f32; 4]> {
+        let sign = if below { -1.0 } else { 1.0 };
         let mut v = Vec::with_capacity(self.n_theta * self.n_phi);
         for i in 0..self.n_theta {
             for j in 0..self.n_phi {
                 let d = self.dir(i, j);
-                v.push([d[0] as f32, d[1] as f32, d[2] as f32, 0.0]);
+                v.push([d[0] as f32, d[1] as f32, (sign * d[2]) as f32, 0.0]);
             }
         }
         v
     }
 }
 
-/// θ and φ bin of direction `d` on a `bins_theta` × `bins_phi` grid of the hemisphere.
-fn bin_of(d: [f64; 3], bins_theta: usize, bins_phi: usize) -> Option<usize> {
-    if d[2] <= 0.0 {
+/// θ and φ bin of direction `d` on a `bins_theta` × `bins_phi` grid of the upper
+/// hemisphere, followed (`sphere`) by the same grid mirrored below it.
+fn bin_of(d: [f64; 3], bins_theta: usize, bins_phi: usize, sphere: bool) -> Option<usize> {
+    if d[2] == 0.0 || (d[2] < 0.0 && !sphere) {
         return None;
     }
-    let t = d[2].min(1.0).acos() / (PI / 2.0);
+    let below = if d[2] < 0.0 { bins_theta * bins_phi } else { 0 };
+    let t = d[2].abs().min(1.0).acos() / (PI / 2.0);
     let mut p = d[1].atan2(d[0]) / (2.0 * PI);
     if p < 0.0 {
         p += 1.0;
     }
     let i = ((t * bins_theta as f64) as usize).min(bins_theta - 1);
     let j = ((p * bins_phi as f64) as usize).min(bins_phi - 1);
-    Some(i * bins_phi + j)
+    Some(below + i * bins_phi + j)
 }
 
 #[test]
 fn bsdf_matches_the_gltf_formulas() {
-    // Directions spread over the hemisphere (and a few below it: zero).
+    // Directions spread over the hemisphere (and a few below it), each also mirrored
+    // below the surface (zero unless the material transmits).
     let mut state = 0x2545_f491_4f6c_dd1du64;
     let mut next = || {
         state ^= state << 13;
@@ -263,6 +322,10 @@ fn bsdf_matches_the_gltf_formulas() {
             let s = (1.0 - z * z).max(0.0).sqrt();
             [s * p.cos(), s * p.sin(), z]
         })
+        .collect();
+    let dirs: Vec<[f64; 3]> = dirs
+        .iter()
+        .flat_map(|&d| [d, [d[0], d[1], -d[2]]])
         .collect();
     let items: Vec<[f32; 4]> = dirs
         .iter()
@@ -291,8 +354,8 @@ fn bsdf_matches_the_gltf_formulas() {
 #[test]
 fn bsdf_density_is_normalised_and_sampling_follows_it() {
     let grid = Grid::fine();
-    let cells = grid.items();
-    // χ² bins: blocks of 24 × 48 grid cells (32 × 32 bins).
+    let halves = [grid.items(false), grid.items(true)];
+    // χ² bins: blocks of 24 × 48 grid cells (32 × 32 bins per hemisphere).
     let (bt, bp) = (32usize, 32usize);
     let samples = 1usize << 20;
     let mut state = 0x9e37_79b9_7f4a_7c15u64;
@@ -307,20 +370,29 @@ fn bsdf_density_is_normalised_and_sampling_follows_it() {
         .collect();
     for (name, c) in cases() {
         // The density on the grid: its integral, and each χ² bin's share.
-        let eval = run(&c, 1, &cells);
-        let mut expected = vec![0.0f64; bt * bp + 1];
+        // A transmitting material's density lives on the whole sphere: the lower
+        // hemisphere's bins follow the upper's.
+        let sphere = c.transmission > 0.0;
+        let bins = if sphere { 2 * bt * bp } else { bt * bp };
+        let mut expected = vec![0.0f64; bins + 1];
         let mut integral = 0.0;
-        grid.for_each_cell(|i, j, dw| {
-            let p = eval[i * grid.n_phi + j].pdf * dw;
-            integral += p;
-            expected[(i * bt / grid.n_theta) * bp + j * bp / grid.n_phi] += p;
-        });
-        // Samples: rejected ones (below the surface) are the last bin.
+        for (half, cells) in halves.iter().enumerate().take(if sphere { 2 } else { 1 }) {
+            let eval = run(&c, 1, cells);
+            grid.for_each_cell(|i, j, dw| {
+                let p = eval[i * grid.n_phi + j].pdf * dw;
+                integral += p;
+                expected[half * bt * bp + (i * bt / grid.n_theta) * bp + j * bp / grid.n_phi] += p;
+            });
+        }
+        // Samples: rejected ones are the last bin.
         let drawn = run(&c, 0, &us);
-        let mut observed = vec![0u64; bt * bp + 1];
+        let mut observed = vec![0u64; bins + 1];
         let mut rejected = 0u64;
         for a in &drawn {
-            match (a.pdf >= 0.0).then(|| bin_of(a.wi, bt, bp)).flatten() {
+            match (a.pdf >= 0.0)
+                .then(|| bin_of(a.wi, bt, bp, sphere))
+                .flatten()
+            {
                 Some(b) => {
                     observed[b] += 1;
                     // A sample carries f·cos and the density of its own direction.
@@ -336,19 +408,17 @@ fn bsdf_density_is_normalised_and_sampling_follows_it() {
                 None => rejected += 1,
             }
         }
-        observed[bt * bp] = rejected;
+        observed[bins] = rejected;
         let rejected_share = rejected as f64 / samples as f64;
-        // Normalisation: the hemisphere's integral and the rejected share make one (the
+        // Normalisation: the density's integral and the rejected share make one (the
         // share's standard error is below 5·10⁻⁴ at 2²⁰ samples).
         let total = integral + rejected_share;
-        eprintln!(
-            "{name}: ∫pdf over the hemisphere {integral:.5}, rejected {rejected_share:.5}, sum {total:.5}"
-        );
+        eprintln!("{name}: ∫pdf {integral:.5}, rejected {rejected_share:.5}, sum {total:.5}");
         assert!(
             (total - 1.0).abs() < 4e-3,
             "{name}: ∫pdf {integral} + rejected share {rejected_share} = {total}"
         );
-        expected[bt * bp] = 1.0 - integral;
+        expected[bins] = 1.0 - integral;
         let expected: Vec<f64> = expected.iter().map(|p| p * samples as f64).collect();
         let observed: Vec<f64> = observed.iter().map(|&n| n as f64).collect();
         let chi2 = chi_square(&observed, &expected, 20.0);
@@ -367,7 +437,7 @@ fn bsdf_density_is_normalised_and_sampling_follows_it() {
 #[test]
 fn white_metal_reflects_at_most_all_light() {
     let grid = Grid::fine();
-    let cells = grid.items();
+    let cells = grid.items(false);
     for (alpha, wo) in [
         (0.05, unit([0.1, 0.0, 0.99])),
         (0.3, unit([0.6, 0.3, 0.5])),
@@ -380,6 +450,7 @@ fn white_metal_reflects_at_most_all_light() {
             alpha,
             wo,
             specular: 1.0,
+            transmission: 0.0,
         };
         let eval = run(&c, 1, &cells);
         let mut albedo = 0.0;
@@ -392,6 +463,47 @@ fn white_metal_reflects_at_most_all_light() {
         assert!(
             albedo <= 1.0 + 2e-3 && albedo > 0.6,
             "white metal α {alpha}: directional albedo {albedo}"
+        );
+    }
+    testing::assert_no_validation_errors();
+}
+
+/// A white thin pane reflects and transmits at most all the light: reflection takes F,
+/// transmission what is left (1 − F). Near grazing F is large, so a transmission lobe
+/// that forgot its 1 − F would pass 1 clearly.
+#[test]
+fn white_thin_glass_scatters_at_most_all_light() {
+    let grid = Grid::fine();
+    let halves = [grid.items(false), grid.items(true)];
+    for (alpha, wo) in [
+        (0.05, unit([0.1, 0.0, 0.99])),
+        (0.3, unit([0.6, 0.3, 0.5])),
+        (0.05, unit([0.0, 0.98, 0.15])),
+    ] {
+        let c = Case {
+            base_color: [1.0; 3],
+            metallic: 0.0,
+            f0: [0.04; 3],
+            alpha,
+            wo,
+            specular: 1.0,
+            transmission: 1.0,
+        };
+        let mut parts = [0.0; 2];
+        for (part, cells) in parts.iter_mut().zip(&halves) {
+            let eval = run(&c, 1, cells);
+            grid.for_each_cell(|i, j, dw| *part += eval[i * grid.n_phi + j].f[1] * dw);
+        }
+        let albedo = parts[0] + parts[1];
+        eprintln!(
+            "white thin glass α {alpha}, cosθo {:.2}: reflected {:.4}, transmitted {:.4}",
+            wo[2], parts[0], parts[1]
+        );
+        assert!(
+            albedo <= 1.0 + 2e-3 && albedo > 0.6 && parts[1] > 0.3,
+            "white thin glass α {alpha}: reflected {} + transmitted {}",
+            parts[0],
+            parts[1]
         );
     }
     testing::assert_no_validation_errors();

@@ -2,9 +2,14 @@
 // Lambertian diffuse + GGX specular (height-correlated Smith), mixed as the glTF spec's
 // appendix B describes (dielectric = Fresnel mix of diffuse and specular; metal =
 // specular tinted by a Schlick conductor Fresnel; metallic blends the two), with
-// KHR_materials_specular's factor and colour. Sampling picks the diffuse or specular lobe
-// with a probability from the Fresnel weights at ωo; the specular lobe samples visible
-// normals (Dupuy & Benyoub 2023, spherical caps). eval() returns f·cosθi.
+// KHR_materials_specular's factor and colour, and KHR_materials_transmission for a thin
+// wall: a share `transmission` of the dielectric's diffuse lobe becomes a GGX lobe
+// through the surface, tinted by the base colour, whose directions are the specular
+// lobe's mirrored through the tangent plane (a rough pane scatters light around the
+// straight-through direction; as the glTF sample viewer evaluates it). Sampling picks
+// the specular lobe with a probability from the Fresnel weights at ωo, else transmission
+// or diffuse by the transmission share; the specular and transmission lobes sample
+// visible normals (Dupuy & Benyoub 2023, spherical caps). eval() returns f·|cosθi|.
 #ifndef INC_BSDF_GLSL
 #define INC_BSDF_GLSL
 
@@ -17,6 +22,8 @@ struct BsdfParams {
     float alpha;           // GGX α = roughness², clamped to MIN_GGX_ALPHA
     float specular;        // KHR_materials_specular factor: dielectric F90
     vec3 f0_dielectric;    // dielectric F0 (ior, specular colour and factor)
+    float transmission;    // KHR_materials_transmission: share of the dielectric's diffuse
+                           // lobe that goes through the surface (0: opaque)
 };
 
 float ggx_d(vec3 h, float a) {
@@ -68,23 +75,33 @@ BsdfWo bsdf_at(BsdfParams p, vec3 wo) {
     return c;
 }
 
-// f(wo, wi)·cosθi and, in `pdf`, the density of sampling wi (solid angle): both share
+// f(wo, wi)·|cosθi| and, in `pdf`, the density of sampling wi (solid angle): both share
 // the half vector and D. The single definition of the BSDF: eval() and pdf() call it.
+// Below the surface (wi.z < 0) only the transmission lobe lives: the specular lobe's
+// value and density at wi mirrored above.
 vec3 bsdf_eval_pdf(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
     vec3 wo = c.wo;
     pdf = 0.0;
-    if (wo.z <= 0.0 || wi.z <= 0.0) return vec3(0.0);
-    vec3 h = normalize(wo + wi);
+    bool through = wi.z < 0.0;
+    if (wo.z <= 0.0 || wi.z == 0.0 || (through && p.transmission <= 0.0)) return vec3(0.0);
+    vec3 wr = through ? vec3(wi.xy, -wi.z) : wi;  // mirrored above the surface
+    vec3 h = normalize(wo + wr);
     float d = ggx_d(h, p.alpha);
     float w = schlick_weight(dot(wo, h));
-    float spec = d / (1.0 + c.lambda_wo + ggx_lambda(wi, p.alpha)) / (4.0 * wo.z * wi.z);
+    float spec = d / (1.0 + c.lambda_wo + ggx_lambda(wr, p.alpha)) / (4.0 * wo.z * wr.z);
     vec3 fd = p.f0_dielectric + (vec3(p.specular) - p.f0_dielectric) * w;
-    vec3 dielectric = p.base_color * INV_PI * (1.0 - max3(fd)) + spec * fd;
-    vec3 metal = spec * (p.base_color + (1.0 - p.base_color) * w);
-    // Specular lobe: visible normals, g1·D/(4 cosθo) (reflection of the sampled normal).
+    // Specular and transmission lobes: visible normals, g1·D/(4 cosθo) (reflection of
+    // the sampled normal; mirrored below the surface for transmission).
     float ps = c.spec_prob;
-    pdf = (1.0 - ps) * wi.z * INV_PI;
-    if (ps > 0.0) pdf += ps * d / ((1.0 + c.lambda_wo) * 4.0 * wo.z);
+    float spec_pdf = d / ((1.0 + c.lambda_wo) * 4.0 * wo.z);
+    if (through) {
+        pdf = (1.0 - ps) * p.transmission * spec_pdf;
+        return (1.0 - p.metallic) * p.transmission * (1.0 - max3(fd)) * spec * p.base_color * wr.z;
+    }
+    vec3 diffuse = p.base_color * INV_PI * (1.0 - p.transmission);
+    vec3 dielectric = diffuse * (1.0 - max3(fd)) + spec * fd;
+    vec3 metal = spec * (p.base_color + (1.0 - p.base_color) * w);
+    pdf = (1.0 - ps) * (1.0 - p.transmission) * wi.z * INV_PI + ps * spec_pdf;
     return mix(dielectric, metal, p.metallic) * wi.z;
 }
 
@@ -110,8 +127,9 @@ vec3 ggx_sample_visible_normal(vec3 wo, float a, vec2 u) {
     return normalize(vec3(h.xy * a, max(h.z, 0.0)));
 }
 
-// Sample wi; returns false when the sample is invalid (below the surface).
-// u.x chooses the lobe, u.yz warps.
+// Sample wi; returns false when the sample is invalid (a visible normal that reflects
+// wo below the surface). u.x chooses the specular lobe (u.x < spec_prob), u.y then the
+// transmission lobe (u.y < transmission, rescaled), and the rest warps.
 bool bsdf_sample(BsdfParams p, BsdfWo c, vec3 u, out vec3 wi) {
     wi = vec3(0.0);
     vec3 wo = c.wo;
@@ -120,9 +138,17 @@ bool bsdf_sample(BsdfParams p, BsdfWo c, vec3 u, out vec3 wi) {
     if (u.x < ps) {
         vec3 h = ggx_sample_visible_normal(wo, p.alpha, u.yz);
         wi = reflect(-wo, h);
-    } else {
-        wi = square_to_cosine_hemisphere(u.yz);
+        return wi.z > 0.0;
     }
+    if (u.y < p.transmission) {
+        vec2 v = vec2(min(u.y / p.transmission, 0.99999994), u.z);
+        vec3 h = ggx_sample_visible_normal(wo, p.alpha, v);
+        wi = reflect(-wo, h);
+        wi.z = -wi.z;
+        return wi.z < 0.0;
+    }
+    float t = p.transmission;
+    wi = square_to_cosine_hemisphere(vec2(t > 0.0 ? min((u.y - t) / (1.0 - t), 0.99999994) : u.y, u.z));
     return wi.z > 0.0;
 }
 

@@ -126,6 +126,12 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     s.bsdf.specular = m.specular;
     float f0 = sqr((m.ior - 1.0) / (m.ior + 1.0));
     s.bsdf.f0_dielectric = min(f0 * m.specular_color, vec3(1.0)) * m.specular;
+    float transmission = m.transmission;
+    if (transmission > 0.0 && m.transmission_tex.index >= 0)
+        transmission *= sample_texture(m.transmission_tex, m.transmission_tex.uv_set == 1u ? s.uv1 : s.uv0).r;
+    // Metals do not transmit: the lobe is part of the dielectric (the BSDF weighs it by
+    // 1 − metallic), so a fully metallic surface stays opaque for the path's geometry too.
+    s.bsdf.transmission = s.bsdf.metallic < 1.0 ? clamp(transmission, 0.0, 1.0) : 0.0;
 
     // Emission: front face only unless the material is double-sided.
     bool emits = s.front || (m.flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;
@@ -141,12 +147,24 @@ vec3 surface_to_world(Surface s, vec3 v) { return to_world(v, s.t, s.b, s.n); }
 // What the BSDF needs of the surface's wo, once per shading point (see BsdfWo).
 BsdfWo surface_bsdf_at(Surface s) { return bsdf_at(s.bsdf, surface_to_local(s, s.wo)); }
 
-// f·cos for world directions and the BSDF's sampling density of wi, zero when wi is
-// below the geometric surface. `c` is surface_bsdf_at(s).
+// Whether light can go through the surface (KHR_materials_transmission): directions
+// below the geometric surface then carry light too.
+bool surface_transmits(Surface s) { return s.bsdf.transmission > 0.0; }
+
+// The geometric normal on the side of direction w (the side a ray toward w leaves from).
+vec3 surface_side_normal(Surface s, vec3 w) { return dot(w, s.ng) < 0.0 ? -s.ng : s.ng; }
+
+// f·|cos| for world directions and the BSDF's sampling density of wi. A direction must
+// lie on the same side of the geometric and the shading surface (no light leaks through
+// shading normals): above both, or below both for a transmitting surface; zero otherwise.
+// `c` is surface_bsdf_at(s).
 vec3 surface_bsdf_eval_pdf(Surface s, BsdfWo c, vec3 wi, out float pdf) {
     pdf = 0.0;
-    if (dot(wi, s.ng) <= 0.0) return vec3(0.0);
-    return bsdf_eval_pdf(s.bsdf, c, surface_to_local(s, wi), pdf);
+    float cg = dot(wi, s.ng);
+    if (cg == 0.0 || (cg < 0.0 && !surface_transmits(s))) return vec3(0.0);
+    vec3 local = surface_to_local(s, wi);
+    if ((local.z < 0.0) != (cg < 0.0)) return vec3(0.0);
+    return bsdf_eval_pdf(s.bsdf, c, local, pdf);
 }
 
 vec3 surface_bsdf_eval(Surface s, vec3 wi) {

@@ -57,6 +57,11 @@ struct Material {
     TextureRef metallic_roughness_tex;
     TextureRef normal_tex;
     TextureRef emissive_tex;
+    // KHR_materials_transmission (thin-walled): the share of the dielectric's diffuse
+    // lobe replaced by a base-colour-tinted GGX transmission lobe (factor × texture R).
+    // Last, so that the content hash of scenes without it is that of older builds.
+    float transmission;
+    TextureRef transmission_tex;
 };
 
 // One emissive triangle in world space.

@@ -1,7 +1,7 @@
 // The BSDF (inc/bsdf.glsl) of one material at one outgoing direction, for the tests in
 // tests/bsdf.rs: mode 0 samples a direction from each input's uniform numbers (xyz) and
-// returns it with the density and f·cosθ that bsdf_eval_pdf gives it; mode 1 evaluates
-// f·cosθ and the density at each input direction.
+// returns it with the density and f·|cosθ| that bsdf_eval_pdf gives it; mode 1 evaluates
+// f·|cosθ| and the density at each input direction.
 #version 460
 #include "../inc/bsdf.glsl"
 
@@ -12,6 +12,7 @@ struct BsdfCase {
     float alpha;
     vec3 wo;
     float specular;
+    float transmission;
 };
 
 layout(local_size_x = 64) in;
@@ -29,6 +30,7 @@ void main() {
     p.alpha = bsdf_case.alpha;
     p.specular = bsdf_case.specular;
     p.f0_dielectric = bsdf_case.f0_dielectric;
+    p.transmission = bsdf_case.transmission;
     BsdfWo c = bsdf_at(p, bsdf_case.wo);
     vec3 wi = items[t].xyz;
     bool valid = true;

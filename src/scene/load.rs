@@ -437,14 +437,15 @@ fn rebase(scene: &mut Scene) {
 
 /// glTF extensions lanterna reads. A file may use others without requiring them (a
 /// required one it does not know is refused when the file is parsed); their data is then
-/// ignored, which a user should hear about: a glass pane under
-/// `KHR_materials_transmission` renders opaque, an `KHR_materials_unlit` material lit.
+/// ignored, which a user should hear about: a solid glass object under
+/// `KHR_materials_volume` renders as a thin shell, a `KHR_materials_unlit` material lit.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_pbrSpecularGlossiness",
     "KHR_materials_specular",
+    "KHR_materials_transmission",
     "KHR_mesh_quantization",
     "KHR_texture_transform",
 ];
@@ -500,7 +501,17 @@ fn content_hash(scene: &Scene) -> String {
         }
     }
     eat(bytemuck::cast_slice(&scene.indices));
-    eat(bytemuck::cast_slice(&scene.materials));
+    // Materials up to their transmission fields, which count only where a material
+    // transmits (scenes without transmission keep their hashes, as for vertex colours).
+    let opaque_part = std::mem::offset_of!(crate::gpu::Material, transmission);
+    for m in &scene.materials {
+        let bytes = bytemuck::bytes_of(m);
+        if m.transmission > 0.0 {
+            eat(bytes);
+        } else {
+            eat(&bytes[..opaque_part]);
+        }
+    }
     for i in &scene.instances {
         eat(&i.primitive.to_le_bytes());
         eat(bytemuck::cast_slice(&i.transform.to_cols_array()));

@@ -165,6 +165,8 @@ pub fn default_material() -> gpu::Material {
         metallic_roughness_tex: no_texture(),
         normal_tex: no_texture(),
         emissive_tex: no_texture(),
+        transmission: 0.0,
+        transmission_tex: no_texture(),
     }
 }
 
@@ -210,6 +212,13 @@ pub fn convert(
                 "material `{name}`: KHR_materials_specular textures are ignored (factors used)"
             ));
         }
+    }
+    // Thin-walled transmission (KHR_materials_volume, which would make the surface the
+    // boundary of a refracting solid, is not read: its users get the unsupported-extension
+    // warning and a thin surface).
+    if let Some(t) = m.transmission() {
+        out.transmission = t.transmission_factor();
+        out.transmission_tex = reg.info(t.transmission_texture(), TextureFormat::Linear);
     }
     if let Some(ior) = m
         .extension_value("KHR_materials_ior")
@@ -260,6 +269,7 @@ pub fn convert(
         out.normal_scale,
         out.alpha_cutoff,
         out.ior,
+        out.transmission,
     ];
     let finite = out
         .base_color
@@ -281,6 +291,7 @@ pub fn convert(
     out.metallic = out.metallic.clamp(0.0, 1.0);
     out.roughness = out.roughness.clamp(0.0, 1.0);
     out.specular = out.specular.max(0.0);
+    out.transmission = out.transmission.clamp(0.0, 1.0);
     Ok(out)
 }
 

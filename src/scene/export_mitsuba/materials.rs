@@ -1,6 +1,8 @@
 //! Materials and textures: glTF materials as Mitsuba BSDFs (exact `diffuse` for
-//! Lambertian ones, `principled` otherwise), base colour and emission as constants or
-//! bitmaps (8-bit sRGB PNG as lanterna decodes it, or linear PFM with the factor baked in).
+//! Lambertian ones, `principled` otherwise; KHR_materials_transmission as a blend with
+//! `thindielectric`, exact for smooth glass without Fresnel reflection), base colour and
+//! emission as constants or bitmaps (8-bit sRGB PNG as lanterna decodes it, or linear PFM
+//! with the factor baked in).
 
 use super::files::{self, PlyMesh};
 use super::geometry::UvPlan;
@@ -75,11 +77,28 @@ impl Writer<'_> {
         }
         let mut s = String::new();
         let _ = writeln!(s, "  <!-- material `{}` -->", xml_escape(&name));
-        let _ = writeln!(
-            s,
-            "  <bsdf type=\"twosided\" id=\"{}\">",
-            bsdf_id(m, vertex_colors)
-        );
+        let transmits = mat.transmission > 0.0 && mat.metallic < 1.0;
+        if transmits {
+            // The reflecting part stays two-sided inside the blend (Mitsuba's `twosided`
+            // refuses transmitting BSDFs; `thindielectric` is symmetric already).
+            let _ = writeln!(
+                s,
+                "  <bsdf type=\"blendbsdf\" id=\"{}\">",
+                bsdf_id(m, vertex_colors)
+            );
+            let _ = writeln!(
+                s,
+                "    <float name=\"weight\" value=\"{}\"/>",
+                mat.transmission.min(1.0)
+            );
+            s.push_str("  <bsdf type=\"twosided\">\n");
+        } else {
+            let _ = writeln!(
+                s,
+                "  <bsdf type=\"twosided\" id=\"{}\">",
+                bsdf_id(m, vertex_colors)
+            );
+        }
         // glTF with specularFactor 0 and metallic 0 is exactly Lambertian (albedo/π).
         if mat.specular == 0.0 && mat.metallic == 0.0 {
             s.push_str("    <bsdf type=\"diffuse\">\n");
@@ -120,7 +139,41 @@ impl Writer<'_> {
             s.push_str("    </bsdf>\n");
         }
         s.push_str("  </bsdf>\n");
+        if transmits {
+            s.push_str(&self.thin_glass_xml(m, &mat, &colour));
+            s.push_str("  </bsdf>\n");
+        }
         Ok(s)
+    }
+
+    /// The transmitting part of a KHR_materials_transmission material as Mitsuba's
+    /// `thindielectric`, its transmittance the base colour (`colour`, the reflectance
+    /// XML). glTF's thin wall passes (1 − F)·base colour straight through (roughness 0)
+    /// and reflects F by Schlick's approximation; `thindielectric` also follows the light
+    /// bouncing inside the wall, so only glass without Fresnel reflection (specularFactor
+    /// 0: matched indices, nothing reflected) is exact; other glass is approximated.
+    fn thin_glass_xml(&mut self, m: u32, mat: &gpu::Material, colour: &str) -> String {
+        let name = self.material_name(m).to_string();
+        let smooth = mat.roughness * mat.roughness <= gpu::MIN_GGX_ALPHA;
+        let reflects = mat.specular > 0.0;
+        if !smooth || reflects {
+            self.approximations.push(format!(
+                "material `{name}`: KHR_materials_transmission (roughness {}, specular {}) approximated by Mitsuba's smooth `thindielectric`",
+                mat.roughness, mat.specular
+            ));
+        }
+        if mat.transmission_tex.index >= 0 {
+            self.approximations.push(format!(
+                "material `{name}`: transmission texture not exported (factor used)"
+            ));
+        }
+        let mut s = String::from("    <bsdf type=\"thindielectric\">\n");
+        let ior = if reflects { mat.ior.max(1.0) } else { 1.0 };
+        let _ = writeln!(s, "      <float name=\"int_ior\" value=\"{ior}\"/>");
+        s.push_str("      <float name=\"ext_ior\" value=\"1\"/>\n");
+        s.push_str(&colour.replace("\"reflectance\"", "\"specular_transmittance\""));
+        s.push_str("    </bsdf>\n");
+        s
     }
 
     /// `<rgb name=…>` or `<texture type="bitmap" name=…>` for the base colour.

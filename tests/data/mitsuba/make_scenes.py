@@ -23,6 +23,11 @@ agree up to noise.
                   positions and normals as normalised shorts, the floor and wall as
                   unnormalised unsigned bytes scaled by their nodes, their texture
                   coordinates as normalised unsigned bytes; must load as smooth.gltf does
+  glass.gltf      KHR_materials_transmission with specularFactor 0 and roughness 0 (exact
+                  against Mitsuba's thindielectric with matched indices): a ceiling lamp
+                  whose light reaches the floor only through an amber pane below it, and
+                  a half-transmitting blue partition (diffuse + thin glass) in front of
+                  a wall lamp, casting a tinted shadow
   glossy.gltf     rough metal and rough dielectric panels (not Lambertian: the export
                   approximates them with `principled`; measures the gap, no exact check)
 
@@ -60,6 +65,7 @@ class Builder:
         self.lights = []
         self.roots = []
         self.required = []
+        self.used = []
 
     def _view(self, data, stride=None):
         while len(self.bin) % 4:
@@ -159,6 +165,18 @@ class Builder:
         self.materials.append(m)
         return len(self.materials) - 1
 
+    def glass(self, rgb, transmission):
+        """Thin smooth glass without Fresnel reflection (specularFactor 0): a share
+        `transmission` passes straight through tinted by `rgb`, the rest is diffuse."""
+        self.materials.append({
+            "pbrMetallicRoughness": {"baseColorFactor": list(rgb) + [1], "metallicFactor": 0,
+                                     "roughnessFactor": 0},
+            "extensions": {"KHR_materials_specular": {"specularFactor": 0},
+                           "KHR_materials_transmission": {"transmissionFactor": transmission}}})
+        if "KHR_materials_transmission" not in self.used:
+            self.used.append("KHR_materials_transmission")
+        return len(self.materials) - 1
+
     def pbr(self, rgb, metallic, roughness):
         self.materials.append({"pbrMetallicRoughness": {"baseColorFactor": list(rgb) + [1],
                                                         "metallicFactor": metallic,
@@ -199,7 +217,7 @@ class Builder:
         used = ["KHR_materials_specular", "KHR_materials_emissive_strength"]
         g = {"asset": {"version": "2.0", "generator": "lanterna tests/data/mitsuba/make_scenes.py"},
              "extensionsUsed": used + (["KHR_lights_punctual"] if self.lights else [])
-             + self.required,
+             + self.used + self.required,
              "buffers": [{"byteLength": len(self.bin), "uri": "data:application/octet-stream;base64,"
                           + base64.b64encode(bytes(self.bin)).decode()}],
              "bufferViews": self.views, "accessors": self.accessors, "meshes": self.meshes,
@@ -482,6 +500,33 @@ def quantized_scene():
     b.write("quantized.gltf")
 
 
+def glass_scene():
+    b = Builder()
+    grey = b.lambert((0.6, 0.6, 0.6))
+    floor_and_wall(b, grey)
+    b.node(mesh=b.box(b.lambert((0.7, 0.2, 0.2))), translation=[0.9, 0.25, 0.2],
+           scale=[0.5, 0.5, 0.5])
+    # Ceiling lamp facing down, an amber pane below it: the floor under the pane sees the
+    # lamp only through the glass.
+    lamp = b.lambert((0, 0, 0), emission=(1, 1, 1), strength=6)
+    b.node(mesh=b.quad((-0.4, 2.0, -0.4), (0.4, 2.0, -0.4), (0.4, 2.0, 0.4), (-0.4, 2.0, 0.4),
+                       lamp, uv=False))
+    amber = b.glass((0.9, 0.6, 0.3), 1.0)
+    b.node(mesh=b.quad((-0.7, 1.7, -0.7), (0.7, 1.7, -0.7), (0.7, 1.7, 0.7), (-0.7, 1.7, 0.7),
+                       amber, uv=False))
+    # Wall lamp on the left facing +x, a half-transmitting blue partition in front of it.
+    wall_lamp = b.lambert((0, 0, 0), emission=(1, 0.9, 0.8), strength=5)
+    b.node(mesh=b.quad((-1.9, 0.5, 0.3), (-1.9, 0.5, -0.3), (-1.9, 1.1, -0.3), (-1.9, 1.1, 0.3),
+                       wall_lamp, uv=False))
+    blue = b.glass((0.3, 0.5, 0.9), 0.5)
+    b.node(mesh=b.quad((-1.3, 0.0, -0.8), (-1.3, 0.0, 0.8), (-1.3, 1.4, 0.8), (-1.3, 1.4, -0.8),
+                       blue, uv=False))
+    eye = (0.6, 1.3, 3.4)
+    b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
+           rotation=look_at_rotation(eye, (-0.3, 0.8, -0.4)))
+    b.write("glass.gltf")
+
+
 def glossy_scene():
     b = Builder()
     grey = b.lambert((0.6, 0.6, 0.6))
@@ -510,3 +555,4 @@ if __name__ == "__main__":
     glossy_scene()
     colors_scene()
     quantized_scene()
+    glass_scene()
