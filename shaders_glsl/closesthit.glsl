@@ -64,13 +64,13 @@ DirectionSampler direction_sampler(Surface s) {
             d.bsdf_fraction = (guide_header.flags & GUIDE_FLAG_LEARN_SELECTION) != 0u
                 ? guide_leaves[d.leaf].bsdf_fraction
                 : guide_header.bsdf_fraction;
-            // A nearly specular lobe beside a rough one (a glossy coat, a clear pane in a
+            // A nearly specular transmission lobe beside a diffuse one (a clear pane in a
             // partly diffuse material): the quadtree cannot find it, so the BSDF keeps at
             // least its share of the samples. (Measured on glass.gltf's half-transmitting
             // partition: without it, the lamp seen through it at 64 spp is a few rare,
-            // large samples.)
+            // large samples.) Opaque glossy surfaces keep the selection they had.
             if (s.bsdf.alpha < GUIDING_MIN_ALPHA)
-                d.bsdf_fraction = max(d.bsdf_fraction, 1.0 - diffuse_prob);
+                d.bsdf_fraction = max(d.bsdf_fraction, (1.0 - d.bsdf.spec_prob) * s.bsdf.transmission);
         }
     }
     d.lights = light_context(s.p, d.leaf);
