@@ -405,3 +405,44 @@ fn rough_glass_nee_and_direction_sampling_agree() {
         testing::assert_same_expectation(&run(method, Strategy::Mis), &bsdf_only, 8, 1e-3);
     }
 }
+
+/// The transmission texture's red channel multiplies the factor (KHR_materials_
+/// transmission): `glass.gltf`'s amber pane with factor 1 and a constant texture of red
+/// 128 (green and blue 0, linear) renders like the pane with factor 128/255 and no
+/// texture. It found the texture's image never loaded (the loader reads only images
+/// that material slots use, and the list lacked this one: block p = 10⁻¹⁰·⁴); seen to
+/// fail too with the green channel read (p = 10⁻¹¹·⁸).
+#[test]
+fn transmission_texture_scales_the_factor() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = root().join("tests/data/mitsuba/glass.gltf");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&src).unwrap()).unwrap();
+    let amber = json["materials"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|m| m["extensions"]["KHR_materials_transmission"]["transmissionFactor"] == 1.0)
+        .expect("the amber pane");
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([128, 0, 0, 255]))
+        .save(dir.path().join("t.png"))
+        .unwrap();
+    let mut textured = json.clone();
+    textured["images"] = serde_json::json!([{ "uri": "t.png" }]);
+    textured["textures"] = serde_json::json!([{ "source": 0 }]);
+    textured["materials"][amber]["extensions"]["KHR_materials_transmission"]
+        ["transmissionTexture"] = serde_json::json!({ "index": 0 });
+    let mut factor = json;
+    factor["materials"][amber]["extensions"]["KHR_materials_transmission"]["transmissionFactor"] =
+        serde_json::json!(128.0 / 255.0);
+    let scenes = [("textured", textured), ("factor", factor)].map(|(name, j)| {
+        let path = dir.path().join(format!("{name}.gltf"));
+        std::fs::write(&path, serde_json::to_vec(&j).unwrap()).unwrap();
+        load(&path)
+    });
+    let camera = scenes[0].cameras[0].clone();
+    let settings = testing::settings(Method::Pt, 32, 24);
+    let a = render_batches(&scenes[0], &camera, settings.clone(), 8, 64);
+    let b = render_batches(&scenes[1], &camera, settings, 8, 64);
+    testing::assert_same_expectation(&a, &b, 8, 1e-3);
+}

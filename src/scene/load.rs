@@ -97,6 +97,9 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         mark(pbr.metallic_roughness_texture().map(|i| i.texture()));
         mark(m.normal_texture().map(|i| i.texture()));
         mark(m.emissive_texture().map(|i| i.texture()));
+        if let Some(t) = m.transmission() {
+            mark(t.transmission_texture().map(|i| i.texture()));
+        }
         if let Some(sg) = m.pbr_specular_glossiness() {
             mark(sg.diffuse_texture().map(|i| i.texture()));
         }
