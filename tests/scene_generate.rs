@@ -606,6 +606,7 @@ fn shipped_scenes_match_their_recorded_options() {
             lights: o["lights"].as_u64().map(|v| v as u32),
             detail: o["detail"].as_u64().map(|v| v as u32),
             matte: o["matte"].as_bool().unwrap_or(false),
+            glass: o["glass"].as_bool().unwrap_or(false),
             ..Options::default()
         };
         let kind = Kind::from_name(x["kind"].as_str().unwrap()).unwrap();
@@ -694,4 +695,71 @@ fn khronos_validator_finds_no_errors() {
         files.len(),
         "validator warnings:\n{text}"
     );
+}
+
+/// `bistro-night --glass`: the café wind screens become thin transmitting glass (clear,
+/// glossy, reflecting); with `--matte` they stay glass, smooth and without reflection,
+/// which the Mitsuba export writes exactly (checked by `lanterna scene export-mitsuba`'s
+/// manifest); without `--glass` nothing transmits; other kinds refuse the option.
+#[test]
+fn bistro_night_glass_makes_the_wind_screens_transmit() {
+    let dir = tempfile::tempdir().unwrap();
+    let transmission =
+        |m: &gltf::Material<'_>| m.transmission().map_or(0.0, |t| t.transmission_factor());
+    for (glass, matte) in [(false, false), (true, false), (true, true)] {
+        let options = Options {
+            glass,
+            matte,
+            ..Options::default()
+        };
+        let path = dir.path().join(format!("b-{glass}-{matte}.gltf"));
+        generate(Kind::BistroNight, &options, &path).unwrap();
+        let l = load(&path);
+        let screens: Vec<_> = l
+            .doc
+            .materials()
+            .filter(|m| transmission(m) > 0.0)
+            .collect();
+        if !glass {
+            assert!(screens.is_empty());
+            continue;
+        }
+        assert_eq!(screens.len(), 1);
+        let s = &screens[0];
+        assert_eq!(s.name(), Some("screen-glass"));
+        assert_eq!(transmission(s), 1.0);
+        let rough = s.pbr_metallic_roughness().roughness_factor();
+        let specular = s.specular().map(|v| v.specular_factor());
+        if matte {
+            assert_eq!((rough, specular), (0.0, Some(0.0)));
+            let out = dir.path().join("export");
+            let run = Command::new(env!("CARGO_BIN_EXE_lanterna"))
+                .args(["scene", "export-mitsuba", path.to_str().unwrap(), "-o"])
+                .arg(&out)
+                .output()
+                .unwrap();
+            assert!(
+                run.status.success(),
+                "{}",
+                String::from_utf8_lossy(&run.stderr)
+            );
+            let manifest: serde_json::Value =
+                serde_json::from_slice(&std::fs::read(out.join("lanterna_export.json")).unwrap())
+                    .unwrap();
+            assert_eq!(manifest["exact"], true, "{}", manifest["approximations"]);
+            let xml = std::fs::read_to_string(out.join("scene.xml")).unwrap();
+            assert_eq!(xml.matches("\"thindielectric\"").count(), 1);
+        } else {
+            assert!(rough > 0.0 && specular.is_none(), "{rough} {specular:?}");
+        }
+    }
+    let refused = generate(
+        Kind::Street,
+        &Options {
+            glass: true,
+            ..Options::default()
+        },
+        &dir.path().join("street.gltf"),
+    );
+    assert!(matches!(refused, Err(GenerateError::UnusedOption { .. })));
 }

@@ -104,6 +104,11 @@ pub struct GenerateArgs {
     /// is exact and Mitsuba can check or race lanterna on the scene.
     #[arg(long)]
     matte: bool,
+    /// bistro-night: the café wind screens of thin transmitting glass
+    /// (KHR_materials_transmission) instead of opaque glossy panels; with --matte they
+    /// stay glass, smooth and without reflection, so the export stays exact.
+    #[arg(long)]
+    glass: bool,
 }
 
 fn parse_offset(s: &str) -> Result<[f32; 3], String> {
@@ -154,6 +159,7 @@ fn run_generate(a: GenerateArgs) -> anyhow::Result<()> {
         }),
         offset: a.offset,
         matte: a.matte,
+        glass: a.glass,
     };
     let start = std::time::Instant::now();
     if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {

@@ -104,7 +104,7 @@ impl Kind {
             Kind::AlphaTest => &["emission"],
             Kind::Sconces | Kind::AlphaLights => &[],
             Kind::PunctualNear => &["intensity"],
-            Kind::BistroNight => &["detail"],
+            Kind::BistroNight => &["detail", "glass"],
         }
     }
 }
@@ -152,8 +152,12 @@ pub struct Options {
     /// Every kind: translate the whole scene, cameras and lights included (precision
     /// tests far from the origin).
     pub offset: Option<[f32; 3]>,
-    /// Every kind: every material Lambertian and opaque (an exactly exportable variant).
+    /// Every kind: every material Lambertian and opaque (an exactly exportable variant),
+    /// except thin glass, which stays but becomes smooth and non-reflecting (exact too).
     pub matte: bool,
+    /// `bistro-night`: the café wind screens of thin transmitting glass
+    /// (`KHR_materials_transmission`) instead of opaque glossy panels.
+    pub glass: bool,
 }
 
 impl Default for Options {
@@ -173,6 +177,7 @@ impl Default for Options {
             shape: None,
             offset: None,
             matte: false,
+            glass: false,
         }
     }
 }
@@ -191,6 +196,7 @@ impl Options {
             ("intensity", self.intensity.is_some()),
             ("spot", self.spot),
             ("shape", self.shape.is_some()),
+            ("glass", self.glass),
         ];
         for (name, set) in flags {
             if set {

@@ -40,6 +40,8 @@ pub struct Material {
     pub emissive_texture_mean: f32,
     pub alpha_cutoff: Option<f32>,
     pub double_sided: bool,
+    /// `KHR_materials_transmission` factor (thin glass); 0: opaque.
+    pub transmission: f32,
 }
 
 impl Material {
@@ -56,6 +58,7 @@ impl Material {
             emissive_texture_mean: 1.0,
             alpha_cutoff: None,
             double_sided: false,
+            transmission: 0.0,
         }
     }
 
@@ -177,6 +180,7 @@ pub struct Gltf {
     texture_defs: Vec<(String, Vec<u8>, Filter)>,
     texture_index: Vec<Option<usize>>,
     uses_specular: bool,
+    uses_transmission: bool,
     cameras: Vec<Value>,
     lights: Vec<Value>,
     nodes: Vec<Value>,
@@ -210,6 +214,7 @@ impl Gltf {
             texture_defs: Vec::new(),
             texture_index: Vec::new(),
             uses_specular: false,
+            uses_transmission: false,
             cameras: Vec::new(),
             lights: Vec::new(),
             nodes: Vec::new(),
@@ -229,7 +234,9 @@ impl Gltf {
         for handle in 0..self.material_defs.len() {
             let m = &mut self.material_defs[handle];
             m.metallic = 0.0;
-            m.roughness = 1.0;
+            // Thin glass stays: smooth and without Fresnel reflection, which the Mitsuba
+            // export writes exactly (`thindielectric` with matched indices).
+            m.roughness = if m.transmission > 0.0 { 0.0 } else { 1.0 };
             m.lambertian = true;
             m.alpha_cutoff = None;
             // Materials the meshes already use are written again.
@@ -343,6 +350,13 @@ impl Gltf {
                 json!({"specularFactor": 0.0}),
             );
             self.uses_specular = true;
+        }
+        if m.transmission > 0.0 {
+            ext.insert(
+                "KHR_materials_transmission".into(),
+                json!({"transmissionFactor": num(m.transmission)}),
+            );
+            self.uses_transmission = true;
         }
         let peak = m.emission.iter().cloned().fold(0.0f32, f32::max);
         if peak > 0.0 {
@@ -597,6 +611,9 @@ impl Gltf {
         }
         if self.uses_emissive_strength {
             used.push("KHR_materials_emissive_strength");
+        }
+        if self.uses_transmission {
+            used.push("KHR_materials_transmission");
         }
         if !self.lights.is_empty() {
             used.push("KHR_lights_punctual");
