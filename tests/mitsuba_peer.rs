@@ -407,6 +407,21 @@ fn assert_agrees_exactly(
     );
 }
 
+/// [`assert_agrees_exactly`] for each of `methods`, Mitsuba at 4× the spp.
+fn assert_methods_agree_exactly(
+    scene: &Scene,
+    methods: &[Method],
+    options: &ExportOptions,
+    dir: &Path,
+    spp: u64,
+    tmp: &Path,
+) {
+    for &method in methods {
+        let what = method.name();
+        assert_agrees_exactly(scene, method, options, dir, spp, 4 * spp, tmp, what);
+    }
+}
+
 #[test]
 fn texture_transforms_agree_with_mitsuba() {
     if !mitsuba_available() {
@@ -504,19 +519,14 @@ fn vertex_colours_agree_with_mitsuba() {
     let xml = std::fs::read_to_string(dir.join("scene.xml")).unwrap();
     assert_eq!(xml.matches("\"mesh_attribute\"").count(), 3, "{xml}");
     let spp = 32;
-    for method in [Method::Pt, Method::Ris] {
-        let what = method.name();
-        assert_agrees_exactly(
-            &loaded.scene,
-            method,
-            &options,
-            &dir,
-            spp,
-            4 * spp,
-            tmp.path(),
-            what,
-        );
-    }
+    assert_methods_agree_exactly(
+        &loaded.scene,
+        &[Method::Pt, Method::Ris],
+        &options,
+        &dir,
+        spp,
+        tmp.path(),
+    );
 }
 
 /// Punctual lights (point, spot with a penumbra, hard spot, directional) and textured
@@ -627,17 +637,12 @@ fn thin_glass_agrees_with_mitsuba() {
     let xml = std::fs::read_to_string(dir.join("scene.xml")).unwrap();
     assert_eq!(xml.matches("\"thindielectric\"").count(), 2, "{xml}");
     let spp = 64;
-    for method in [Method::Pt, Method::Ris, Method::GuidedRis] {
-        let what = method.name();
-        assert_agrees_exactly(
-            &loaded.scene,
-            method,
-            &options,
-            &dir,
-            spp,
-            4 * spp,
-            tmp.path(),
-            what,
-        );
-    }
+    assert_methods_agree_exactly(
+        &loaded.scene,
+        &[Method::Pt, Method::Ris, Method::GuidedRis],
+        &options,
+        &dir,
+        spp,
+        tmp.path(),
+    );
 }

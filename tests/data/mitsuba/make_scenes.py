@@ -386,6 +386,16 @@ def texxform_scene():
     b.write("texxform.gltf")
 
 
+def sphere_room_light_and_camera(b):
+    """The ceiling light and camera of smooth.gltf, its quantised copy and glossy.gltf."""
+    light = b.lambert((0, 0, 0), emission=(1, 1, 1), strength=8)
+    b.node(mesh=b.quad((-0.5, 2.2, -0.5), (0.5, 2.2, -0.5), (0.5, 2.2, 0.5), (-0.5, 2.2, 0.5),
+                       light, uv=False))
+    eye = (0.3, 1.4, 3.2)
+    b.node(camera=b.camera(yfov=0.8), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.6, -0.3)))
+
+
 def smooth_scene():
     """A coarse UV sphere with smooth vertex normals (the export notes an approximation:
     the renderers treat shading normals that disagree with the geometry differently)."""
@@ -407,12 +417,7 @@ def smooth_scene():
             idx += [a, a + 1, c, a + 1, c + 1, c]
     sphere = b.mesh(pos, idx, b.lambert((0.8, 0.5, 0.3)), nrm)
     b.node(mesh=sphere, translation=[0, 0.7, -0.3], scale=[0.7, 0.7, 0.7])
-    light = b.lambert((0, 0, 0), emission=(1, 1, 1), strength=8)
-    b.node(mesh=b.quad((-0.5, 2.2, -0.5), (0.5, 2.2, -0.5), (0.5, 2.2, 0.5), (-0.5, 2.2, 0.5),
-                       light, uv=False))
-    eye = (0.3, 1.4, 3.2)
-    b.node(camera=b.camera(yfov=0.8), translation=list(eye),
-           rotation=look_at_rotation(eye, (0, 0.6, -0.3)))
+    sphere_room_light_and_camera(b)
     b.write("smooth.gltf")
 
 
@@ -491,12 +496,7 @@ def quantized_scene():
         min=[-1, -1, -1], max=[1, 1, 1])
     b.meshes.append(sphere)
     b.node(mesh=len(b.meshes) - 1, translation=[0, 0.7, -0.3], scale=[0.7, 0.7, 0.7])
-    light = b.lambert((0, 0, 0), emission=(1, 1, 1), strength=8)
-    b.node(mesh=b.quad((-0.5, 2.2, -0.5), (0.5, 2.2, -0.5), (0.5, 2.2, 0.5), (-0.5, 2.2, 0.5),
-                       light, uv=False))
-    eye = (0.3, 1.4, 3.2)
-    b.node(camera=b.camera(yfov=0.8), translation=list(eye),
-           rotation=look_at_rotation(eye, (0, 0.6, -0.3)))
+    sphere_room_light_and_camera(b)
     b.write("quantized.gltf")
 
 
@@ -536,12 +536,7 @@ def glossy_scene():
     b.node(mesh=b.box(metal), translation=[-0.6, 0.4, -0.3], scale=[0.8, 0.8, 0.8],
            rotation=[0, 0.3826834, 0, 0.9238795])
     b.node(mesh=b.box(plastic), translation=[0.7, 0.35, 0.2], scale=[0.7, 0.7, 0.7])
-    light = b.lambert((0, 0, 0), emission=(1, 1, 1), strength=8)
-    b.node(mesh=b.quad((-0.5, 2.2, -0.5), (0.5, 2.2, -0.5), (0.5, 2.2, 0.5), (-0.5, 2.2, 0.5),
-                       light, uv=False))
-    eye = (0.3, 1.4, 3.2)
-    b.node(camera=b.camera(yfov=0.8), translation=list(eye),
-           rotation=look_at_rotation(eye, (0, 0.6, -0.3)))
+    sphere_room_light_and_camera(b)
     b.write("glossy.gltf")
 
 
