@@ -446,3 +446,81 @@ fn transmission_texture_scales_the_factor() {
     let b = render_batches(&scenes[1], &camera, settings, 8, 64);
     testing::assert_same_expectation(&a, &b, 8, 1e-3);
 }
+
+/// Morph targets at their default weights (a static scene shows the posed mesh): a quad
+/// in the y = 0 plane with two position targets (+y, +x) is posed by the mesh's weights
+/// (0.5, 0) on one node and by the node's own (0.25, 1) on another, which then needs its
+/// own copy of the geometry. Seen to fail with the weights ignored, and with the node's
+/// weights ignored (both nodes sharing the mesh's pose).
+#[test]
+fn morph_targets_pose_meshes_by_node_or_mesh_weights() {
+    use base64::Engine as _;
+    let mut bin: Vec<u8> = Vec::new();
+    let mut push = |v: &[f32]| {
+        v.iter()
+            .for_each(|x| bin.extend_from_slice(&x.to_le_bytes()))
+    };
+    push(&[-1., 0., -1., 1., 0., -1., 1., 0., 1., -1., 0., 1.]);
+    push(&[0., 1., 0.].repeat(4));
+    push(&[1., 0., 0.].repeat(4));
+    for i in [0u16, 2, 1, 0, 3, 2] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bin)
+    );
+    let vec3 = |view: usize| serde_json::json!({"bufferView": view, "componentType": 5126, "count": 4, "type": "VEC3"});
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "buffers": [{"uri": uri, "byteLength": bin.len()}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 96, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 144, "byteLength": 12}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [-1, 0, -1], "max": [1, 0, 1]},
+            vec3(1), vec3(2),
+            {"bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR"}
+        ],
+        "materials": [{"emissiveFactor": [1, 1, 1]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 3, "material": 0,
+                                    "targets": [{"POSITION": 1}, {"POSITION": 2}]}],
+                    "weights": [0.5, 0.0]}],
+        "nodes": [{"mesh": 0}, {"mesh": 0, "weights": [0.25, 1.0], "translation": [0, 0, 5]}],
+        "scenes": [{"nodes": [0, 1]}],
+        "scene": 0
+    });
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("morph.gltf");
+    std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
+    let scene = load(&path);
+    assert_eq!(scene.instances.len(), 2);
+    // Object-space positions of node 0's instance, then node 1's (translated along z).
+    let mut instances: Vec<_> = scene.instances.iter().collect();
+    instances.sort_by(|a, b| a.transform.w_axis.z.total_cmp(&b.transform.w_axis.z));
+    let posed = |k: usize| -> Vec<[f32; 3]> {
+        let p = &scene.primitives[instances[k].primitive as usize];
+        let range = p.vertex_offset as usize..(p.vertex_offset + p.vertex_count) as usize;
+        scene.vertices[range].iter().map(|v| v.position).collect()
+    };
+    let (a, b) = (posed(0), posed(1));
+    let base = [[-1., 0., -1.], [1., 0., -1.], [1., 0., 1.], [-1., 0., 1.]];
+    for ((a, b), base) in a.iter().zip(&b).zip(base) {
+        let want_a = [base[0], 0.5, base[2]];
+        let want_b = [base[0] + 1.0, 0.25, base[2]];
+        for c in 0..3 {
+            assert!(
+                (a[c] - want_a[c]).abs() < 1e-5,
+                "mesh weights: {a:?}, want {want_a:?}"
+            );
+            assert!(
+                (b[c] - want_b[c]).abs() < 1e-5,
+                "node weights: {b:?}, want {want_b:?}"
+            );
+        }
+    }
+}

@@ -184,7 +184,9 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let mut colors = Vec::new();
     let mut indices = Vec::new();
     let mut primitives: Vec<MeshPrimitive> = Vec::new();
-    let mut primitive_ids: HashMap<(usize, usize), Option<u32>> = HashMap::new();
+    // Keyed by mesh, primitive and the morph weights it is posed with (empty without
+    // morph targets): nodes that pose one mesh differently get their own geometry.
+    let mut primitive_ids: HashMap<(usize, usize, Vec<u32>), Option<u32>> = HashMap::new();
     let mut instances = Vec::new();
     let mut cameras = Vec::new();
     let mut punctual = Vec::new();
@@ -269,14 +271,22 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
             ));
             continue;
         }
+        let morph_weights = node.weights().or(mesh.weights()).unwrap_or(&[]);
         for prim in mesh.primitives() {
-            let key = (mesh.index(), prim.index());
+            let posed = prim.morph_targets().next().is_some();
+            let weight_bits = if posed {
+                morph_weights.iter().map(|w| w.to_bits()).collect()
+            } else {
+                Vec::new()
+            };
+            let key = (mesh.index(), prim.index(), weight_bits);
             let id = match primitive_ids.get(&key) {
                 Some(id) => *id,
                 None => {
                     let id = load_primitive(
                         &mesh,
                         &prim,
+                        morph_weights,
                         &buffers,
                         default_material,
                         &materials,

@@ -17,9 +17,12 @@ pub(super) struct Geometry<'a> {
     pub budget: &'a mut sources::Budget,
 }
 
+// The mesh, the primitive and its pose are what it is; the rest is the output and context.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn load_primitive(
     mesh: &gltf::Mesh<'_>,
     prim: &gltf::Primitive<'_>,
+    morph_weights: &[f32],
     buffers: &[gltf::buffer::Data],
     default_material: u32,
     materials: &[gpu::Material],
@@ -90,9 +93,18 @@ pub(super) fn load_primitive(
         return Err(format!("{name} has non-finite vertex positions"));
     }
     let n = positions.len();
+    let has_normals = attribute(gltf::Semantic::Normals).is_some();
     let normals: Vec<[f32; 3]> = attribute(gltf::Semantic::Normals)
         .and_then(|a| read_floats(a, get, false))
         .unwrap_or_else(|| vec![[0.0; 3]; n]);
+    let (positions, normals) = morph(
+        prim,
+        morph_weights,
+        (positions, normals, has_normals),
+        (root, max_bytes, &name),
+        get,
+        warnings,
+    )?;
     let tangents: Vec<[f32; 4]> = attribute(gltf::Semantic::Tangents)
         .and_then(|a| read_floats(a, get, false))
         .unwrap_or_else(|| vec![[0.0; 4]; n]);
@@ -216,6 +228,75 @@ pub(super) fn load_primitive(
         color_offset,
         name,
     }))
+}
+
+/// Positions and normals with the morph targets applied at `weights` (the node's, else
+/// the mesh's default weights): a static scene shows base + Σ wᵢ·targetᵢ. Tangent
+/// displacements are left out: the shader makes the tangent orthogonal to the normal.
+/// Missing weights count as 0 (with a warning when the file gives a different number).
+#[allow(clippy::type_complexity)]
+fn morph<'a, 's>(
+    prim: &gltf::Primitive<'a>,
+    weights: &[f32],
+    (mut positions, mut normals, has_normals): (Vec<[f32; 3]>, Vec<[f32; 3]>, bool),
+    (root, max_bytes, name): (&gltf::json::Root, u64, &str),
+    get: impl Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+    warnings: &mut Vec<String>,
+) -> Result<(Vec<[f32; 3]>, Vec<[f32; 3]>), String> {
+    let targets: Vec<_> = prim.morph_targets().collect();
+    if targets.is_empty() {
+        return Ok((positions, normals));
+    }
+    if !weights.is_empty() && weights.len() != targets.len() {
+        warnings.push(format!(
+            "{name}: {} morph targets but {} weights; missing weights count as 0",
+            targets.len(),
+            weights.len()
+        ));
+    }
+    if let Some(w) = weights.iter().find(|w| !w.is_finite()) {
+        return Err(format!("{name}: morph weight {w} is not finite"));
+    }
+    let n = positions.len();
+    let add = |k: usize,
+               accessor: gltf::Accessor<'a>,
+               role: Role,
+               w: f32,
+               to: &mut Vec<[f32; 3]>|
+     -> Result<(), String> {
+        gltf_check::check_accessor(root, accessor.index(), role, max_bytes)
+            .map_err(|e| format!("{name} morph target {k}: {e}"))?;
+        let d: Vec<[f32; 3]> = read_floats(accessor, get.clone(), false)
+            .ok_or_else(|| format!("{name} morph target {k}: unreadable data"))?;
+        if d.len() != n {
+            return Err(format!(
+                "{name} morph target {k} has {} elements for {n} vertices",
+                d.len()
+            ));
+        }
+        for (v, d) in to.iter_mut().zip(&d) {
+            for c in 0..3 {
+                v[c] += w * d[c];
+            }
+        }
+        Ok(())
+    };
+    for (k, target) in targets.into_iter().enumerate() {
+        let w = weights.get(k).copied().unwrap_or(0.0);
+        if w == 0.0 {
+            continue;
+        }
+        if let Some(a) = target.positions() {
+            add(k, a, Role::Position, w, &mut positions)?;
+        }
+        if let (Some(a), true) = (target.normals(), has_normals) {
+            add(k, a, Role::Normal, w, &mut normals)?;
+        }
+    }
+    if positions.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(format!("{name} has non-finite morphed vertex positions"));
+    }
+    Ok((positions, normals))
 }
 
 /// The elements of a float or integer vertex attribute as floats: integer components
