@@ -221,6 +221,16 @@ fn an_unsupported_extension_loads_with_a_warning_naming_it() {
         stderr.contains("KHR_materials_volume, which lanterna does not support"),
         "no warning:\n{stderr}"
     );
+    // Skins are not applied either, and the user hears so.
+    let mut skinned = json.clone();
+    skinned["skins"] = serde_json::json!([{ "joints": [0] }]);
+    skinned["nodes"][0]["skin"] = serde_json::json!(0);
+    let skin_dir = tempfile::tempdir().unwrap();
+    let (_, skin_stderr) = info_of_edited_cornell(skin_dir.path(), &skinned);
+    assert!(
+        skin_stderr.contains("is skinned: skinning is not applied"),
+        "no warning:\n{skin_stderr}"
+    );
     // Extensions lanterna reads (the shipped file's emissive strength) and inert ones are
     // not reported.
     assert_eq!(stderr.matches("does not support").count(), 1, "{stderr}");

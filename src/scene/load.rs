@@ -263,6 +263,12 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
             punctual.push(convert_light(&light, &world, &node_name(&node)).map_err(&invalid)?);
         }
         let Some(mesh) = node.mesh() else { continue };
+        if node.skin().is_some() {
+            warnings.push(format!(
+                "node {} is skinned: skinning is not applied (its mesh is drawn as stored, placed by the node's transform)",
+                node_name(&node)
+            ));
+        }
         let det = world.determinant();
         if det.abs() < 1e-20 {
             warnings.push(format!(
