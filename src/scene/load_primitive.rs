@@ -86,7 +86,7 @@ pub(super) fn load_primitive(
     let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
     let get = |b: gltf::Buffer<'_>| buffers.get(b.index()).map(|d| &d.0[..]);
     let attribute = |semantic: gltf::Semantic| prim.get(&semantic);
-    let positions: Vec<[f32; 3]> = attribute(gltf::Semantic::Positions)
+    let mut positions: Vec<[f32; 3]> = attribute(gltf::Semantic::Positions)
         .and_then(|a| read_floats(a, get, false))
         .ok_or_else(|| format!("{name} has no POSITION data"))?;
     if positions.iter().flatten().any(|v| !v.is_finite()) {
@@ -94,13 +94,14 @@ pub(super) fn load_primitive(
     }
     let n = positions.len();
     let has_normals = attribute(gltf::Semantic::Normals).is_some();
-    let normals: Vec<[f32; 3]> = attribute(gltf::Semantic::Normals)
+    let mut normals: Vec<[f32; 3]> = attribute(gltf::Semantic::Normals)
         .and_then(|a| read_floats(a, get, false))
         .unwrap_or_else(|| vec![[0.0; 3]; n]);
-    let (positions, normals) = morph(
+    morph(
         prim,
         morph_weights,
-        (positions, normals, has_normals),
+        &mut positions,
+        has_normals.then_some(&mut normals[..]),
         (root, max_bytes, &name),
         get,
         warnings,
@@ -230,23 +231,25 @@ pub(super) fn load_primitive(
     }))
 }
 
-/// Positions and normals with the morph targets applied at `weights` (the node's, else
-/// the mesh's default weights): a static scene shows base + Σ wᵢ·targetᵢ. Tangent
-/// displacements are left out: the shader makes the tangent orthogonal to the normal.
+/// Displaces positions and normals (None: the primitive has none) by the morph targets
+/// at `weights` (the node's, else the mesh's default weights): a static scene shows
+/// base + Σ wᵢ·targetᵢ. Tangent displacements are left out: the shader makes the
+/// tangent orthogonal to the normal.
 /// Missing weights count as 0 (with a warning when the file gives a different number).
-#[allow(clippy::type_complexity)]
 fn morph<'a, 's>(
     prim: &gltf::Primitive<'a>,
     weights: &[f32],
-    (mut positions, mut normals, has_normals): (Vec<[f32; 3]>, Vec<[f32; 3]>, bool),
+    positions: &mut [[f32; 3]],
+    normals: Option<&mut [[f32; 3]]>,
     (root, max_bytes, name): (&gltf::json::Root, u64, &str),
     get: impl Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
     warnings: &mut Vec<String>,
-) -> Result<(Vec<[f32; 3]>, Vec<[f32; 3]>), String> {
+) -> Result<(), String> {
     let targets: Vec<_> = prim.morph_targets().collect();
     if targets.is_empty() {
-        return Ok((positions, normals));
+        return Ok(());
     }
+    let mut normals = normals;
     if !weights.is_empty() && weights.len() != targets.len() {
         warnings.push(format!(
             "{name}: {} morph targets but {} weights; missing weights count as 0",
@@ -262,7 +265,7 @@ fn morph<'a, 's>(
                accessor: gltf::Accessor<'a>,
                role: Role,
                w: f32,
-               to: &mut Vec<[f32; 3]>|
+               to: &mut [[f32; 3]]|
      -> Result<(), String> {
         gltf_check::check_accessor(root, accessor.index(), role, max_bytes)
             .map_err(|e| format!("{name} morph target {k}: {e}"))?;
@@ -287,16 +290,16 @@ fn morph<'a, 's>(
             continue;
         }
         if let Some(a) = target.positions() {
-            add(k, a, Role::Position, w, &mut positions)?;
+            add(k, a, Role::Position, w, positions)?;
         }
-        if let (Some(a), true) = (target.normals(), has_normals) {
-            add(k, a, Role::Normal, w, &mut normals)?;
+        if let (Some(a), Some(normals)) = (target.normals(), normals.as_deref_mut()) {
+            add(k, a, Role::Normal, w, normals)?;
         }
     }
     if positions.iter().flatten().any(|v| !v.is_finite()) {
         return Err(format!("{name} has non-finite morphed vertex positions"));
     }
-    Ok((positions, normals))
+    Ok(())
 }
 
 /// The elements of a float or integer vertex attribute as floats: integer components
@@ -319,45 +322,32 @@ where
 {
     use gltf::accessor::{DataType, Iter};
     let normalized = accessor.normalized() || assume_normalized;
-    fn convert<T: Copy, const N: usize>(
+    // The spec's formulas: c / largest, clamped at −1 for signed types (unsigned ones
+    // never reach it).
+    fn convert<T: Copy + Into<f32>, const N: usize>(
         iter: Iter<'_, [T; N]>,
-        f: impl Fn(T) -> f32,
+        largest: f32,
+        normalized: bool,
     ) -> Vec<[f32; N]>
     where
         [T; N]: gltf::accessor::Item,
     {
-        iter.map(|e| e.map(&f)).collect()
+        let f = |c: T| {
+            let c: f32 = c.into();
+            if normalized {
+                (c / largest).max(-1.0)
+            } else {
+                c
+            }
+        };
+        iter.map(|e| e.map(f)).collect()
     }
     Some(match accessor.data_type() {
         DataType::F32 => Iter::<[f32; N]>::new(accessor, get)?.collect(),
-        DataType::I8 => convert(Iter::<[i8; N]>::new(accessor, get)?, |c| {
-            if normalized {
-                (c as f32 / 127.0).max(-1.0)
-            } else {
-                c as f32
-            }
-        }),
-        DataType::U8 => convert(Iter::<[u8; N]>::new(accessor, get)?, |c| {
-            if normalized {
-                c as f32 / 255.0
-            } else {
-                c as f32
-            }
-        }),
-        DataType::I16 => convert(Iter::<[i16; N]>::new(accessor, get)?, |c| {
-            if normalized {
-                (c as f32 / 32767.0).max(-1.0)
-            } else {
-                c as f32
-            }
-        }),
-        DataType::U16 => convert(Iter::<[u16; N]>::new(accessor, get)?, |c| {
-            if normalized {
-                c as f32 / 65535.0
-            } else {
-                c as f32
-            }
-        }),
+        DataType::I8 => convert(Iter::<[i8; N]>::new(accessor, get)?, 127.0, normalized),
+        DataType::U8 => convert(Iter::<[u8; N]>::new(accessor, get)?, 255.0, normalized),
+        DataType::I16 => convert(Iter::<[i16; N]>::new(accessor, get)?, 32767.0, normalized),
+        DataType::U16 => convert(Iter::<[u16; N]>::new(accessor, get)?, 65535.0, normalized),
         // Refused by `gltf_check::check_accessor` for every vertex attribute.
         DataType::U32 => return None,
     })
