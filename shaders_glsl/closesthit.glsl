@@ -56,7 +56,7 @@ DirectionSampler direction_sampler(Surface s) {
     if (GUIDING) {
         // Nearly specular lobes (reflection or transmission) are not guided: the BSDF
         // already samples them well.
-        float diffuse_prob = (1.0 - d.bsdf.spec_prob) * (1.0 - s.bsdf.transmission);
+        float diffuse_prob = bsdf_diffuse_probability(s.bsdf, d.bsdf);
         bool nearly_specular = s.bsdf.alpha < GUIDING_MIN_ALPHA && diffuse_prob <= 0.1;
         if (!nearly_specular) {
             d.leaf = guide_find_leaf(s.p);
@@ -65,12 +65,12 @@ DirectionSampler direction_sampler(Surface s) {
                 ? guide_leaves[d.leaf].bsdf_fraction
                 : guide_header.bsdf_fraction;
             // A nearly specular transmission lobe beside a diffuse one (a clear pane in a
-            // partly diffuse material): the quadtree cannot find it, so the BSDF keeps at
-            // least its share of the samples. (Measured on glass.gltf's half-transmitting
+            // partly diffuse material, or a solid's clear interface): the quadtree cannot
+            // find it, so the BSDF keeps at least its share of the samples. (Measured on glass.gltf's half-transmitting
             // partition: without it, the lamp seen through it at 64 spp is a few rare,
             // large samples.) Opaque glossy surfaces keep the selection they had.
             if (s.bsdf.alpha < GUIDING_MIN_ALPHA)
-                d.bsdf_fraction = max(d.bsdf_fraction, (1.0 - d.bsdf.spec_prob) * s.bsdf.transmission);
+                d.bsdf_fraction = max(d.bsdf_fraction, bsdf_glass_probability(s.bsdf, d.bsdf));
         }
     }
     d.lights = light_context(s.p, d.leaf);
@@ -149,7 +149,10 @@ DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
     vec3 u = vec3(lobe, warp);
     if (!ds.guided) {
         vec3 wi_local;
-        bool ok = bsdf_sample(s.bsdf, d.bsdf, u, wi_local);
+        // A solid's boundary chooses between reflection and refraction after drawing its
+        // microfacet normal, with a number of its own.
+        float u_fresnel = s.bsdf.eta > 0.0 ? rng_next(rng) : 0.0;
+        bool ok = bsdf_sample(s.bsdf, d.bsdf, u, u_fresnel, wi_local);
         ds.wi = ok ? surface_to_world(s, wi_local) : s.n;
         if (!ok) {
             ds.valid = false;
@@ -183,6 +186,8 @@ struct NeeResult {
     uint chosen_model;   // light model NEE picked (AOV), INVALID_INDEX if none
     bool connected;      // the shadow ray found the light visible
     float ris_weight;    // RIS contribution weight W (0 without RIS)
+    vec3 light_dir;      // toward the chosen light point, and its distance (FLT_MAX: a
+    float light_dist;    // light at infinity), for the absorption along the way
     // The shadow ray that decides it, when one does: the path loop traces it (raygen's
     // one trace_ray call site) and passes the answer to nee_resolve.
     bool needs_shadow_ray;
@@ -198,6 +203,8 @@ NeeResult nee_none() {
     r.chosen_model = INVALID_INDEX;
     r.connected = false;
     r.ris_weight = 0.0;
+    r.light_dir = vec3(0.0);
+    r.light_dist = 0.0;
     r.needs_shadow_ray = false;
     r.shadow = Ray(vec3(0.0), vec3(0.0), 0.0);
     return r;
@@ -251,6 +258,8 @@ NeeResult nee_single(Surface s, DirectionSampler d, inout Rng rng) {
         w = power_heuristic(p_light, direction_pdf_mix(s, d, ls.wi, bsdf_pdf, tree_pdf));
     }
     shadow_ray(s, ls, r);
+    r.light_dir = ls.wi;
+    r.light_dist = ls.dist;
     TRACE5("  nee light model %u tri %u pdf=%f mis=%f f=%v3f\n", r.chosen_model, ls.tri, ls.pdf, w, f);
     vec3 Li_over_pdf = ls.Le_G * (w / ls.pdf);
     r.contribution = f * Li_over_pdf;
@@ -371,6 +380,8 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
     TRACE6("  ris chosen model %u tri %u p_hat=%f W=%f shadow ray=%u Le_G=%v3f\n", r.chosen_model, y.tri, res.p_hat, res.W,
            uint(r.needs_shadow_ray), y.Le_G);
     r.contribution = res.y.f * y.Le_G * res.W;
+    r.light_dir = y.wi;
+    r.light_dist = y.dist;
     if (y.area) {
         vec3 Li_over_pdf = y.Le_G * res.W;
         r.record_dir = y.wi;
@@ -379,6 +390,18 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
         r.record_pdf = y.dist * y.dist / max(y.cos_y * res.W, 1e-20);
     }
     return r;
+}
+
+// Light carried over distance t through a medium of absorption coefficient σ.
+vec3 transmittance(vec3 sigma, float t) { return exp(-sigma * t); }
+
+// NEE's contribution once the medium its light is seen through is known (`sigma`: the
+// absorption toward the light; solids' interiors, KHR_materials_volume).
+void nee_absorb(inout NeeResult r, vec3 sigma) {
+    if (max3(sigma) <= 0.0 || max3(r.contribution) <= 0.0) return;
+    vec3 tr = transmittance(sigma, r.light_dist);
+    r.contribution *= tr;
+    r.record_value *= (tr.x + tr.y + tr.z) / 3.0;
 }
 
 // MIS weight of emission reached by direction sampling from a vertex whose light

@@ -202,6 +202,10 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
     Hit next;
     Surface ns;
     NeeResult nee = nee_none();
+    // Absorption (KHR_materials_volume) of the medium the vertex s was reached through,
+    // and of the one its direction sample's ray crosses. Paths start in clear air.
+    vec3 medium = vec3(0.0);
+    vec3 ray_medium = vec3(0.0);
     // Every ray of the path goes through the one trace_ray call below: step 0 is the
     // camera ray; then each vertex takes two steps, its direction sample's closest hit
     // (odd steps) and its NEE shadow ray (even steps). One call site keeps one copy of
@@ -273,6 +277,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
             // emitter hit there as a candidate); its shadow ray is the next step.
             rng.vertex = depth;
             nee = NEE_MODE == NEE_RIS ? nee_ris(s, d, ds, next.valid, ns, next.t, rng) : nee_single(s, d, rng);
+            nee_absorb(nee, medium_toward(s, nee.light_dir, medium));
             continue;
         } else {
             bool hit_next = next.valid;
@@ -285,19 +290,21 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
                 info.selected_light = nee.chosen_model;
             }
 
+            // What the direction sample's ray lost to absorption on its way to the hit.
+            vec3 absorbed = hit_next && max3(ray_medium) > 0.0 ? transmittance(ray_medium, next.t) : vec3(1.0);
             vec3 emitted = vec3(0.0);
             vec3 emitted_recorded = vec3(0.0);
             if (hit_next && max3(ns.emission) > 0.0) {
                 float w = emission_weight(d.lights, ns, ds.wi, next.t, ds.pdf);
-                emitted = ns.emission * w;
+                emitted = ns.emission * w * absorbed;
                 // Without NEE records, direct light reaches the guide through hits alone.
-                emitted_recorded = record_nee ? emitted : ns.emission;
+                emitted_recorded = record_nee ? emitted : ns.emission * absorbed;
                 TRACE3("  direction hit emitter: Le=%v3f mis=%f contribution=%v3f\n", ns.emission, w, beta * ds.weight * emitted);
             }
             L += beta * ds.weight * emitted;
 
             // Russian roulette (off unless rr_depth > 0).
-            vec3 weight = ds.weight;
+            vec3 weight = ds.weight * absorbed;
             bool alive = ds.valid && hit_next;
             if (alive && params.rr_depth > 0u && depth >= params.rr_depth) {
                 float q = min(max3(beta * weight), 0.95);
@@ -332,8 +339,10 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
             }
             beta *= weight;
         }
-        // The next vertex: sample its direction, if the path may grow from it.
+        // The next vertex: sample its direction, if the path may grow from it. It was
+        // reached through the medium the ray crossed.
         s = ns;
+        medium = ray_medium;
         if (depth + 1u >= params.max_depth) break;
         TRACE6("vertex %u p=%v3f n=%v3f material %u front=%u emission=%v3f\n", depth + 1u, s.p, s.n, s.material, uint(s.front),
                s.emission);
@@ -346,6 +355,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
         if (ds.guided) info.guided += 1.0;
         origin = offset_ray(s.p, surface_side_normal(s, ds.wi));
         dir = ds.wi;
+        ray_medium = medium_toward(s, ds.wi, medium);
     }
     if (TRAINING) record_path(rec, recorded, rng);
     TRACE1("sample radiance L=%v3f\n", L);

@@ -141,6 +141,15 @@ fn quad_json() -> Value {
     })
 }
 
+/// The quad's material as transmitting with `KHR_materials_volume` = `volume`.
+fn volume(j: &mut Value, volume: Value) {
+    j["extensionsUsed"] = json!(["KHR_materials_transmission", "KHR_materials_volume"]);
+    j["materials"][0]["extensions"] = json!({
+        "KHR_materials_transmission": {"transmissionFactor": 1},
+        "KHR_materials_volume": volume
+    });
+}
+
 fn quad_bin() -> Vec<u8> {
     let mut bin = Vec::new();
     for v in [
@@ -674,6 +683,33 @@ fn wrong_values_are_refused() {
             "byte but not normalized",
         ),
         (scene_with(byte_normals), "NORMAL must be float VEC3"),
+        // KHR_materials_volume: values that would make the absorption negative, infinite
+        // or NaN.
+        (
+            scene_with(|j| volume(j, json!({"thicknessFactor": 1, "attenuationDistance": 0}))),
+            "attenuationDistance 0 must be positive",
+        ),
+        (
+            scene_with(|j| volume(j, json!({"thicknessFactor": -1}))),
+            "thicknessFactor -1 is negative",
+        ),
+        (
+            scene_with(|j| {
+                volume(
+                    j,
+                    json!({"thicknessFactor": 1, "attenuationColor": [2, 0, 0]}),
+                )
+            }),
+            "attenuationColor must be three numbers in [0, 1]",
+        ),
+        (
+            scene_with(|j| volume(j, json!({"thicknessFactor": 1, "attenuationColor": [1, 1]}))),
+            "attenuationColor must be three numbers in [0, 1]",
+        ),
+        (
+            scene_with(|j| volume(j, json!({"thicknessFactor": "thick"}))),
+            "thicknessFactor is not a finite number",
+        ),
     ];
     for (s, says) in scenes {
         let before = snapshot(s.dir.path());

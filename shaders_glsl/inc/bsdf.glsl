@@ -10,6 +10,14 @@
 // the specular lobe with a probability from the Fresnel weights at ωo, else transmission
 // or diffuse by the transmission share; the specular and transmission lobes sample
 // visible normals (Dupuy & Benyoub 2023, spherical caps). eval() returns f·|cosθi|.
+//
+// On the boundary of a solid (KHR_materials_volume, eta > 0) the transmitted share is
+// instead a rough dielectric interface (Walter et al. 2007, "Microfacet models for
+// refraction"): GGX with separable Smith shadowing, reflection weighted by the exact
+// dielectric Fresnel term F and refraction by 1 − F tinted by the base colour, radiance
+// scaled by 1/η² on the way through (pbrt-v4's and Mitsuba 3's `roughdielectric`). It
+// takes the share (1 − metallic)·transmission of the material; the rest is the opaque
+// material (diffuse + specular, metal) with that share taken out (volume_rest).
 #ifndef INC_BSDF_GLSL
 #define INC_BSDF_GLSL
 
@@ -24,6 +32,8 @@ struct BsdfParams {
     vec3 f0_dielectric;    // dielectric F0 (ior, specular colour and factor)
     float transmission;    // KHR_materials_transmission: share of the dielectric's diffuse
                            // lobe that goes through the surface (0: opaque)
+    float eta;             // KHR_materials_volume: the boundary of a refracting solid, the
+                           // index of the far side over wo's; 0: a thin or opaque surface
 };
 
 float ggx_d(vec3 h, float a) {
@@ -67,11 +77,90 @@ struct BsdfWo {
     float spec_prob;    // bsdf_specular_probability(wo)
 };
 
+// Visible GGX normal for wo (Dupuy & Benyoub 2023).
+vec3 ggx_sample_visible_normal(vec3 wo, float a, vec2 u) {
+    vec3 v = normalize(vec3(wo.xy * a, wo.z));
+    vec2 cs = cos_sin_turn(u.x);  // of φ = 2π·u.x
+    float z = (1.0 - u.y) * (1.0 + v.z) - v.z;
+    float s = sqrt(clamp(1.0 - z * z, 0.0, 1.0));
+    vec3 h = vec3(s * cs.x, s * cs.y, z) + v;
+    return normalize(vec3(h.xy * a, max(h.z, 0.0)));
+}
+
+// ---- the boundary of a solid (eta > 0) ----
+
+// Share of the material that is the dielectric interface.
+float volume_share(BsdfParams p) { return (1.0 - p.metallic) * p.transmission; }
+
+// The rest of the material, opaque, as BsdfParams whose value times (1 − volume_share)
+// is (1 − metallic)(1 − transmission)·dielectric + metallic·metal.
+BsdfParams volume_rest(BsdfParams p) {
+    BsdfParams q = p;
+    float rest = 1.0 - volume_share(p);
+    q.metallic = rest > 0.0 ? clamp(p.metallic / rest, 0.0, 1.0) : 0.0;
+    q.transmission = 0.0;
+    q.eta = 0.0;
+    return q;
+}
+
+// Fresnel reflectance of a dielectric interface for light arriving at cosine cos_i (> 0)
+// on the side of index 1, the far side of index eta (total internal reflection: 1).
+float fresnel_dielectric(float cos_i, float eta) {
+    float sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
+    if (sin2_t >= 1.0) return 1.0;
+    float cos_t = sqrt(1.0 - sin2_t);
+    float r_parallel = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    float r_perpendicular = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    return 0.5 * (r_parallel * r_parallel + r_perpendicular * r_perpendicular);
+}
+
+// The interface's f·|cosθi| and sampling density of wi (wo.z > 0), both sides.
+vec3 interface_eval_pdf(BsdfParams p, vec3 wo, float lambda_wo, vec3 wi, out float pdf) {
+    pdf = 0.0;
+    bool reflected = wi.z > 0.0;
+    float etap = reflected ? 1.0 : p.eta;
+    vec3 h = wi * etap + wo;  // the (generalised) half vector
+    if (wi.z == 0.0 || dot(h, h) == 0.0) return vec3(0.0);
+    h = normalize(h);
+    if (h.z < 0.0) h = -h;
+    float ho = dot(wo, h);
+    float hi = dot(wi, h);
+    // Microfacets seen from behind by either direction carry nothing.
+    if (ho <= 0.0 || hi * wi.z <= 0.0) return vec3(0.0);
+    float d = ggx_d(h, p.alpha);
+    float g1o = 1.0 / (1.0 + lambda_wo);
+    float g1i = 1.0 / (1.0 + ggx_lambda(wi, p.alpha));
+    float f = fresnel_dielectric(ho, p.eta);
+    // Visible-normal density of h: g1o·D·(wo·h)/cosθo.
+    float visible = g1o * d * ho / wo.z;
+    if (reflected) {
+        pdf = f * visible / (4.0 * ho);
+        return vec3(f * d * g1o * g1i / (4.0 * wo.z));
+    }
+    float denom = sqr(hi + ho / etap);
+    pdf = (1.0 - f) * visible * abs(hi) / denom;
+    return p.base_color * ((1.0 - f) * d * g1o * g1i * abs(hi) * ho / (denom * wo.z * etap * etap));
+}
+
+// Sample the interface: a visible normal from u.yz, then reflection with probability F
+// (decided by u.x) or refraction.
+bool interface_sample(BsdfParams p, vec3 wo, vec3 u, out vec3 wi) {
+    vec3 h = ggx_sample_visible_normal(wo, p.alpha, u.yz);
+    float ho = dot(wo, h);
+    if (u.x < fresnel_dielectric(ho, p.eta)) {
+        wi = reflect(-wo, h);
+        return wi.z > 0.0;
+    }
+    wi = refract(-wo, h, 1.0 / p.eta);
+    return wi.z < 0.0;
+}
+
 BsdfWo bsdf_at(BsdfParams p, vec3 wo) {
     BsdfWo c;
     c.wo = wo;
     c.lambda_wo = ggx_lambda(wo, p.alpha);
-    c.spec_prob = bsdf_specular_probability(p, wo);
+    // On a solid's boundary the specular probability is the opaque rest's.
+    c.spec_prob = bsdf_specular_probability(p.eta > 0.0 ? volume_rest(p) : p, wo);
     return c;
 }
 
@@ -79,7 +168,7 @@ BsdfWo bsdf_at(BsdfParams p, vec3 wo) {
 // the half vector and D. The single definition of the BSDF: eval() and pdf() call it.
 // Below the surface (wi.z < 0) only the transmission lobe lives: the specular lobe's
 // value and density at wi mirrored above.
-vec3 bsdf_eval_pdf(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
+vec3 bsdf_eval_pdf_walls(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
     vec3 wo = c.wo;
     pdf = 0.0;
     bool through = wi.z < 0.0;
@@ -105,6 +194,37 @@ vec3 bsdf_eval_pdf(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
     return mix(dielectric, metal, p.metallic) * wi.z;
 }
 
+// The whole BSDF: bsdf_eval_pdf_walls for thin or opaque surfaces; on a solid's boundary
+// the interface with its share, and the opaque rest.
+vec3 bsdf_eval_pdf(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
+    if (p.eta <= 0.0) return bsdf_eval_pdf_walls(p, c, wi, pdf);
+    pdf = 0.0;
+    if (c.wo.z <= 0.0) return vec3(0.0);
+    float share = volume_share(p);
+    float pdf_interface;
+    vec3 f = share * interface_eval_pdf(p, c.wo, c.lambda_wo, wi, pdf_interface);
+    pdf = share * pdf_interface;
+    if (share < 1.0 && wi.z > 0.0) {
+        float pdf_rest;
+        f += (1.0 - share) * bsdf_eval_pdf_walls(volume_rest(p), c, wi, pdf_rest);
+        pdf += (1.0 - share) * pdf_rest;
+    }
+    return f;
+}
+
+// Probability that bsdf_sample draws from the diffuse lobe.
+float bsdf_diffuse_probability(BsdfParams p, BsdfWo c) {
+    if (p.eta > 0.0) return (1.0 - volume_share(p)) * (1.0 - c.spec_prob);
+    return (1.0 - c.spec_prob) * (1.0 - p.transmission);
+}
+
+// Probability that bsdf_sample draws from the lobe through a thin wall, or from a
+// solid's interface (both of its sides).
+float bsdf_glass_probability(BsdfParams p, BsdfWo c) {
+    if (p.eta > 0.0) return volume_share(p);
+    return (1.0 - c.spec_prob) * p.transmission;
+}
+
 // f(wo, wi)·cosθi.
 vec3 bsdf_eval(BsdfParams p, vec3 wo, vec3 wi) {
     float unused_pdf;
@@ -117,23 +237,31 @@ float bsdf_pdf(BsdfParams p, vec3 wo, vec3 wi) {
     return pdf;
 }
 
-// Visible GGX normal for wo (Dupuy & Benyoub 2023).
-vec3 ggx_sample_visible_normal(vec3 wo, float a, vec2 u) {
-    vec3 v = normalize(vec3(wo.xy * a, wo.z));
-    vec2 cs = cos_sin_turn(u.x);  // of φ = 2π·u.x
-    float z = (1.0 - u.y) * (1.0 + v.z) - v.z;
-    float s = sqrt(clamp(1.0 - z * z, 0.0, 1.0));
-    vec3 h = vec3(s * cs.x, s * cs.y, z) + v;
-    return normalize(vec3(h.xy * a, max(h.z, 0.0)));
-}
-
 // Sample wi; returns false when the sample is invalid (a visible normal that reflects
 // wo below the surface). u.x chooses the specular lobe (u.x < spec_prob), u.y then the
 // transmission lobe (u.y < transmission, rescaled), and the rest warps.
-bool bsdf_sample(BsdfParams p, BsdfWo c, vec3 u, out vec3 wi) {
+//
+// On a solid's boundary u.x < volume_share picks the interface, which then takes u.x
+// rescaled as its visible normal's first number, u.z as the second, and `u_fresnel` to
+// choose between reflection and refraction (which depends on the normal drawn); the
+// opaque rest takes u.x rescaled and u.z as above. (u.y is not used there: the caller
+// derives it from u.x for the lobe choice of the walls' case.)
+bool bsdf_sample(BsdfParams p, BsdfWo c, vec3 u, float u_fresnel, out vec3 wi) {
     wi = vec3(0.0);
     vec3 wo = c.wo;
     if (wo.z <= 0.0) return false;
+    if (p.eta > 0.0) {
+        float share = volume_share(p);
+        if (u.x < share) {
+            float x = min(u.x / share, 0.99999994);
+            return interface_sample(p, wo, vec3(u_fresnel, x, u.z), wi);
+        }
+        float x = min((u.x - share) / (1.0 - share), 0.99999994);
+        float ps_rest = c.spec_prob;
+        float y = ps_rest > 0.0 && x < ps_rest ? x / ps_rest : (x - ps_rest) / max(1.0 - ps_rest, 1e-30);
+        p = volume_rest(p);
+        u = vec3(x, min(y, 0.99999994), u.z);
+    }
     float ps = c.spec_prob;
     if (u.x < ps) {
         vec3 h = ggx_sample_visible_normal(wo, p.alpha, u.yz);

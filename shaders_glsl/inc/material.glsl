@@ -26,6 +26,7 @@ struct Surface {
     BsdfParams bsdf;
     float roughness;   // perceptual roughness (AOVs)
     vec3 emission;     // radiance emitted toward wo
+    vec3 interior;     // a solid's boundary (bsdf.eta > 0): the solid's absorption σ
     uint light_tri;    // light triangle index, INVALID_INDEX if not a sampled light
 };
 
@@ -132,6 +133,12 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     // Metals do not transmit: the lobe is part of the dielectric (the BSDF weighs it by
     // 1 − metallic), so a fully metallic surface stays opaque for the path's geometry too.
     s.bsdf.transmission = s.bsdf.metallic < 1.0 ? clamp(transmission, 0.0, 1.0) : 0.0;
+    // The boundary of a refracting solid (KHR_materials_volume): the index ratio across it
+    // seen from wo; the solid lies behind the front face (its outward side).
+    bool solid = s.bsdf.transmission > 0.0 && (m.flags & MATERIAL_FLAG_VOLUME) != 0u;
+    float ior = max(m.ior, 1.0);
+    s.bsdf.eta = solid ? (s.front ? ior : 1.0 / ior) : 0.0;
+    s.interior = solid ? m.attenuation : vec3(0.0);
 
     // Emission: front face only unless the material is double-sided.
     bool emits = s.front || (m.flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;
@@ -150,6 +157,15 @@ BsdfWo surface_bsdf_at(Surface s) { return bsdf_at(s.bsdf, surface_to_local(s, s
 // Whether light can go through the surface (KHR_materials_transmission): directions
 // below the geometric surface then carry light too.
 bool surface_transmits(Surface s) { return s.bsdf.transmission > 0.0; }
+
+// The absorption coefficient along a ray leaving the surface toward w, for a path that
+// reached it through a medium of coefficient `here` (the side of wo): crossing a solid's
+// boundary enters the solid (from its front) or leaves it for the outside (clear; solids
+// do not nest).
+vec3 medium_toward(Surface s, vec3 w, vec3 here) {
+    if (s.bsdf.eta <= 0.0 || dot(w, s.ng) > 0.0) return here;
+    return s.front ? s.interior : vec3(0.0);
+}
 
 // The geometric normal on the side of direction w (the side a ray toward w leaves from).
 vec3 surface_side_normal(Surface s, vec3 w) { return dot(w, s.ng) < 0.0 ? -s.ng : s.ng; }

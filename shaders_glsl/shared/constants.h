@@ -15,6 +15,9 @@
 
 // Material flags.
 #define MATERIAL_FLAG_DOUBLE_SIDED 1u
+// KHR_materials_volume with a thickness: the surface bounds a refracting solid (the
+// transmitted share is a rough dielectric interface, Walter et al. 2007), not a thin wall.
+#define MATERIAL_FLAG_VOLUME 2u
 
 // LightCandidateTriangle flags.
 #define LIGHT_CANDIDATE_TWO_SIDED 1u

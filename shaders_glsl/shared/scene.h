@@ -62,6 +62,10 @@ struct Material {
     // Last, so that the content hash of scenes without it is that of older builds.
     float transmission;
     TextureRef transmission_tex;
+    // KHR_materials_volume (MATERIAL_FLAG_VOLUME): the absorption coefficient of the solid
+    // the surface bounds, per world unit (−ln(attenuationColor) / attenuationDistance; 0:
+    // clear). Counted in the content hash with the transmission fields.
+    vec3 attenuation;
 };
 
 // One emissive triangle in world space.

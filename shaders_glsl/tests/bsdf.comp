@@ -1,5 +1,6 @@
 // The BSDF (inc/bsdf.glsl) of one material at one outgoing direction, for the tests in
-// tests/bsdf.rs: mode 0 samples a direction from each input's uniform numbers (xyz) and
+// tests/bsdf.rs: mode 0 samples a direction from each input's uniform numbers (xyz; w: the
+// reflection-or-refraction choice on a solid's boundary) and
 // returns it with the density and f·|cosθ| that bsdf_eval_pdf gives it; mode 1 evaluates
 // f·|cosθ| and the density at each input direction.
 #version 460
@@ -13,6 +14,7 @@ struct BsdfCase {
     vec3 wo;
     float specular;
     float transmission;
+    float eta;
 };
 
 layout(local_size_x = 64) in;
@@ -31,10 +33,11 @@ void main() {
     p.specular = bsdf_case.specular;
     p.f0_dielectric = bsdf_case.f0_dielectric;
     p.transmission = bsdf_case.transmission;
+    p.eta = bsdf_case.eta;
     BsdfWo c = bsdf_at(p, bsdf_case.wo);
     vec3 wi = items[t].xyz;
     bool valid = true;
-    if (pc.mode == 0u) valid = bsdf_sample(p, c, items[t].xyz, wi);
+    if (pc.mode == 0u) valid = bsdf_sample(p, c, items[t].xyz, items[t].w, wi);
     float pdf;
     vec3 f = bsdf_eval_pdf(p, c, wi, pdf);
     results[2u * t] = vec4(wi, valid ? pdf : -1.0);

@@ -456,8 +456,8 @@ fn rebase(scene: &mut Scene) {
 
 /// glTF extensions lanterna reads. A file may use others without requiring them (a
 /// required one it does not know is refused when the file is parsed); their data is then
-/// ignored, which a user should hear about: a solid glass object under
-/// `KHR_materials_volume` renders as a thin shell, a `KHR_materials_unlit` material lit.
+/// ignored, which a user should hear about: a `KHR_materials_clearcoat` material renders
+/// without its coat, a `KHR_materials_unlit` material lit.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
@@ -465,6 +465,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_pbrSpecularGlossiness",
     "KHR_materials_specular",
     "KHR_materials_transmission",
+    "KHR_materials_volume",
     "KHR_mesh_quantization",
     "KHR_texture_transform",
 ];

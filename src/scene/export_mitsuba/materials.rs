@@ -1,6 +1,8 @@
 //! Materials and textures: glTF materials as Mitsuba BSDFs (exact `diffuse` for
 //! Lambertian ones, `principled` otherwise; KHR_materials_transmission as a blend with
-//! `thindielectric`, exact for smooth glass without Fresnel reflection), base colour and
+//! `thindielectric`, exact for smooth glass without Fresnel reflection; with
+//! KHR_materials_volume as `roughdielectric`, exact for glass through and through, its
+//! absorption as an interior `homogeneous` medium), base colour and
 //! emission as constants or bitmaps (8-bit sRGB PNG as lanterna decodes it, or linear PFM
 //! with the factor baked in).
 
@@ -9,7 +11,7 @@ use super::geometry::UvPlan;
 use super::textures::{average_colour, linear_texels};
 use super::uv_cover;
 use super::writer::Writer;
-use super::xml::{bitmap_xml, bsdf_id, is_identity, rgb_xml, uv_matrix, xml_escape};
+use super::xml::{bitmap_xml, bsdf_id, is_identity, is_solid, rgb_xml, uv_matrix, xml_escape};
 use super::ExportError;
 use crate::gpu;
 use crate::scene::TextureData;
@@ -78,6 +80,14 @@ impl Writer<'_> {
         let mut s = String::new();
         let _ = writeln!(s, "  <!-- material `{}` -->", xml_escape(&name));
         let transmits = mat.transmission > 0.0 && mat.metallic < 1.0;
+        let solid = transmits && is_solid(&mat);
+        let share = (1.0 - mat.metallic) * mat.transmission.min(1.0);
+        if solid && share >= 1.0 {
+            // Clear or tinted glass through and through: exactly `roughdielectric`.
+            let id = bsdf_id(m, vertex_colors);
+            s.push_str(&self.solid_glass_xml(m, &mat, &colour, Some(&id)));
+            return Ok(s);
+        }
         if transmits {
             // The reflecting part stays two-sided inside the blend (Mitsuba's `twosided`
             // refuses transmitting BSDFs; `thindielectric` is symmetric already).
@@ -89,7 +99,11 @@ impl Writer<'_> {
             let _ = writeln!(
                 s,
                 "    <float name=\"weight\" value=\"{}\"/>",
-                mat.transmission.min(1.0)
+                if solid {
+                    share
+                } else {
+                    mat.transmission.min(1.0)
+                }
             );
             s.push_str("  <bsdf type=\"twosided\">\n");
         } else {
@@ -140,10 +154,59 @@ impl Writer<'_> {
         }
         s.push_str("  </bsdf>\n");
         if transmits {
-            s.push_str(&self.thin_glass_xml(m, &mat, &colour));
+            if solid {
+                self.approximations.push(format!(
+                    "material `{name}`: a solid whose interface takes only part of the material (metallic {}, transmission {}) as a blend of `roughdielectric` with the opaque part",
+                    mat.metallic, mat.transmission
+                ));
+                s.push_str(&self.solid_glass_xml(m, &mat, &colour, None));
+            } else {
+                s.push_str(&self.thin_glass_xml(m, &mat, &colour));
+            }
             s.push_str("  </bsdf>\n");
         }
         Ok(s)
+    }
+
+    /// The interface of a solid (KHR_materials_volume) as Mitsuba's `roughdielectric`:
+    /// GGX at lanterna's α (roughness², at least MIN_GGX_ALPHA), visible normals, the
+    /// material's index inside (the side behind the front face, which both renderers
+    /// take from the winding), transmittance the base colour. The same model as
+    /// lanterna's (exact Fresnel, separable Smith, 1/η² for radiance).
+    /// `id`: the BSDF's own id when it stands alone (not inside a blend).
+    fn solid_glass_xml(
+        &mut self,
+        m: u32,
+        mat: &gpu::Material,
+        colour: &str,
+        id: Option<&str>,
+    ) -> String {
+        let name = self.material_name(m).to_string();
+        if mat.transmission_tex.index >= 0 {
+            self.approximations.push(format!(
+                "material `{name}`: transmission texture not exported (factor used)"
+            ));
+        }
+        if mat.metallic_roughness_tex.index >= 0 {
+            self.approximations.push(format!(
+                "material `{name}`: metallic-roughness texture not exported (factors used)"
+            ));
+        }
+        // Mitsuba refuses equal indices; 1.0001 bends light by nothing visible.
+        let ior = mat.ior.max(1.0001);
+        let alpha = (mat.roughness * mat.roughness).max(gpu::MIN_GGX_ALPHA);
+        let mut s = match id {
+            Some(id) => format!("    <bsdf type=\"roughdielectric\" id=\"{id}\">\n"),
+            None => "    <bsdf type=\"roughdielectric\">\n".to_string(),
+        };
+        s.push_str("      <string name=\"distribution\" value=\"ggx\"/>\n");
+        let _ = writeln!(s, "      <float name=\"alpha\" value=\"{alpha}\"/>");
+        let _ = writeln!(s, "      <float name=\"int_ior\" value=\"{ior}\"/>");
+        s.push_str("      <float name=\"ext_ior\" value=\"1\"/>\n");
+        s.push_str("      <boolean name=\"sample_visible\" value=\"true\"/>\n");
+        s.push_str(&colour.replace("\"reflectance\"", "\"specular_transmittance\""));
+        s.push_str("    </bsdf>\n");
+        s
     }
 
     /// The transmitting part of a KHR_materials_transmission material as Mitsuba's

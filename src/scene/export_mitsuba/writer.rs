@@ -4,7 +4,7 @@
 
 use super::files::PlyMesh;
 use super::geometry::{append_instance, back_sheet, shading, GroupKey, Shading, UvPlan};
-use super::xml::{bsdf_id, integrator_xml, xml_escape};
+use super::xml::{bsdf_id, integrator_xml, interior_medium_xml, medium_id, xml_escape};
 use super::{io_err, ExportError, ExportOptions};
 use crate::gpu;
 use crate::lights::LightTable;
@@ -146,6 +146,25 @@ impl Writer<'_> {
             xml.push_str(&self.bsdf_xml(m, plan, colored)?);
         }
 
+        // The absorbing interiors of solids (KHR_materials_volume).
+        let mut media = Vec::new();
+        for &(m, _) in &used {
+            if let Some(medium) = interior_medium_xml(m, &scene.materials[m as usize]) {
+                if !media.contains(&m) {
+                    xml.push_str(&medium);
+                    media.push(m);
+                }
+            }
+        }
+        if !media.is_empty() {
+            // Mitsuba's `path` ignores media; `volpath` is `path` plus them.
+            xml = xml.replacen(
+                "<integrator type=\"path\">",
+                "<integrator type=\"volpath\">",
+                1,
+            );
+        }
+
         let mut shapes = 0;
         let mut emitters = 0;
         for (key, mesh) in &groups {
@@ -193,6 +212,13 @@ impl Writer<'_> {
                     "    <ref id=\"{}\"/>",
                     bsdf_id(key.material, key.colored)
                 );
+                if media.contains(&key.material) {
+                    let _ = writeln!(
+                        xml,
+                        "    <ref name=\"interior\" id=\"{}\"/>",
+                        medium_id(key.material)
+                    );
+                }
                 if let Some(r) = &radiance {
                     let _ = writeln!(xml, "    <emitter type=\"area\">\n{r}    </emitter>");
                     emitters += 1;

@@ -109,6 +109,30 @@ pub(super) fn bsdf_id(m: u32, vertex_colors: bool) -> String {
     }
 }
 
+/// Whether a material bounds a refracting solid (KHR_materials_volume with a thickness).
+pub(super) fn is_solid(mat: &gpu::Material) -> bool {
+    mat.transmission > 0.0 && mat.metallic < 1.0 && mat.flags & gpu::MATERIAL_FLAG_VOLUME != 0
+}
+
+/// A solid's absorption as Mitsuba's `homogeneous` medium (σt = σa, albedo 0: every
+/// interaction absorbs), or None for a clear one.
+pub(super) fn interior_medium_xml(m: u32, mat: &gpu::Material) -> Option<String> {
+    if !is_solid(mat) || mat.attenuation.iter().all(|&a| a <= 0.0) {
+        return None;
+    }
+    // Mitsuba reads an RGB σt as a reflectance (in [0, 1]) times `scale`.
+    let scale = mat.attenuation.iter().cloned().fold(0.0, f32::max);
+    Some(format!(
+        "  <medium type=\"homogeneous\" id=\"{}\">\n    {}\n    <float name=\"scale\" value=\"{scale}\"/>\n    <rgb name=\"albedo\" value=\"0\"/>\n  </medium>\n",
+        medium_id(m),
+        rgb_xml("sigma_t", mat.attenuation.map(|a| (a / scale).clamp(0.0, 1.0)))
+    ))
+}
+
+pub(super) fn medium_id(m: u32) -> String {
+    format!("interior{m}")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -28,6 +28,9 @@ agree up to noise.
                   whose light reaches the floor only through an amber pane below it, and
                   a half-transmitting blue partition (diffuse + thin glass) in front of
                   a wall lamp, casting a tinted shadow
+  solid.gltf      KHR_materials_volume: a smooth clear glass box (index 1.5) and a rough
+                  absorbing ball (index 1.33, attenuation) around a small lamp (exact
+                  against Mitsuba's roughdielectric and an interior homogeneous medium)
   glossy.gltf     rough metal and rough dielectric panels (not Lambertian: the export
                   approximates them with `principled`; measures the gap, no exact check)
 
@@ -175,6 +178,24 @@ class Builder:
                            "KHR_materials_transmission": {"transmissionFactor": transmission}}})
         if "KHR_materials_transmission" not in self.used:
             self.used.append("KHR_materials_transmission")
+        return len(self.materials) - 1
+
+    def solid_glass(self, rgb, roughness, ior, attenuation=None):
+        """The boundary of a glass solid (KHR_materials_volume, thickness > 0):
+        `attenuation` = (colour, distance) makes it absorb."""
+        volume = {"thicknessFactor": 0.1}
+        if attenuation:
+            volume.update(attenuationColor=list(attenuation[0]),
+                          attenuationDistance=attenuation[1])
+        self.materials.append({
+            "pbrMetallicRoughness": {"baseColorFactor": list(rgb) + [1], "metallicFactor": 0,
+                                     "roughnessFactor": roughness},
+            "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1},
+                           "KHR_materials_ior": {"ior": ior},
+                           "KHR_materials_volume": volume}})
+        for e in ("KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_volume"):
+            if e not in self.used:
+                self.used.append(e)
         return len(self.materials) - 1
 
     def pbr(self, rgb, metallic, roughness):
@@ -527,6 +548,31 @@ def glass_scene():
     b.write("glass.gltf")
 
 
+def solid_scene():
+    """Glass solids under a ceiling lamp: a clear, slightly green smooth box standing on
+    the floor (light reaches the floor under it only through two interfaces), and a
+    rough, blue-absorbing faceted ball of index 1.33 holding a small lamp, whose light
+    leaves only through the absorbing solid."""
+    b = Builder()
+    grey = b.lambert((0.6, 0.6, 0.6))
+    floor_and_wall(b, grey)
+    lamp = b.lambert((0, 0, 0), emission=(1, 1, 1), strength=6)
+    b.node(mesh=b.quad((-0.4, 2.0, -0.4), (0.4, 2.0, -0.4), (0.4, 2.0, 0.4), (-0.4, 2.0, 0.4),
+                       lamp, uv=False))
+    clear = b.solid_glass((0.92, 1.0, 0.92), 0.0, 1.5)
+    b.node(mesh=b.box(clear), translation=[-0.6, 0.36, -0.2], scale=[0.7, 0.7, 0.7],
+           rotation=[0, 0.258819, 0, 0.9659258])
+    pos, idx = sphere_geometry(rings=8, segs=16)
+    murky = b.solid_glass((1, 1, 1), 0.3, 1.33, attenuation=((0.9, 0.6, 0.3), 0.5))
+    b.node(mesh=b.mesh(pos, idx, murky), translation=[0.7, 0.5, 0.1], scale=[0.45, 0.45, 0.45])
+    inner = b.lambert((0, 0, 0), emission=(1, 0.9, 0.7), strength=12)
+    b.node(mesh=b.box(inner), translation=[0.7, 0.5, 0.1], scale=[0.15, 0.15, 0.15])
+    eye = (0.3, 1.3, 3.4)
+    b.node(camera=b.camera(yfov=0.8, aspect=4 / 3), translation=list(eye),
+           rotation=look_at_rotation(eye, (0.0, 0.5, -0.2)))
+    b.write("solid.gltf")
+
+
 def glossy_scene():
     b = Builder()
     grey = b.lambert((0.6, 0.6, 0.6))
@@ -551,3 +597,4 @@ if __name__ == "__main__":
     colors_scene()
     quantized_scene()
     glass_scene()
+    solid_scene()
