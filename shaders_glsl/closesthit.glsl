@@ -186,8 +186,6 @@ struct NeeResult {
     uint chosen_model;   // light model NEE picked (AOV), INVALID_INDEX if none
     bool connected;      // the shadow ray found the light visible
     float ris_weight;    // RIS contribution weight W (0 without RIS)
-    vec3 light_dir;      // toward the chosen light point, and its distance (FLT_MAX: a
-    float light_dist;    // light at infinity), for the absorption along the way
     // The shadow ray that decides it, when one does: the path loop traces it (raygen's
     // one trace_ray call site) and passes the answer to nee_resolve.
     bool needs_shadow_ray;
@@ -203,11 +201,21 @@ NeeResult nee_none() {
     r.chosen_model = INVALID_INDEX;
     r.connected = false;
     r.ris_weight = 0.0;
-    r.light_dir = vec3(0.0);
-    r.light_dist = 0.0;
     r.needs_shadow_ray = false;
     r.shadow = Ray(vec3(0.0), vec3(0.0), 0.0);
     return r;
+}
+
+// Light carried over distance t through a medium of absorption coefficient σ.
+vec3 transmittance(vec3 sigma, float t) { return exp(-sigma * t); }
+
+// NEE's contribution, and its record, seen through a medium of absorption `sigma` over
+// the distance to the light (solids' interiors, KHR_materials_volume).
+void nee_absorb(inout NeeResult r, vec3 sigma, float dist) {
+    if (max3(sigma) <= 0.0) return;
+    vec3 tr = transmittance(sigma, dist);
+    r.contribution *= tr;
+    r.record_value *= (tr.x + tr.y + tr.z) / 3.0;
 }
 
 // The NEE result once its shadow ray is answered: it counts only when the light is
@@ -241,7 +249,9 @@ void shadow_ray(Surface s, LightSample ls, inout NeeResult r) {
 
 // One light sample from the source distribution, MIS-weighted against direction sampling;
 // its contribution as if the light were visible, and the shadow ray that decides it.
-NeeResult nee_single(Surface s, DirectionSampler d, inout Rng rng) {
+// `medium`: the absorption where the path reached s (raygen's path state), which the
+// light is seen through unless the shadow ray crosses into a solid or out of it.
+NeeResult nee_single(Surface s, DirectionSampler d, vec3 medium, inout Rng rng) {
     NeeResult r = nee_none();
     if (params.strategy == STRATEGY_BSDF_ONLY) return r;
     vec4 u = vec4(rng_stratified2(rng, RNG_PAIR_LIGHT), rng_stratified2(rng, RNG_PAIR_LIGHT_POINT));
@@ -258,8 +268,6 @@ NeeResult nee_single(Surface s, DirectionSampler d, inout Rng rng) {
         w = power_heuristic(p_light, direction_pdf_mix(s, d, ls.wi, bsdf_pdf, tree_pdf));
     }
     shadow_ray(s, ls, r);
-    r.light_dir = ls.wi;
-    r.light_dist = ls.dist;
     TRACE5("  nee light model %u tri %u pdf=%f mis=%f f=%v3f\n", r.chosen_model, ls.tri, ls.pdf, w, f);
     vec3 Li_over_pdf = ls.Le_G * (w / ls.pdf);
     r.contribution = f * Li_over_pdf;
@@ -269,6 +277,7 @@ NeeResult nee_single(Surface s, DirectionSampler d, inout Rng rng) {
         r.record_value = (Li_over_pdf.x + Li_over_pdf.y + Li_over_pdf.z) / 3.0;
         r.record_pdf = ls.pdf * ls.dist * ls.dist / max(ls.cos_y, 1e-12);
     }
+    nee_absorb(r, medium_toward(s, ls.wi, medium), ls.dist);
     return r;
 }
 
@@ -335,7 +344,7 @@ float ris_denominator(RisContext ctx, RisCandidate c, uint M) {
 // RIS-selected light. `ds` is this vertex's direction sample and `next` the surface it
 // hit (valid when hit_next); an emitter there joins as the extra candidate.
 NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_next, Surface next, float next_t,
-                  inout Rng rng) {
+                  vec3 medium, inout Rng rng) {
     NeeResult r = nee_none();
     if (params.strategy == STRATEGY_BSDF_ONLY) return r;
     d.lights = light_context_for_ris(d.lights);
@@ -380,8 +389,6 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
     TRACE6("  ris chosen model %u tri %u p_hat=%f W=%f shadow ray=%u Le_G=%v3f\n", r.chosen_model, y.tri, res.p_hat, res.W,
            uint(r.needs_shadow_ray), y.Le_G);
     r.contribution = res.y.f * y.Le_G * res.W;
-    r.light_dir = y.wi;
-    r.light_dist = y.dist;
     if (y.area) {
         vec3 Li_over_pdf = y.Le_G * res.W;
         r.record_dir = y.wi;
@@ -389,19 +396,8 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
         // W stands for 1/pdf in area measure.
         r.record_pdf = y.dist * y.dist / max(y.cos_y * res.W, 1e-20);
     }
+    nee_absorb(r, medium_toward(s, y.wi, medium), y.dist);
     return r;
-}
-
-// Light carried over distance t through a medium of absorption coefficient σ.
-vec3 transmittance(vec3 sigma, float t) { return exp(-sigma * t); }
-
-// NEE's contribution once the medium its light is seen through is known (`sigma`: the
-// absorption toward the light; solids' interiors, KHR_materials_volume).
-void nee_absorb(inout NeeResult r, vec3 sigma) {
-    if (max3(sigma) <= 0.0 || max3(r.contribution) <= 0.0) return;
-    vec3 tr = transmittance(sigma, r.light_dist);
-    r.contribution *= tr;
-    r.record_value *= (tr.x + tr.y + tr.z) / 3.0;
 }
 
 // MIS weight of emission reached by direction sampling from a vertex whose light

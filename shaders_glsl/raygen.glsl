@@ -276,8 +276,8 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
             // The direction sample's hit is known: choose NEE's light (RIS takes an
             // emitter hit there as a candidate); its shadow ray is the next step.
             rng.vertex = depth;
-            nee = NEE_MODE == NEE_RIS ? nee_ris(s, d, ds, next.valid, ns, next.t, rng) : nee_single(s, d, rng);
-            nee_absorb(nee, medium_toward(s, nee.light_dir, medium));
+            nee = NEE_MODE == NEE_RIS ? nee_ris(s, d, ds, next.valid, ns, next.t, medium, rng)
+                                      : nee_single(s, d, medium, rng);
             continue;
         } else {
             bool hit_next = next.valid;

@@ -6,6 +6,7 @@
 #include "trace.glsl"
 
 #include "common.glsl"
+#include "specialization.glsl"
 #include "scene_data.glsl"
 #include "geometry.glsl"
 #include "bsdf.glsl"
@@ -26,7 +27,6 @@ struct Surface {
     BsdfParams bsdf;
     float roughness;   // perceptual roughness (AOVs)
     vec3 emission;     // radiance emitted toward wo
-    vec3 interior;     // a solid's boundary (bsdf.eta > 0): the solid's absorption σ
     uint light_tri;    // light triangle index, INVALID_INDEX if not a sampled light
 };
 
@@ -135,10 +135,9 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     s.bsdf.transmission = s.bsdf.metallic < 1.0 ? clamp(transmission, 0.0, 1.0) : 0.0;
     // The boundary of a refracting solid (KHR_materials_volume): the index ratio across it
     // seen from wo; the solid lies behind the front face (its outward side).
-    bool solid = s.bsdf.transmission > 0.0 && (m.flags & MATERIAL_FLAG_VOLUME) != 0u;
+    bool solid = SOLIDS && s.bsdf.transmission > 0.0 && (m.flags & MATERIAL_FLAG_VOLUME) != 0u;
     float ior = max(m.ior, 1.0);
     s.bsdf.eta = solid ? (s.front ? ior : 1.0 / ior) : 0.0;
-    s.interior = solid ? m.attenuation : vec3(0.0);
 
     // Emission: front face only unless the material is double-sided.
     bool emits = s.front || (m.flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;
@@ -164,7 +163,7 @@ bool surface_transmits(Surface s) { return s.bsdf.transmission > 0.0; }
 // do not nest).
 vec3 medium_toward(Surface s, vec3 w, vec3 here) {
     if (s.bsdf.eta <= 0.0 || dot(w, s.ng) > 0.0) return here;
-    return s.front ? s.interior : vec3(0.0);
+    return s.front ? materials[s.material].attenuation : vec3(0.0);
 }
 
 // The geometric normal on the side of direction w (the side a ray toward w leaves from).

@@ -20,6 +20,8 @@ pub(super) struct Variant {
     pub debug: bool,
     /// The kernel with SIMD lane-utilisation counters (`settings.lane_stats`).
     pub lanes: bool,
+    /// The scene has solids (KHR_materials_volume): refraction and absorption.
+    pub solids: bool,
 }
 
 /// Texture slots of the descriptor-set layout come in multiples of this many.
@@ -147,11 +149,12 @@ impl Renderer {
             v.guiding as u32,
             v.training as u32,
             v.aovs as u32,
+            v.solids as u32,
         ];
         let started = Instant::now();
         let name = format!(
-            "render (ris={}, guiding={}, training={}, aovs={}, debug={}, lanes={}, traversal={})",
-            v.ris, v.guiding, v.training, v.aovs, v.debug, v.lanes, self.traversal.kind
+            "render (ris={}, guiding={}, training={}, aovs={}, solids={}, debug={}, lanes={}, traversal={})",
+            v.ris, v.guiding, v.training, v.aovs, v.solids, v.debug, v.lanes, self.traversal.kind
         );
         let p = ComputePipeline::new(
             &self.device,
@@ -226,6 +229,7 @@ impl Renderer {
             aovs: self.settings.aovs,
             debug: false,
             lanes: self.settings.lane_stats,
+            solids: self.has_solids,
         }
     }
 

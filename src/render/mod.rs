@@ -158,6 +158,8 @@ pub struct Renderer {
     pixel_emitter_flags: Buffer,
     /// Whether any pixel has pieces (else the kernel never reads the lists).
     has_pixel_emitters: bool,
+    /// Whether any material bounds a solid (the kernels' SOLIDS constant).
+    has_solids: bool,
     guide: GuideBuffers,
     /// A trained SD-tree to render with instead of training (`--load-guiding`).
     pub preloaded_tree: Option<crate::guiding::SdTree>,
@@ -254,6 +256,10 @@ impl Renderer {
             pixel_emitter_pieces,
             pixel_emitter_flags,
             has_pixel_emitters: !emitters.pieces.is_empty(),
+            has_solids: scene
+                .materials
+                .iter()
+                .any(|m| m.transmission > 0.0 && m.flags & gpu::MATERIAL_FLAG_VOLUME != 0),
             guide,
             preloaded_tree: None,
             bounds: (scene.bounds_min, scene.bounds_max),
