@@ -221,16 +221,6 @@ fn an_unsupported_extension_loads_with_a_warning_naming_it() {
         stderr.contains("KHR_materials_clearcoat, which lanterna does not support"),
         "no warning:\n{stderr}"
     );
-    // Skins are not applied either, and the user hears so.
-    let mut skinned = json.clone();
-    skinned["skins"] = serde_json::json!([{ "joints": [0] }]);
-    skinned["nodes"][0]["skin"] = serde_json::json!(0);
-    let skin_dir = tempfile::tempdir().unwrap();
-    let (_, skin_stderr) = info_of_edited_cornell(skin_dir.path(), &skinned);
-    assert!(
-        skin_stderr.contains("is skinned: skinning is not applied"),
-        "no warning:\n{skin_stderr}"
-    );
     // Extensions lanterna reads (the shipped file's emissive strength) and inert ones are
     // not reported.
     assert_eq!(stderr.matches("does not support").count(), 1, "{stderr}");
@@ -553,4 +543,112 @@ fn morph_targets_pose_meshes_by_node_or_mesh_weights() {
             );
         }
     }
+}
+
+/// A skinned quad in the file's static pose (glTF 2.0 skins): two joints, the second a
+/// child of the first, turned a quarter about z, with an inverse bind matrix; vertices
+/// bound to one joint or blended 3:1 over both. The skinned node's own transform (a
+/// scale of 10) must be ignored. The positions are worked out by hand: joint 0 moves by
+/// (0, 0, −2); joint 1 takes (x, y) to (1 − y, x − 1) and moves by (0, 0, −2) too. Seen
+/// to fail with the node's transform applied as well, and with the inverse bind
+/// matrices left out.
+#[test]
+fn skinned_meshes_take_their_joints_pose() {
+    use base64::Engine;
+    let mut bin = Vec::new();
+    let floats = |bin: &mut Vec<u8>, v: &[f32]| {
+        for x in v {
+            bin.extend_from_slice(&x.to_le_bytes());
+        }
+    };
+    floats(&mut bin, &[0., 0., 0., 1., 0., 0., 1., 1., 0., 0., 1., 0.]); // 0..48
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        bin.extend_from_slice(&i.to_le_bytes()); // 48..60
+    }
+    bin.extend_from_slice(&[0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0]); // 60..76
+    #[rustfmt::skip]
+    floats(&mut bin, &[1., 0., 0., 0., 1., 0., 0., 0., 1., 0., 0., 0., 0.75, 0.25, 0., 0.]); // 76..140
+    #[rustfmt::skip]
+    floats(&mut bin, &[
+        1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1.,
+        1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., -1., 0., 0., 1.,
+    ]); // 140..268
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bin)
+    );
+    let quarter = std::f32::consts::FRAC_1_SQRT_2;
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "buffers": [{"uri": uri, "byteLength": bin.len()}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 12},
+            {"buffer": 0, "byteOffset": 60, "byteLength": 16},
+            {"buffer": 0, "byteOffset": 76, "byteLength": 64},
+            {"buffer": 0, "byteOffset": 140, "byteLength": 128}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"},
+            {"bufferView": 2, "componentType": 5121, "count": 4, "type": "VEC4"},
+            {"bufferView": 3, "componentType": 5126, "count": 4, "type": "VEC4"},
+            {"bufferView": 4, "componentType": 5126, "count": 2, "type": "MAT4"}
+        ],
+        "materials": [{"emissiveFactor": [1, 1, 1], "doubleSided": true}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "JOINTS_0": 2, "WEIGHTS_0": 3},
+                                    "indices": 1, "material": 0}]}],
+        "skins": [{"joints": [1, 2], "inverseBindMatrices": 4}],
+        "nodes": [
+            {"mesh": 0, "skin": 0, "scale": [10, 10, 10]},
+            {"translation": [0, 0, -2], "children": [2]},
+            {"translation": [1, 0, 0], "rotation": [0, 0, quarter, quarter]},
+            {"camera": 0, "translation": [0, 0, 3]}
+        ],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}],
+        "scenes": [{"nodes": [0, 1, 3]}],
+        "scene": 0
+    });
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("skinned.gltf");
+    std::fs::write(&path, serde_json::to_string(&json).unwrap()).unwrap();
+    let scene = load(&path);
+    assert_eq!(scene.instances.len(), 1);
+    let inst = &scene.instances[0];
+    let prim = &scene.primitives[inst.primitive as usize];
+    let got: Vec<glam::Vec3> = scene.vertices
+        [prim.vertex_offset as usize..(prim.vertex_offset + prim.vertex_count) as usize]
+        .iter()
+        .map(|v| {
+            inst.transform
+                .transform_point3(glam::Vec3::from(v.position))
+                + scene.origin
+        })
+        .collect();
+    let want = [
+        glam::Vec3::new(0.0, 0.0, -2.0),
+        glam::Vec3::new(1.0, 0.0, -2.0),
+        glam::Vec3::new(1.0, 1.0, -2.0),
+        glam::Vec3::new(0.0, 0.5, -2.0),
+    ];
+    for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+        assert!((*g - *w).length() < 1e-5, "vertex {k}: {g} instead of {w}");
+    }
+    // A joint index beyond the skin's joints is an error naming it.
+    let mut bad = json.clone();
+    bad["skins"][0]["joints"] = serde_json::json!([1]);
+    bad["skins"][0]["inverseBindMatrices"] = serde_json::Value::Null;
+    std::fs::write(&path, serde_json::to_string(&bad).unwrap()).unwrap();
+    let err = Scene::load(&path, &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("uses joint 1, but the skin has 1"), "{err}");
+    // Joint indices of a type the spec does not allow are refused, not misread.
+    let mut bad = json.clone();
+    bad["accessors"][2]["componentType"] = serde_json::json!(5126);
+    bad["accessors"][2]["count"] = serde_json::json!(1);
+    std::fs::write(&path, serde_json::to_string(&bad).unwrap()).unwrap();
+    let err = Scene::load(&path, &Default::default()).unwrap_err().to_string();
+    assert!(err.contains("JOINTS must be VEC4 of unsigned byte"), "{err}");
 }

@@ -77,6 +77,9 @@ pub(super) enum Role {
     TexCoord,
     Color,
     Indices,
+    Joints,
+    Weights,
+    InverseBind,
 }
 
 impl Role {
@@ -88,6 +91,9 @@ impl Role {
             Role::TexCoord => "TEXCOORD",
             Role::Color => "COLOR",
             Role::Indices => "indices",
+            Role::Joints => "JOINTS",
+            Role::Weights => "WEIGHTS",
+            Role::InverseBind => "inverseBindMatrices",
         }
     }
 
@@ -109,6 +115,9 @@ impl Role {
             Role::TexCoord => ty == Type::Vec2 && matches!(ct, F32 | U8 | U16),
             Role::Color => matches!(ty, Type::Vec3 | Type::Vec4) && matches!(ct, F32 | U8 | U16),
             Role::Indices => ty == Type::Scalar && matches!(ct, U8 | U16 | U32),
+            Role::Joints => ty == Type::Vec4 && matches!(ct, U8 | U16),
+            Role::Weights => ty == Type::Vec4 && matches!(ct, F32 | U8 | U16),
+            Role::InverseBind => ty == Type::Mat4 && ct == F32,
         }
     }
 
@@ -127,6 +136,9 @@ impl Role {
             Role::TexCoord => "VEC2 of float, unsigned byte or unsigned short",
             Role::Color => "VEC3 or VEC4 of float, unsigned byte or unsigned short",
             Role::Indices => "SCALAR unsigned byte, short or int",
+            Role::Joints => "VEC4 of unsigned byte or unsigned short",
+            Role::Weights => "VEC4 of float, unsigned byte or unsigned short",
+            Role::InverseBind => "float MAT4",
         }
     }
 }
@@ -184,7 +196,7 @@ pub(super) fn check_accessor(
     }
     // Integer normals and tangents are unit vectors only as normalised integers.
     let integer = ct != ComponentType::F32;
-    if integer && matches!(role, Role::Normal | Role::Tangent) && !acc.normalized {
+    if integer && matches!(role, Role::Normal | Role::Tangent | Role::Weights) && !acc.normalized {
         return Err(format!(
             "{what} is {} but not normalized",
             component_name(ct)

@@ -184,9 +184,13 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let mut colors = Vec::new();
     let mut indices = Vec::new();
     let mut primitives: Vec<MeshPrimitive> = Vec::new();
-    // Keyed by mesh, primitive and the morph weights it is posed with (empty without
-    // morph targets): nodes that pose one mesh differently get their own geometry.
-    let mut primitive_ids: HashMap<(usize, usize, Vec<u32>), Option<u32>> = HashMap::new();
+    // Keyed by mesh, primitive, the morph weights it is posed with (empty without morph
+    // targets) and the skin that moves it: nodes that pose one mesh differently get their
+    // own geometry.
+    type PrimitiveKey = (usize, usize, Vec<u32>, Option<usize>);
+    let mut primitive_ids: HashMap<PrimitiveKey, Option<u32>> = HashMap::new();
+    // Every node's world transform, for skins' joints (which may lie anywhere).
+    let node_worlds = node_world_matrices(&document).map_err(&invalid)?;
     let mut instances = Vec::new();
     let mut cameras = Vec::new();
     let mut punctual = Vec::new();
@@ -263,12 +267,26 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
             punctual.push(convert_light(&light, &world, &node_name(&node)).map_err(&invalid)?);
         }
         let Some(mesh) = node.mesh() else { continue };
-        if node.skin().is_some() {
-            warnings.push(format!(
-                "node {} is skinned: skinning is not applied (its mesh is drawn as stored, placed by the node's transform)",
-                node_name(&node)
-            ));
-        }
+        // A skinned mesh is moved by its joints, in world space; the node's own transform
+        // does not apply (glTF 2.0, skins).
+        let joints = match node.skin() {
+            Some(skin) => Some(
+                joint_matrices(
+                    &skin,
+                    &node_worlds,
+                    &buffers,
+                    document.as_json(),
+                    budget.left(),
+                )
+                .map_err(&invalid)?,
+            ),
+            None => None,
+        };
+        let world = if joints.is_some() {
+            Mat4::IDENTITY
+        } else {
+            world
+        };
         let det = world.determinant();
         if det.abs() < 1e-20 {
             warnings.push(format!(
@@ -285,7 +303,12 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
             } else {
                 Vec::new()
             };
-            let key = (mesh.index(), prim.index(), weight_bits);
+            let key = (
+                mesh.index(),
+                prim.index(),
+                weight_bits,
+                node.skin().map(|s| s.index()),
+            );
             let id = match primitive_ids.get(&key) {
                 Some(id) => *id,
                 None => {
@@ -293,6 +316,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
                         &mesh,
                         &prim,
                         morph_weights,
+                        joints.as_deref(),
                         &buffers,
                         default_material,
                         &materials,
@@ -404,6 +428,101 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         scene.textures.len()
     );
     Ok(scene)
+}
+
+/// World transforms of all nodes of the file (those outside the scene's trees too: a
+/// skin's joints may be anywhere), each its parents' product with its own.
+fn node_world_matrices(document: &gltf::Document) -> Result<Vec<Mat4>, String> {
+    let count = document.nodes().len();
+    let mut parent = vec![None; count];
+    for node in document.nodes() {
+        for child in node.children() {
+            if parent[child.index()].replace(node.index()).is_some() {
+                return Err(format!(
+                    "node {} has two parents: a glTF node hierarchy must be a set of disjoint trees",
+                    node_name(&child)
+                ));
+            }
+        }
+    }
+    let local: Vec<Mat4> = document
+        .nodes()
+        .map(|n| Mat4::from_cols_array_2d(&n.transform().matrix()))
+        .collect();
+    let mut world: Vec<Option<Mat4>> = vec![None; count];
+    for start in 0..count {
+        // Walk up to a node whose transform is known (or a root), then down again.
+        let mut chain = vec![start];
+        while let Some(p) = parent[*chain.last().unwrap()] {
+            if world[p].is_some() {
+                break;
+            }
+            if chain.len() > 256 {
+                return Err("node hierarchy deeper than 256 levels (a cycle?)".into());
+            }
+            chain.push(p);
+        }
+        for &n in chain.iter().rev() {
+            if world[n].is_none() {
+                let above = parent[n].and_then(|p| world[p]).unwrap_or(Mat4::IDENTITY);
+                world[n] = Some(above * local[n]);
+            }
+        }
+    }
+    Ok(world
+        .into_iter()
+        .map(|m| m.unwrap_or(Mat4::IDENTITY))
+        .collect())
+}
+
+/// A skin's joint matrices in the static pose: each joint's world transform times its
+/// inverse bind matrix (identity when the skin gives none).
+fn joint_matrices(
+    skin: &gltf::Skin<'_>,
+    node_worlds: &[Mat4],
+    buffers: &[gltf::buffer::Data],
+    root: &gltf::json::Root,
+    max_bytes: u64,
+) -> Result<Vec<Mat4>, String> {
+    let what = format!("skin {}", skin.index());
+    let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
+    if joints.is_empty() {
+        return Err(format!("{what} has no joints"));
+    }
+    let inverse_bind: Vec<Mat4> = match skin.inverse_bind_matrices() {
+        Some(accessor) => {
+            super::gltf_check::check_accessor(
+                root,
+                accessor.index(),
+                super::gltf_check::Role::InverseBind,
+                max_bytes,
+            )
+            .map_err(|e| format!("{what}: {e}"))?;
+            let reader = skin.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let m: Vec<Mat4> = reader
+                .read_inverse_bind_matrices()
+                .map(|r| r.map(|m| Mat4::from_cols_array_2d(&m)).collect())
+                .unwrap_or_default();
+            if m.len() < joints.len() {
+                return Err(format!(
+                    "{what} has {} joints but {} inverse bind matrices",
+                    joints.len(),
+                    m.len()
+                ));
+            }
+            m
+        }
+        None => vec![Mat4::IDENTITY; joints.len()],
+    };
+    let out: Vec<Mat4> = joints
+        .iter()
+        .zip(&inverse_bind)
+        .map(|(&j, ibm)| node_worlds[j] * *ibm)
+        .collect();
+    if out.iter().any(|m| !m.is_finite()) {
+        return Err(format!("{what} has a non-finite joint matrix"));
+    }
+    Ok(out)
 }
 
 /// The point to move to the origin before rendering: zero for a scene around the

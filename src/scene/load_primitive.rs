@@ -6,6 +6,7 @@ use super::gltf_check::{self, Role};
 use super::sources;
 use super::MeshPrimitive;
 use crate::gpu;
+use glam::{Mat3, Mat4, Vec3};
 
 /// Where primitives' vertices and indices go, and what they may still take.
 pub(super) struct Geometry<'a> {
@@ -23,6 +24,7 @@ pub(super) fn load_primitive(
     mesh: &gltf::Mesh<'_>,
     prim: &gltf::Primitive<'_>,
     morph_weights: &[f32],
+    joints: Option<&[Mat4]>,
     buffers: &[gltf::buffer::Data],
     default_material: u32,
     materials: &[gpu::Material],
@@ -106,9 +108,17 @@ pub(super) fn load_primitive(
         get,
         warnings,
     )?;
-    let tangents: Vec<[f32; 4]> = attribute(gltf::Semantic::Tangents)
+    let mut tangents: Vec<[f32; 4]> = attribute(gltf::Semantic::Tangents)
         .and_then(|a| read_floats(a, get, false))
         .unwrap_or_else(|| vec![[0.0; 4]; n]);
+    if let Some(joints) = joints {
+        let geometry = Skinned {
+            positions: &mut positions,
+            normals: &mut normals,
+            tangents: &mut tangents,
+        };
+        skin(prim, joints, geometry, (root, max_bytes, &name), buffers)?;
+    }
     // Core glTF allows only normalised integer texture coordinates; files that forget
     // the flag read as normalised, as they always have. With KHR_mesh_quantization the
     // flag decides (unnormalised ones come with a texture transform that scales them).
@@ -351,4 +361,102 @@ where
         // Refused by `gltf_check::check_accessor` for every vertex attribute.
         DataType::U32 => return None,
     })
+}
+
+/// What skinning moves: positions, normals and tangents (morphed already).
+struct Skinned<'v> {
+    positions: &'v mut [[f32; 3]],
+    normals: &'v mut [[f32; 3]],
+    tangents: &'v mut [[f32; 4]],
+}
+
+/// Linear blend skinning in the scene's static pose (the nodes' own transforms; glTF:
+/// the skinned node's transform is ignored): each vertex moves by Σ wᵢ·Jᵢ over its
+/// JOINTS_n / WEIGHTS_n sets, Jᵢ = (joint's world transform)·(its inverse bind matrix),
+/// given as `joints`. Normals move by the blended matrix's inverse transpose, tangents by
+/// the matrix. Weights are normalised by their sum; a vertex without weight stays as
+/// stored. `context`: the document, the reading budget and the primitive's name.
+fn skin(
+    prim: &gltf::Primitive<'_>,
+    joints: &[Mat4],
+    geometry: Skinned<'_>,
+    context: (&gltf::json::Root, u64, &str),
+    buffers: &[gltf::buffer::Data],
+) -> Result<(), String> {
+    let (root, max_bytes, name) = context;
+    let n = geometry.positions.len();
+    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let mut blend = vec![Mat4::ZERO; n];
+    let mut total = vec![0.0f32; n];
+    for set in 0.. {
+        let (Some(j), Some(w)) = (
+            prim.get(&gltf::Semantic::Joints(set)),
+            prim.get(&gltf::Semantic::Weights(set)),
+        ) else {
+            if set == 0 {
+                return Err(format!(
+                    "{name} belongs to a skinned node but has no JOINTS_0 and WEIGHTS_0"
+                ));
+            }
+            break;
+        };
+        for (accessor, role) in [(j, Role::Joints), (w, Role::Weights)] {
+            gltf_check::check_accessor(root, accessor.index(), role, max_bytes)
+                .map_err(|e| format!("{name}: {e}"))?;
+        }
+        let indices: Vec<[u16; 4]> = reader
+            .read_joints(set)
+            .map(|r| r.into_u16().collect())
+            .unwrap_or_default();
+        let weights: Vec<[f32; 4]> = reader
+            .read_weights(set)
+            .map(|r| r.into_f32().collect())
+            .unwrap_or_default();
+        if indices.len() != n || weights.len() != n {
+            return Err(format!("{name} has attributes of different lengths"));
+        }
+        for (v, (js, ws)) in indices.iter().zip(&weights).enumerate() {
+            for (&joint, &weight) in js.iter().zip(ws) {
+                if !(weight.is_finite() && weight >= 0.0) {
+                    return Err(format!("{name}: vertex {v} has joint weight {weight}"));
+                }
+                if weight == 0.0 {
+                    continue;
+                }
+                let m = joints.get(joint as usize).ok_or_else(|| {
+                    format!(
+                        "{name}: vertex {v} uses joint {joint}, but the skin has {}",
+                        joints.len()
+                    )
+                })?;
+                blend[v] += *m * weight;
+                total[v] += weight;
+            }
+        }
+    }
+    for v in 0..n {
+        if total[v] <= 0.0 {
+            continue;
+        }
+        let m = blend[v] * (1.0 / total[v]);
+        let p = m.transform_point3(Vec3::from(geometry.positions[v]));
+        if !p.is_finite() {
+            return Err(format!(
+                "{name}: vertex {v} is skinned to a non-finite position"
+            ));
+        }
+        geometry.positions[v] = p.into();
+        let linear = Mat3::from_mat4(m);
+        let normal_matrix = linear.inverse().transpose();
+        let nrm = normal_matrix * Vec3::from(geometry.normals[v]);
+        geometry.normals[v] = if nrm.is_finite() {
+            nrm.into()
+        } else {
+            [0.0; 3]
+        };
+        let t = geometry.tangents[v];
+        let tt = linear * Vec3::new(t[0], t[1], t[2]);
+        geometry.tangents[v] = [tt.x, tt.y, tt.z, t[3]];
+    }
+    Ok(())
 }
