@@ -550,8 +550,8 @@ fn morph_targets_pose_meshes_by_node_or_mesh_weights() {
 /// bound to one joint or blended 3:1 over both. The skinned node's own transform (a
 /// scale of 10) must be ignored. The positions are worked out by hand: joint 0 moves by
 /// (0, 0, −2); joint 1 takes (x, y) to (1 − y, x − 1) and moves by (0, 0, −2) too. Seen
-/// to fail with the node's transform applied as well, and with the inverse bind
-/// matrices left out.
+/// to fail with the node's transform applied as well, with the inverse bind matrices
+/// left out, and with the normals left as stored.
 #[test]
 fn skinned_meshes_take_their_joints_pose() {
     use base64::Engine;
@@ -573,6 +573,7 @@ fn skinned_meshes_take_their_joints_pose() {
         1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1.,
         1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., -1., 0., 0., 1.,
     ]); // 140..268
+    floats(&mut bin, &[1., 0., 0., 1., 0., 0., 1., 0., 0., 1., 0., 0.]); // 268..316
     let uri = format!(
         "data:application/octet-stream;base64,{}",
         base64::engine::general_purpose::STANDARD.encode(&bin)
@@ -586,7 +587,8 @@ fn skinned_meshes_take_their_joints_pose() {
             {"buffer": 0, "byteOffset": 48, "byteLength": 12},
             {"buffer": 0, "byteOffset": 60, "byteLength": 16},
             {"buffer": 0, "byteOffset": 76, "byteLength": 64},
-            {"buffer": 0, "byteOffset": 140, "byteLength": 128}
+            {"buffer": 0, "byteOffset": 140, "byteLength": 128},
+            {"buffer": 0, "byteOffset": 268, "byteLength": 48}
         ],
         "accessors": [
             {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
@@ -594,10 +596,11 @@ fn skinned_meshes_take_their_joints_pose() {
             {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"},
             {"bufferView": 2, "componentType": 5121, "count": 4, "type": "VEC4"},
             {"bufferView": 3, "componentType": 5126, "count": 4, "type": "VEC4"},
-            {"bufferView": 4, "componentType": 5126, "count": 2, "type": "MAT4"}
+            {"bufferView": 4, "componentType": 5126, "count": 2, "type": "MAT4"},
+            {"bufferView": 5, "componentType": 5126, "count": 4, "type": "VEC3"}
         ],
         "materials": [{"emissiveFactor": [1, 1, 1], "doubleSided": true}],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "JOINTS_0": 2, "WEIGHTS_0": 3},
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 5, "JOINTS_0": 2, "WEIGHTS_0": 3},
                                     "indices": 1, "material": 0}]}],
         "skins": [{"joints": [1, 2], "inverseBindMatrices": 4}],
         "nodes": [
@@ -635,6 +638,22 @@ fn skinned_meshes_take_their_joints_pose() {
     for (k, (g, w)) in got.iter().zip(&want).enumerate() {
         assert!((*g - *w).length() < 1e-5, "vertex {k}: {g} instead of {w}");
     }
+    // Normals, all +x as stored: joint 1 turns them to +y; the 3:1 blend is a scaled
+    // rotation, whose inverse transpose turns +x to (0.75, 0.25, 0), normalised.
+    let normals: Vec<glam::Vec3> = scene.vertices
+        [prim.vertex_offset as usize..(prim.vertex_offset + prim.vertex_count) as usize]
+        .iter()
+        .map(|v| glam::Vec3::from(v.normal))
+        .collect();
+    let want_normals = [
+        glam::Vec3::X,
+        glam::Vec3::Y,
+        glam::Vec3::X,
+        glam::Vec3::new(0.75, 0.25, 0.0).normalize(),
+    ];
+    for (k, (g, w)) in normals.iter().zip(&want_normals).enumerate() {
+        assert!((*g - *w).length() < 1e-5, "normal {k}: {g} instead of {w}");
+    }
     // A joint index beyond the skin's joints is an error naming it.
     let mut bad = json.clone();
     bad["skins"][0]["joints"] = serde_json::json!([1]);
@@ -649,6 +668,11 @@ fn skinned_meshes_take_their_joints_pose() {
     bad["accessors"][2]["componentType"] = serde_json::json!(5126);
     bad["accessors"][2]["count"] = serde_json::json!(1);
     std::fs::write(&path, serde_json::to_string(&bad).unwrap()).unwrap();
-    let err = Scene::load(&path, &Default::default()).unwrap_err().to_string();
-    assert!(err.contains("JOINTS must be VEC4 of unsigned byte"), "{err}");
+    let err = Scene::load(&path, &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("JOINTS must be VEC4 of unsigned byte"),
+        "{err}"
+    );
 }
