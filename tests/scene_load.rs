@@ -423,6 +423,12 @@ fn assert_methods_agree_with_direction_sampling_alone(scene: &Scene, max_depth: 
 #[test]
 fn solid_glass_nee_and_direction_sampling_agree() {
     let scene = load(&root().join("tests/data/mitsuba/solid.gltf"));
+    // `lanterna info` tells solids from thin walls.
+    let stats = lanterna::scene::SceneStats::new(&scene, &LightTable::build(&scene).unwrap());
+    assert_eq!((stats.thin_glass_materials, stats.solid_materials), (0, 2));
+    let glass = load(&root().join("tests/data/mitsuba/glass.gltf"));
+    let stats = lanterna::scene::SceneStats::new(&glass, &LightTable::build(&glass).unwrap());
+    assert_eq!((stats.thin_glass_materials, stats.solid_materials), (2, 0));
     assert_methods_agree_with_direction_sampling_alone(&scene, 8);
 }
 

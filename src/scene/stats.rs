@@ -13,6 +13,10 @@ pub struct SceneStats {
     pub instances: u64,
     pub primitives: u64,
     pub materials: u64,
+    /// Materials that transmit as thin walls, and those that bound solids
+    /// (KHR_materials_transmission, with KHR_materials_volume).
+    pub thin_glass_materials: u64,
+    pub solid_materials: u64,
     pub textures: u64,
     pub cameras: u64,
     pub light_models: u64,
@@ -57,6 +61,8 @@ impl SceneStats {
         let textures: u64 = scene.textures.iter().map(|t| t.rgba.len() as u64).sum();
         // BVH nodes and leaves: a conservative ~64 bytes per triangle plus instances.
         let accel = unique_triangles * 64 + scene.instances.len() as u64 * 128;
+        let transmitting = || scene.materials.iter().filter(|m| m.transmission > 0.0);
+        let solid = |m: &&crate::gpu::Material| m.flags & crate::gpu::MATERIAL_FLAG_VOLUME != 0;
         SceneStats {
             triangles: scene.triangle_count(),
             unique_triangles,
@@ -64,6 +70,8 @@ impl SceneStats {
             instances: scene.instances.len() as u64,
             primitives: scene.primitives.len() as u64,
             materials: scene.materials.len() as u64 - 1,
+            thin_glass_materials: transmitting().filter(|m| !solid(m)).count() as u64,
+            solid_materials: transmitting().filter(solid).count() as u64,
             textures: scene.textures.len() as u64,
             cameras: scene.cameras.len() as u64,
             light_models: lights.models.len() as u64,
@@ -92,7 +100,15 @@ impl fmt::Display for SceneStats {
             "instances           {} of {} primitives",
             self.instances, self.primitives
         )?;
-        writeln!(f, "materials           {}", self.materials)?;
+        write!(f, "materials           {}", self.materials)?;
+        if self.thin_glass_materials + self.solid_materials > 0 {
+            write!(
+                f,
+                " ({} thin glass, {} solid glass)",
+                self.thin_glass_materials, self.solid_materials
+            )?;
+        }
+        writeln!(f)?;
         writeln!(f, "textures            {}", self.textures)?;
         writeln!(f, "cameras             {}", self.cameras)?;
         writeln!(f, "light models        {}", self.light_models)?;
