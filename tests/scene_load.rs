@@ -626,57 +626,62 @@ fn skinned_meshes_take_their_joints_pose() {
     assert_eq!(scene.instances.len(), 1);
     let inst = &scene.instances[0];
     let prim = &scene.primitives[inst.primitive as usize];
-    let got: Vec<glam::Vec3> = scene.vertices
-        [prim.vertex_offset as usize..(prim.vertex_offset + prim.vertex_count) as usize]
-        .iter()
-        .map(|v| {
-            inst.transform
-                .transform_point3(glam::Vec3::from(v.position))
-                + scene.origin
-        })
-        .collect();
-    let want = [
-        glam::Vec3::new(0.0, 0.0, -2.0),
-        glam::Vec3::new(1.0, 0.0, -2.0),
-        glam::Vec3::new(1.0, 1.0, -2.0),
-        glam::Vec3::new(0.0, 0.5, -2.0),
-    ];
-    for (k, (g, w)) in got.iter().zip(&want).enumerate() {
-        assert!((*g - *w).length() < 1e-5, "vertex {k}: {g} instead of {w}");
-    }
+    let vertices = &scene.vertices[prim.vertex_offset as usize..][..prim.vertex_count as usize];
+    let assert_close = |what: &str, got: Vec<glam::Vec3>, want: [glam::Vec3; 4]| {
+        for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+            assert!((*g - *w).length() < 1e-5, "{what} {k}: {g} instead of {w}");
+        }
+    };
+    let world = |v: &lanterna::gpu::Vertex| {
+        inst.transform
+            .transform_point3(glam::Vec3::from(v.position))
+            + scene.origin
+    };
+    assert_close(
+        "vertex",
+        vertices.iter().map(world).collect(),
+        [
+            glam::Vec3::new(0.0, 0.0, -2.0),
+            glam::Vec3::new(1.0, 0.0, -2.0),
+            glam::Vec3::new(1.0, 1.0, -2.0),
+            glam::Vec3::new(0.0, 0.5, -2.0),
+        ],
+    );
     // Normals, all +x as stored: joint 1 turns them to +y; the 3:1 blend is a scaled
     // rotation, whose inverse transpose turns +x to (0.75, 0.25, 0), normalised.
-    let normals: Vec<glam::Vec3> = scene.vertices
-        [prim.vertex_offset as usize..(prim.vertex_offset + prim.vertex_count) as usize]
-        .iter()
-        .map(|v| glam::Vec3::from(v.normal))
-        .collect();
-    let want_normals = [
-        glam::Vec3::X,
-        glam::Vec3::Y,
-        glam::Vec3::X,
-        glam::Vec3::new(0.75, 0.25, 0.0).normalize(),
-    ];
-    for (k, (g, w)) in normals.iter().zip(&want_normals).enumerate() {
-        assert!((*g - *w).length() < 1e-5, "normal {k}: {g} instead of {w}");
-    }
-    // A joint index beyond the skin's joints is an error naming it.
-    let mut bad = json.clone();
-    bad["skins"][0]["joints"] = serde_json::json!([1]);
-    bad["skins"][0]["inverseBindMatrices"] = serde_json::Value::Null;
-    std::fs::write(&path, serde_json::to_string(&bad).unwrap()).unwrap();
-    let err = Scene::load(&path, &Default::default())
-        .unwrap_err()
-        .to_string();
+    assert_close(
+        "normal",
+        vertices
+            .iter()
+            .map(|v| glam::Vec3::from(v.normal))
+            .collect(),
+        [
+            glam::Vec3::X,
+            glam::Vec3::Y,
+            glam::Vec3::X,
+            glam::Vec3::new(0.75, 0.25, 0.0).normalize(),
+        ],
+    );
+    // Bad skins are errors naming what is wrong.
+    let load_error = |edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut bad = json.clone();
+        edit(&mut bad);
+        std::fs::write(&path, serde_json::to_string(&bad).unwrap()).unwrap();
+        Scene::load(&path, &Default::default())
+            .unwrap_err()
+            .to_string()
+    };
+    // A joint index beyond the skin's joints.
+    let err = load_error(&|j| {
+        j["skins"][0]["joints"] = serde_json::json!([1]);
+        j["skins"][0]["inverseBindMatrices"] = serde_json::Value::Null;
+    });
     assert!(err.contains("uses joint 1, but the skin has 1"), "{err}");
     // Joint indices of a type the spec does not allow are refused, not misread.
-    let mut bad = json.clone();
-    bad["accessors"][2]["componentType"] = serde_json::json!(5126);
-    bad["accessors"][2]["count"] = serde_json::json!(1);
-    std::fs::write(&path, serde_json::to_string(&bad).unwrap()).unwrap();
-    let err = Scene::load(&path, &Default::default())
-        .unwrap_err()
-        .to_string();
+    let err = load_error(&|j| {
+        j["accessors"][2]["componentType"] = serde_json::json!(5126);
+        j["accessors"][2]["count"] = serde_json::json!(1);
+    });
     assert!(
         err.contains("JOINTS must be VEC4 of unsigned byte"),
         "{err}"

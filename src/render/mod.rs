@@ -256,10 +256,7 @@ impl Renderer {
             pixel_emitter_pieces,
             pixel_emitter_flags,
             has_pixel_emitters: !emitters.pieces.is_empty(),
-            has_solids: scene
-                .materials
-                .iter()
-                .any(|m| m.transmission > 0.0 && m.flags & gpu::MATERIAL_FLAG_VOLUME != 0),
+            has_solids: scene.materials.iter().any(crate::scene::bounds_solid),
             guide,
             preloaded_tree: None,
             bounds: (scene.bounds_min, scene.bounds_max),

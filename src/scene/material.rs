@@ -298,6 +298,13 @@ pub fn convert(
     Ok(out)
 }
 
+/// Whether a material bounds a refracting solid (KHR_materials_volume with a thickness,
+/// and a transmission factor): what the kernels' SOLIDS constant, `lanterna info` and the
+/// Mitsuba export ask. (A metallic texture may still make parts of it opaque.)
+pub fn bounds_solid(m: &gpu::Material) -> bool {
+    m.transmission > 0.0 && m.flags & gpu::MATERIAL_FLAG_VOLUME != 0
+}
+
 /// KHR_materials_volume: a thickness above 0 makes a transmitting surface the boundary of
 /// a solid (the spec's thin-walled case is thickness 0, its default); the solid absorbs
 /// with σ = −ln(attenuationColor) / attenuationDistance per world unit (none when the

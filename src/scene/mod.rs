@@ -20,6 +20,7 @@ mod texture;
 
 pub use camera::{Camera, CameraOverride, Projection};
 pub use load::LoadOptions;
+pub use material::bounds_solid;
 pub use stats::SceneStats;
 pub use texture::{TextureData, TextureKey};
 

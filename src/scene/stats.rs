@@ -62,7 +62,6 @@ impl SceneStats {
         // BVH nodes and leaves: a conservative ~64 bytes per triangle plus instances.
         let accel = unique_triangles * 64 + scene.instances.len() as u64 * 128;
         let transmitting = || scene.materials.iter().filter(|m| m.transmission > 0.0);
-        let solid = |m: &&crate::gpu::Material| m.flags & crate::gpu::MATERIAL_FLAG_VOLUME != 0;
         SceneStats {
             triangles: scene.triangle_count(),
             unique_triangles,
@@ -70,8 +69,8 @@ impl SceneStats {
             instances: scene.instances.len() as u64,
             primitives: scene.primitives.len() as u64,
             materials: scene.materials.len() as u64 - 1,
-            thin_glass_materials: transmitting().filter(|m| !solid(m)).count() as u64,
-            solid_materials: transmitting().filter(solid).count() as u64,
+            thin_glass_materials: transmitting().filter(|m| !super::bounds_solid(m)).count() as u64,
+            solid_materials: transmitting().filter(|m| super::bounds_solid(m)).count() as u64,
             textures: scene.textures.len() as u64,
             cameras: scene.cameras.len() as u64,
             light_models: lights.models.len() as u64,

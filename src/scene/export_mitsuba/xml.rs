@@ -109,9 +109,10 @@ pub(super) fn bsdf_id(m: u32, vertex_colors: bool) -> String {
     }
 }
 
-/// Whether a material bounds a refracting solid (KHR_materials_volume with a thickness).
+/// Whether the export writes a material as a solid: it bounds one and is not wholly
+/// metallic (the export, like the kernel's factors, lets metals transmit nothing).
 pub(super) fn is_solid(mat: &gpu::Material) -> bool {
-    mat.transmission > 0.0 && mat.metallic < 1.0 && mat.flags & gpu::MATERIAL_FLAG_VOLUME != 0
+    mat.metallic < 1.0 && crate::scene::bounds_solid(mat)
 }
 
 /// A solid's absorption as Mitsuba's `homogeneous` medium (σt = σa, albedo 0: every
