@@ -150,6 +150,11 @@ fn volume(j: &mut Value, volume: Value) {
     });
 }
 
+fn clearcoat(j: &mut Value, coat: Value) {
+    j["extensionsUsed"] = json!(["KHR_materials_clearcoat"]);
+    j["materials"][0]["extensions"] = json!({ "KHR_materials_clearcoat": coat });
+}
+
 fn quad_bin() -> Vec<u8> {
     let mut bin = Vec::new();
     for v in [
@@ -709,6 +714,30 @@ fn wrong_values_are_refused() {
         (
             scene_with(|j| volume(j, json!({"thicknessFactor": "thick"}))),
             "thicknessFactor is not a finite number",
+        ),
+        // KHR_materials_clearcoat: a factor that is not a number, texture references
+        // that lead nowhere.
+        (
+            scene_with(|j| clearcoat(j, json!({"clearcoatFactor": "glossy"}))),
+            "KHR_materials_clearcoat clearcoatFactor is not a finite number",
+        ),
+        (
+            scene_with(|j| {
+                clearcoat(
+                    j,
+                    json!({"clearcoatFactor": 1, "clearcoatNormalTexture": {"index": 7}}),
+                )
+            }),
+            "clearcoatNormalTexture refers to texture 7, which does not exist",
+        ),
+        (
+            scene_with(|j| {
+                clearcoat(
+                    j,
+                    json!({"clearcoatFactor": 1, "clearcoatTexture": {"texCoord": 0}}),
+                )
+            }),
+            "clearcoatTexture has no texture index",
         ),
     ];
     for (s, says) in scenes {

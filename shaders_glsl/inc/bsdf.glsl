@@ -18,6 +18,12 @@
 // scaled by 1/η² on the way through (pbrt-v4's and Mitsuba 3's `roughdielectric`). It
 // takes the share (1 − metallic)·transmission of the material; the rest is the opaque
 // material (diffuse + specular, metal) with that share taken out (volume_rest).
+//
+// KHR_materials_clearcoat lays a GGX coat over all of it (the spec's fresnel_coat): with
+// w = clearcoat·F(ωo·nc), F Schlick's with F0 = 0.04 at the coat normal nc, the BSDF is
+// (1 − w)·base + w·D·G2/(4|ωo·nc||ωi·nc|) with the coat's own α and normal, the coat's
+// value taken with its own cosine |ωi·nc|. Sampling picks the coat with a probability
+// from w and the base's albedo (its visible normals about nc), else the base as above.
 #ifndef INC_BSDF_GLSL
 #define INC_BSDF_GLSL
 
@@ -34,19 +40,28 @@ struct BsdfParams {
                            // lobe that goes through the surface (0: opaque)
     float eta;             // KHR_materials_volume: the boundary of a refracting solid, the
                            // index of the far side over wo's; 0: a thin or opaque surface
+    float coat;            // KHR_materials_clearcoat: the coat's weight (0: no coat)
+    float coat_alpha;      // its GGX α (clearcoat roughness², clamped to MIN_GGX_ALPHA)
+    vec3 coat_n;           // its unit normal in the local frame (upper hemisphere)
 };
 
-float ggx_d(vec3 h, float a) {
+// GGX's D of a microfacet normal at cosine `c` from the macro normal.
+float ggx_d_cos(float c, float a) {
     float a2 = a * a;
-    float d = h.z * h.z * (a2 - 1.0) + 1.0;
+    float d = c * c * (a2 - 1.0) + 1.0;
     return a2 / (PI * d * d);
 }
 
-float ggx_lambda(vec3 v, float a) {
-    float c2 = v.z * v.z;
+float ggx_d(vec3 h, float a) { return ggx_d_cos(h.z, a); }
+
+// Smith's Λ of a direction at cosine `c` from the macro normal.
+float ggx_lambda_cos(float c, float a) {
+    float c2 = c * c;
     float t2 = max(0.0, 1.0 - c2) / max(c2, 1e-12);
     return 0.5 * (-1.0 + sqrt(1.0 + a * a * t2));
 }
+
+float ggx_lambda(vec3 v, float a) { return ggx_lambda_cos(v.z, a); }
 
 // (1 − c)⁵ of Schlick's Fresnel, by multiplication: pow() is exp2(5·log2(x)) on CPU
 // devices (lavapipe), several times the cost.
@@ -75,6 +90,9 @@ struct BsdfWo {
     vec3 wo;            // local outgoing direction
     float lambda_wo;    // Smith Λ(wo)
     float spec_prob;    // bsdf_specular_probability(wo)
+    float coat_weight;  // the coat's share w = clearcoat·F(ωo·nc); the base has 1 − w
+    float coat_prob;    // probability of sampling the coat (0: no coat lobe toward wo)
+    float coat_lambda_wo;  // the coat's Smith Λ(wo)
 };
 
 // Visible GGX normal for wo (Dupuy & Benyoub 2023).
@@ -155,12 +173,52 @@ bool interface_sample(BsdfParams p, vec3 wo, vec3 u, out vec3 wi) {
     return wi.z < 0.0;
 }
 
+// ---- the clearcoat (p.coat > 0) ----
+
+// Sampling probability of the coat: its share w against the base's (1 − w) times a rough
+// albedo of the base (its lobes scale with the base colour, its dielectric specular about
+// 0.04), kept within [0.1, 0.9] so that neither lobe is starved.
+float coat_probability(BsdfParams p, float w) {
+    if (w <= 0.0) return 0.0;
+    float base = max(luminance(p.base_color), 0.04) * (1.0 - w);
+    return clamp(w / (w + base), 0.1, 0.9);
+}
+
+// The coat's f·|ωi·nc| (its share w not applied) and its visible-normal density of wi.
+float coat_eval_pdf(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
+    pdf = 0.0;
+    float co = dot(c.wo, p.coat_n);
+    float ci = dot(wi, p.coat_n);
+    if (co <= 0.0 || ci <= 0.0 || wi.z <= 0.0) return 0.0;
+    float d = ggx_d_cos(dot(normalize(c.wo + wi), p.coat_n), p.coat_alpha);
+    pdf = d / ((1.0 + c.coat_lambda_wo) * 4.0 * co);
+    return d / (1.0 + c.coat_lambda_wo + ggx_lambda_cos(ci, p.coat_alpha)) / (4.0 * co);
+}
+
+// A direction reflected by a visible normal of the coat drawn from u.
+bool coat_sample(BsdfParams p, vec3 wo, vec2 u, out vec3 wi) {
+    vec3 t, b;
+    make_basis(p.coat_n, t, b);
+    vec3 h = ggx_sample_visible_normal(to_local(wo, t, b, p.coat_n), p.coat_alpha, u);
+    wi = reflect(-wo, to_world(h, t, b, p.coat_n));
+    return wi.z > 0.0 && dot(wi, p.coat_n) > 0.0;
+}
+
 BsdfWo bsdf_at(BsdfParams p, vec3 wo) {
     BsdfWo c;
     c.wo = wo;
     c.lambda_wo = ggx_lambda(wo, p.alpha);
     // On a solid's boundary the specular probability is the opaque rest's.
     c.spec_prob = bsdf_specular_probability(p.eta > 0.0 ? volume_rest(p) : p, wo);
+    c.coat_weight = 0.0;
+    c.coat_prob = 0.0;
+    c.coat_lambda_wo = 0.0;
+    if (p.coat > 0.0) {
+        float co = dot(wo, p.coat_n);
+        c.coat_weight = p.coat * (0.04 + 0.96 * schlick_weight(abs(co)));
+        c.coat_prob = co > 0.0 ? coat_probability(p, c.coat_weight) : 0.0;
+        c.coat_lambda_wo = ggx_lambda_cos(co, p.coat_alpha);
+    }
     return c;
 }
 
@@ -194,9 +252,9 @@ vec3 bsdf_eval_pdf_walls(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
     return mix(dielectric, metal, p.metallic) * wi.z;
 }
 
-// The whole BSDF: bsdf_eval_pdf_walls for thin or opaque surfaces; on a solid's boundary
-// the interface with its share, and the opaque rest.
-vec3 bsdf_eval_pdf(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
+// The base under the coat: bsdf_eval_pdf_walls for thin or opaque surfaces; on a solid's
+// boundary the interface with its share, and the opaque rest.
+vec3 bsdf_eval_pdf_base(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
     if (p.eta <= 0.0) return bsdf_eval_pdf_walls(p, c, wi, pdf);
     pdf = 0.0;
     if (c.wo.z <= 0.0) return vec3(0.0);
@@ -212,17 +270,30 @@ vec3 bsdf_eval_pdf(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
     return f;
 }
 
+// The whole BSDF: the base, and the coat over it.
+vec3 bsdf_eval_pdf(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
+    vec3 f = bsdf_eval_pdf_base(p, c, wi, pdf);
+    if (p.coat <= 0.0) return f;
+    float coat_pdf;
+    float coat_f = coat_eval_pdf(p, c, wi, coat_pdf);
+    f = f * (1.0 - c.coat_weight) + vec3(c.coat_weight * coat_f);
+    pdf = pdf * (1.0 - c.coat_prob) + c.coat_prob * coat_pdf;
+    return f;
+}
+
 // Probability that bsdf_sample draws from the diffuse lobe.
 float bsdf_diffuse_probability(BsdfParams p, BsdfWo c) {
-    if (p.eta > 0.0) return (1.0 - volume_share(p)) * (1.0 - c.spec_prob);
-    return (1.0 - c.spec_prob) * (1.0 - p.transmission);
+    float base = 1.0 - c.coat_prob;
+    if (p.eta > 0.0) return base * (1.0 - volume_share(p)) * (1.0 - c.spec_prob);
+    return base * (1.0 - c.spec_prob) * (1.0 - p.transmission);
 }
 
 // Probability that bsdf_sample draws from the lobe through a thin wall, or from a
 // solid's interface (both of its sides).
 float bsdf_glass_probability(BsdfParams p, BsdfWo c) {
-    if (p.eta > 0.0) return volume_share(p);
-    return (1.0 - c.spec_prob) * p.transmission;
+    float base = 1.0 - c.coat_prob;
+    if (p.eta > 0.0) return base * volume_share(p);
+    return base * (1.0 - c.spec_prob) * p.transmission;
 }
 
 // f(wo, wi)·cosθi.
@@ -246,10 +317,18 @@ float bsdf_pdf(BsdfParams p, vec3 wo, vec3 wi) {
 // choose between reflection and refraction (which depends on the normal drawn); the
 // opaque rest takes u.x rescaled and u.z as above. (u.y is not used there: the caller
 // derives it from u.x for the lobe choice of the walls' case.)
+//
+// With a coat, `u_fresnel` first chooses the coat (u_fresnel < coat_prob), which then
+// takes u.yz as its visible normal's numbers; otherwise u_fresnel, rescaled, goes on to
+// the base.
 bool bsdf_sample(BsdfParams p, BsdfWo c, vec3 u, float u_fresnel, out vec3 wi) {
     wi = vec3(0.0);
     vec3 wo = c.wo;
     if (wo.z <= 0.0) return false;
+    if (c.coat_prob > 0.0) {
+        if (u_fresnel < c.coat_prob) return coat_sample(p, wo, u.yz, wi);
+        u_fresnel = min((u_fresnel - c.coat_prob) / (1.0 - c.coat_prob), 0.99999994);
+    }
     if (p.eta > 0.0) {
         float share = volume_share(p);
         if (u.x < share) {

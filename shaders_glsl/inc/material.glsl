@@ -41,6 +41,35 @@ mat3 inverse_transpose3(mat3 m) {
     return transpose(inverse(m));
 }
 
+// The tangent (xyz, world space) and bitangent sign (w) of a normal map read from UV set
+// `uv_set`: the TANGENT attribute, else derived from the UV parameterisation.
+vec4 normal_map_tangent(uint uv_set, vec3 w, Vertex v0, Vertex v1, Vertex v2, mat4x3 object_to_world,
+                        vec3 p0, vec3 p1, vec3 p2) {
+    vec4 tv = w.x * v0.tangent + w.y * v1.tangent + w.z * v2.tangent;
+    if (dot(tv.xyz, tv.xyz) > 1e-12) return vec4(mat3(object_to_world) * tv.xyz, tv.w < 0.0 ? -1.0 : 1.0);
+    vec2 uva = uv_set == 1u ? v0.uv1 : v0.uv0;
+    vec2 uvb = uv_set == 1u ? v1.uv1 : v1.uv0;
+    vec2 uvc = uv_set == 1u ? v2.uv1 : v2.uv0;
+    vec2 d1 = uvb - uva;
+    vec2 d2 = uvc - uva;
+    float det = d1.x * d2.y - d1.y * d2.x;
+    vec3 tangent = abs(det) > 1e-20 ? ((p1 - p0) * d2.y - (p2 - p0) * d1.y) / det : vec3(0.0);
+    return vec4(tangent, det < 0.0 ? -1.0 : 1.0);
+}
+
+// The unit normal `n` (world space) perturbed by the tangent-space normal map `tex` at
+// `uv`, its xy scaled by `scale`; `n` itself where the frame degenerates.
+vec3 normal_mapped(TextureRef tex, float scale, vec3 n, vec4 tangent_sign, vec2 uv) {
+    vec3 tn = sample_texture(tex, uv).xyz * 2.0 - 1.0;
+    tn.xy *= scale;
+    vec3 tangent = tangent_sign.xyz - n * dot(n, tangent_sign.xyz);
+    if (dot(tangent, tangent) <= 1e-20) return n;
+    tangent = normalize(tangent);
+    vec3 bitangent = cross(n, tangent) * tangent_sign.w;
+    vec3 mapped = normalize(tangent * tn.x + bitangent * tn.y + n * max(tn.z, 1e-4));
+    return all_finite(mapped) ? mapped : n;
+}
+
 Surface make_surface(Hit h, vec3 ray_dir) {
     Surface s;
     Instance inst = instances[h.instance];
@@ -70,41 +99,27 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     vec3 nv = w.x * v0.normal + w.y * v1.normal + w.z * v2.normal;
     vec3 n = dot(nv, nv) > 1e-12 ? normalize(normal_to_world * nv) : ng;
     if (dot(n, ng) < 0.0) n = -n;  // authored normals agree with the winding
+    // The clearcoat's normal: its own map, else the normal before the base's map.
+    bool coated = CLEARCOAT && m.clearcoat > 0.0;
+    vec3 coat_n = n;
+    if (coated && m.clearcoat_normal_tex.index >= 0) {
+        TextureRef t = m.clearcoat_normal_tex;
+        coat_n = normal_mapped(t, m.clearcoat_normal_scale, n, normal_map_tangent(t.uv_set, w, v0, v1, v2, object_to_world, p0, p1, p2),
+                               t.uv_set == 1u ? s.uv1 : s.uv0);
+    }
     if (m.normal_tex.index >= 0) {
-        vec2 uvn = m.normal_tex.uv_set == 1u ? s.uv1 : s.uv0;
-        vec3 tn = sample_texture(m.normal_tex, uvn).xyz * 2.0 - 1.0;
-        tn.xy *= m.normal_scale;
-        vec4 tv = w.x * v0.tangent + w.y * v1.tangent + w.z * v2.tangent;
-        vec3 tangent;
-        float sign_b;
-        if (dot(tv.xyz, tv.xyz) > 1e-12) {
-            tangent = mat3(object_to_world) * tv.xyz;
-            sign_b = tv.w < 0.0 ? -1.0 : 1.0;
-        } else {
-            // No TANGENT attribute: derive one from the UV parameterisation.
-            vec2 uva = m.normal_tex.uv_set == 1u ? v0.uv1 : v0.uv0;
-            vec2 uvb = m.normal_tex.uv_set == 1u ? v1.uv1 : v1.uv0;
-            vec2 uvc = m.normal_tex.uv_set == 1u ? v2.uv1 : v2.uv0;
-            vec2 d1 = uvb - uva;
-            vec2 d2 = uvc - uva;
-            float det = d1.x * d2.y - d1.y * d2.x;
-            tangent = abs(det) > 1e-20 ? ((p1 - p0) * d2.y - (p2 - p0) * d1.y) / det : vec3(0.0);
-            sign_b = det < 0.0 ? -1.0 : 1.0;
-        }
-        tangent = tangent - n * dot(n, tangent);
-        if (dot(tangent, tangent) > 1e-20) {
-            tangent = normalize(tangent);
-            vec3 bitangent = cross(n, tangent) * sign_b;
-            vec3 mapped = normalize(tangent * tn.x + bitangent * tn.y + n * max(tn.z, 1e-4));
-            if (all_finite(mapped)) n = mapped;
-        }
+        TextureRef t = m.normal_tex;
+        n = normal_mapped(t, m.normal_scale, n, normal_map_tangent(t.uv_set, w, v0, v1, v2, object_to_world, p0, p1, p2),
+                          t.uv_set == 1u ? s.uv1 : s.uv0);
     }
     // Two-sided BSDF: work on the side the ray came from.
     if (!s.front) {
         ng = -ng;
         n = -n;
+        coat_n = -coat_n;
     }
     if (dot(n, ng) <= 1e-4) n = ng;
+    if (dot(coat_n, ng) <= 1e-4) coat_n = ng;
     s.ng = ng;
     s.n = n;
     make_basis(n, s.t, s.b);
@@ -138,6 +153,21 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     bool solid = SOLIDS && s.bsdf.transmission > 0.0 && (m.flags & MATERIAL_FLAG_VOLUME) != 0u;
     float ior = max(m.ior, 1.0);
     s.bsdf.eta = solid ? (s.front ? ior : 1.0 / ior) : 0.0;
+    // KHR_materials_clearcoat.
+    s.bsdf.coat = 0.0;
+    s.bsdf.coat_alpha = 1.0;
+    s.bsdf.coat_n = vec3(0.0, 0.0, 1.0);
+    if (coated) {
+        float coat = m.clearcoat;
+        if (m.clearcoat_tex.index >= 0)
+            coat *= sample_texture(m.clearcoat_tex, m.clearcoat_tex.uv_set == 1u ? s.uv1 : s.uv0).r;
+        float coat_roughness = m.clearcoat_roughness;
+        if (m.clearcoat_roughness_tex.index >= 0)
+            coat_roughness *= sample_texture(m.clearcoat_roughness_tex, m.clearcoat_roughness_tex.uv_set == 1u ? s.uv1 : s.uv0).g;
+        s.bsdf.coat = clamp(coat, 0.0, 1.0);
+        s.bsdf.coat_alpha = max(sqr(clamp(coat_roughness, 0.0, 1.0)), MIN_GGX_ALPHA);
+        s.bsdf.coat_n = normalize(to_local(coat_n, s.t, s.b, s.n));
+    }
 
     // Emission: front face only unless the material is double-sided.
     bool emits = s.front || (m.flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;

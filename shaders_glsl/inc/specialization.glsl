@@ -12,5 +12,8 @@ layout(constant_id = 3) const bool AOVS = false;            // write first-hit A
 // The scene has solids (KHR_materials_volume): without, refraction and absorption compile
 // away (lavapipe: 2-3 % of a `pt` sample).
 layout(constant_id = 4) const bool SOLIDS = false;
+// The scene has coated materials (KHR_materials_clearcoat): without, the coat compiles
+// away.
+layout(constant_id = 5) const bool CLEARCOAT = false;
 
 #endif

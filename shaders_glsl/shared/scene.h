@@ -66,6 +66,16 @@ struct Material {
     // the surface bounds, per world unit (−ln(attenuationColor) / attenuationDistance; 0:
     // clear). Counted in the content hash with the transmission fields.
     vec3 attenuation;
+    // KHR_materials_clearcoat: a GGX coat over the whole material (clearcoat = factor ×
+    // texture R, its roughness = factor × texture G, its own normal map; none: the
+    // surface's normal before the base's normal map). Counted in the content hash only
+    // where a material has a coat.
+    float clearcoat;
+    float clearcoat_roughness;
+    float clearcoat_normal_scale;
+    TextureRef clearcoat_tex;
+    TextureRef clearcoat_roughness_tex;
+    TextureRef clearcoat_normal_tex;
 };
 
 // One emissive triangle in world space.

@@ -1,6 +1,6 @@
 // The BSDF (inc/bsdf.glsl) of one material at one outgoing direction, for the tests in
 // tests/bsdf.rs: mode 0 samples a direction from each input's uniform numbers (xyz; w: the
-// reflection-or-refraction choice on a solid's boundary) and
+// choice of a coat, then of reflection or refraction on a solid's boundary) and
 // returns it with the density and f·|cosθ| that bsdf_eval_pdf gives it; mode 1 evaluates
 // f·|cosθ| and the density at each input direction.
 #version 460
@@ -15,6 +15,9 @@ struct BsdfCase {
     float specular;
     float transmission;
     float eta;
+    float coat;
+    float coat_alpha;
+    vec3 coat_n;
 };
 
 layout(local_size_x = 64) in;
@@ -34,6 +37,9 @@ void main() {
     p.f0_dielectric = bsdf_case.f0_dielectric;
     p.transmission = bsdf_case.transmission;
     p.eta = bsdf_case.eta;
+    p.coat = bsdf_case.coat;
+    p.coat_alpha = bsdf_case.coat_alpha;
+    p.coat_n = bsdf_case.coat_n;
     BsdfWo c = bsdf_at(p, bsdf_case.wo);
     vec3 wi = items[t].xyz;
     bool valid = true;

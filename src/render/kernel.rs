@@ -22,6 +22,8 @@ pub(super) struct Variant {
     pub lanes: bool,
     /// The scene has solids (KHR_materials_volume): refraction and absorption.
     pub solids: bool,
+    /// The scene has coated materials (KHR_materials_clearcoat).
+    pub clearcoat: bool,
 }
 
 /// Texture slots of the descriptor-set layout come in multiples of this many.
@@ -150,11 +152,12 @@ impl Renderer {
             v.training as u32,
             v.aovs as u32,
             v.solids as u32,
+            v.clearcoat as u32,
         ];
         let started = Instant::now();
         let name = format!(
-            "render (ris={}, guiding={}, training={}, aovs={}, solids={}, debug={}, lanes={}, traversal={})",
-            v.ris, v.guiding, v.training, v.aovs, v.solids, v.debug, v.lanes, self.traversal.kind
+            "render (ris={}, guiding={}, training={}, aovs={}, solids={}, clearcoat={}, debug={}, lanes={}, traversal={})",
+            v.ris, v.guiding, v.training, v.aovs, v.solids, v.clearcoat, v.debug, v.lanes, self.traversal.kind
         );
         let p = ComputePipeline::new(
             &self.device,
@@ -230,6 +233,7 @@ impl Renderer {
             debug: false,
             lanes: self.settings.lane_stats,
             solids: self.has_solids,
+            clearcoat: self.has_clearcoat,
         }
     }
 

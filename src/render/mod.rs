@@ -160,6 +160,8 @@ pub struct Renderer {
     has_pixel_emitters: bool,
     /// Whether any material bounds a solid (the kernels' SOLIDS constant).
     has_solids: bool,
+    /// Whether any material has a clearcoat (the kernels' CLEARCOAT constant).
+    has_clearcoat: bool,
     guide: GuideBuffers,
     /// A trained SD-tree to render with instead of training (`--load-guiding`).
     pub preloaded_tree: Option<crate::guiding::SdTree>,
@@ -257,6 +259,7 @@ impl Renderer {
             pixel_emitter_flags,
             has_pixel_emitters: !emitters.pieces.is_empty(),
             has_solids: scene.materials.iter().any(crate::scene::bounds_solid),
+            has_clearcoat: scene.materials.iter().any(|m| m.clearcoat > 0.0),
             guide,
             preloaded_tree: None,
             bounds: (scene.bounds_min, scene.bounds_max),

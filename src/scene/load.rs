@@ -103,6 +103,12 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         if let Some(sg) = m.pbr_specular_glossiness() {
             mark(sg.diffuse_texture().map(|i| i.texture()));
         }
+        // Malformed coats are reported by the conversion below.
+        if let Ok(Some(coat)) = material::Clearcoat::read(&m, &document) {
+            for t in [coat.texture, coat.roughness_texture, coat.normal_texture] {
+                mark(t.map(|t| t.texture));
+            }
+        }
     }
     let mut images = Vec::new();
     for img in document.images() {
@@ -150,7 +156,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let mut materials = Vec::new();
     let mut material_names = Vec::new();
     for m in document.materials() {
-        materials.push(material::convert(&m, &mut registry).map_err(invalid)?);
+        materials.push(material::convert(&m, &document, &mut registry).map_err(invalid)?);
         material_names.push(
             m.name()
                 .map(str::to_string)
@@ -575,10 +581,11 @@ fn rebase(scene: &mut Scene) {
 
 /// glTF extensions lanterna reads. A file may use others without requiring them (a
 /// required one it does not know is refused when the file is parsed); their data is then
-/// ignored, which a user should hear about: a `KHR_materials_clearcoat` material renders
-/// without its coat, a `KHR_materials_unlit` material lit.
+/// ignored, which a user should hear about: a `KHR_materials_sheen` material renders
+/// without its sheen, a `KHR_materials_unlit` material lit.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
+    "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_pbrSpecularGlossiness",
@@ -641,14 +648,18 @@ fn content_hash(scene: &Scene) -> String {
     }
     eat(bytemuck::cast_slice(&scene.indices));
     // Materials up to their transmission fields, which count only where a material
-    // transmits (scenes without transmission keep their hashes, as for vertex colours).
+    // transmits, and the coat's, which count only where it has one (scenes without
+    // either keep their hashes, as for vertex colours).
     let opaque_part = std::mem::offset_of!(crate::gpu::Material, transmission);
+    let coat_part = std::mem::offset_of!(crate::gpu::Material, clearcoat);
     for m in &scene.materials {
         let bytes = bytemuck::bytes_of(m);
+        eat(&bytes[..opaque_part]);
         if m.transmission > 0.0 {
-            eat(bytes);
-        } else {
-            eat(&bytes[..opaque_part]);
+            eat(&bytes[opaque_part..coat_part]);
+        }
+        if m.clearcoat > 0.0 {
+            eat(&bytes[coat_part..]);
         }
     }
     for i in &scene.instances {

@@ -1,6 +1,7 @@
 //! glTF materials → the kernels' `Material`: metallic-roughness with
-//! KHR_materials_specular / emissive_strength / ior / texture_transform, and
-//! KHR_materials_pbrSpecularGlossiness converted to metallic-roughness.
+//! KHR_materials_specular / emissive_strength / ior / texture_transform / transmission /
+//! volume / clearcoat, and KHR_materials_pbrSpecularGlossiness converted to
+//! metallic-roughness.
 
 use super::texture::{to_rgba8, TextureData, TextureKey};
 use crate::gpu;
@@ -168,12 +169,19 @@ pub fn default_material() -> gpu::Material {
         transmission: 0.0,
         transmission_tex: no_texture(),
         attenuation: [0.0; 3],
+        clearcoat: 0.0,
+        clearcoat_roughness: 0.0,
+        clearcoat_normal_scale: 1.0,
+        clearcoat_tex: no_texture(),
+        clearcoat_roughness_tex: no_texture(),
+        clearcoat_normal_tex: no_texture(),
     }
 }
 
-/// Convert one glTF material.
+/// Convert one glTF material of `doc`.
 pub fn convert(
     m: &gltf::Material<'_>,
+    doc: &gltf::Document,
     reg: &mut TextureRegistry<'_>,
 ) -> Result<gpu::Material, String> {
     let name = m
@@ -223,6 +231,20 @@ pub fn convert(
     if let Some(v) = m.extension_value("KHR_materials_volume") {
         read_volume(v, &name, &mut out)?;
     }
+    if let Some(coat) = Clearcoat::read(m, doc)? {
+        out.clearcoat = coat.factor;
+        out.clearcoat_roughness = coat.roughness;
+        let mut slot = |t: Option<CoatTexture<'_>>, format| match t {
+            Some(t) => reg.reference(t.texture, t.tex_coord, t.transform.as_ref(), format),
+            None => no_texture(),
+        };
+        out.clearcoat_tex = slot(coat.texture, TextureFormat::Linear);
+        out.clearcoat_roughness_tex = slot(coat.roughness_texture, TextureFormat::Linear);
+        if let Some(n) = &coat.normal_texture {
+            out.clearcoat_normal_scale = n.scale;
+        }
+        out.clearcoat_normal_tex = slot(coat.normal_texture, TextureFormat::Linear);
+    }
     if let Some(ior) = m
         .extension_value("KHR_materials_ior")
         .and_then(|v| v.get("ior"))
@@ -253,6 +275,12 @@ pub fn convert(
     let strength = strength.unwrap_or(1.0);
     out.emission = factor.map(|c| c * strength);
     out.emissive_tex = reg.info(m.emissive_texture(), TextureFormat::Srgb);
+    if out.clearcoat > 0.0 && out.emission.iter().any(|&e| e > 0.0) {
+        reg.warnings.push(format!(
+            "material `{name}`: its emission is not darkened by its clearcoat's Fresnel term \
+             (the glTF spec's 1 − clearcoat·F: 4 % at normal incidence, more at grazing angles)"
+        ));
+    }
 
     out.alpha_cutoff = m.alpha_cutoff().unwrap_or(0.5);
     out.alpha_mode = match m.alpha_mode() {
@@ -273,6 +301,9 @@ pub fn convert(
         out.alpha_cutoff,
         out.ior,
         out.transmission,
+        out.clearcoat,
+        out.clearcoat_roughness,
+        out.clearcoat_normal_scale,
     ];
     let finite = out
         .base_color
@@ -295,7 +326,100 @@ pub fn convert(
     out.roughness = out.roughness.clamp(0.0, 1.0);
     out.specular = out.specular.max(0.0);
     out.transmission = out.transmission.clamp(0.0, 1.0);
+    out.clearcoat = out.clearcoat.clamp(0.0, 1.0);
+    out.clearcoat_roughness = out.clearcoat_roughness.clamp(0.0, 1.0);
     Ok(out)
+}
+
+/// A texture slot of KHR_materials_clearcoat (read from the extension's JSON: the gltf
+/// crate has no typed access to it).
+pub struct CoatTexture<'a> {
+    pub texture: gltf::Texture<'a>,
+    tex_coord: u32,
+    transform: Option<serde_json::Value>,
+    scale: f32,
+}
+
+/// KHR_materials_clearcoat of one material.
+pub struct Clearcoat<'a> {
+    factor: f32,
+    roughness: f32,
+    pub texture: Option<CoatTexture<'a>>,
+    pub roughness_texture: Option<CoatTexture<'a>>,
+    pub normal_texture: Option<CoatTexture<'a>>,
+}
+
+impl<'a> Clearcoat<'a> {
+    /// The material's coat, if it has the extension; malformed values and texture
+    /// references are errors naming the material.
+    pub fn read(m: &gltf::Material<'a>, doc: &'a gltf::Document) -> Result<Option<Self>, String> {
+        let Some(v) = m.extension_value("KHR_materials_clearcoat") else {
+            return Ok(None);
+        };
+        let name = m
+            .name()
+            .map(str::to_string)
+            .unwrap_or_else(|| format!("#{}", m.index().unwrap_or(0)));
+        let bad = |what: String| format!("material `{name}`: KHR_materials_clearcoat {what}");
+        let number = |key: &str, default: f32| -> Result<f32, String> {
+            match v.get(key) {
+                None => Ok(default),
+                Some(x) => x
+                    .as_f64()
+                    .filter(|x| x.is_finite())
+                    .map(|x| x as f32)
+                    .ok_or_else(|| bad(format!("{key} is not a finite number"))),
+            }
+        };
+        let texture = |key: &str| -> Result<Option<CoatTexture<'a>>, String> {
+            let Some(info) = v.get(key) else {
+                return Ok(None);
+            };
+            let index = info
+                .get("index")
+                .and_then(|i| i.as_u64())
+                .ok_or_else(|| bad(format!("{key} has no texture index")))?;
+            let texture = usize::try_from(index)
+                .ok()
+                .and_then(|i| doc.textures().nth(i))
+                .ok_or_else(|| {
+                    bad(format!(
+                        "{key} refers to texture {index}, which does not exist"
+                    ))
+                })?;
+            let tex_coord = match info.get("texCoord") {
+                None => 0,
+                Some(t) => t
+                    .as_u64()
+                    .and_then(|t| u32::try_from(t).ok())
+                    .ok_or_else(|| bad(format!("{key} texCoord is not a small integer")))?,
+            };
+            let scale = match info.get("scale") {
+                None => 1.0,
+                Some(x) => x
+                    .as_f64()
+                    .filter(|x| x.is_finite())
+                    .map(|x| x as f32)
+                    .ok_or_else(|| bad(format!("{key} scale is not a finite number")))?,
+            };
+            Ok(Some(CoatTexture {
+                texture,
+                tex_coord,
+                transform: info
+                    .get("extensions")
+                    .and_then(|e| e.get("KHR_texture_transform"))
+                    .cloned(),
+                scale,
+            }))
+        };
+        Ok(Some(Clearcoat {
+            factor: number("clearcoatFactor", 0.0)?,
+            roughness: number("clearcoatRoughnessFactor", 0.0)?,
+            texture: texture("clearcoatTexture")?,
+            roughness_texture: texture("clearcoatRoughnessTexture")?,
+            normal_texture: texture("clearcoatNormalTexture")?,
+        }))
+    }
 }
 
 /// Whether a material bounds a refracting solid (KHR_materials_volume with a thickness,

@@ -17,6 +17,8 @@ pub struct SceneStats {
     /// (KHR_materials_transmission, with KHR_materials_volume).
     pub thin_glass_materials: u64,
     pub solid_materials: u64,
+    /// Materials with a clearcoat (KHR_materials_clearcoat).
+    pub coated_materials: u64,
     pub textures: u64,
     pub cameras: u64,
     pub light_models: u64,
@@ -71,6 +73,7 @@ impl SceneStats {
             materials: scene.materials.len() as u64 - 1,
             thin_glass_materials: transmitting().filter(|m| !super::bounds_solid(m)).count() as u64,
             solid_materials: transmitting().filter(|m| super::bounds_solid(m)).count() as u64,
+            coated_materials: scene.materials.iter().filter(|m| m.clearcoat > 0.0).count() as u64,
             textures: scene.textures.len() as u64,
             cameras: scene.cameras.len() as u64,
             light_models: lights.models.len() as u64,
@@ -100,12 +103,18 @@ impl fmt::Display for SceneStats {
             self.instances, self.primitives
         )?;
         write!(f, "materials           {}", self.materials)?;
+        let mut kinds = Vec::new();
         if self.thin_glass_materials + self.solid_materials > 0 {
-            write!(
-                f,
-                " ({} thin glass, {} solid glass)",
+            kinds.push(format!(
+                "{} thin glass, {} solid glass",
                 self.thin_glass_materials, self.solid_materials
-            )?;
+            ));
+        }
+        if self.coated_materials > 0 {
+            kinds.push(format!("{} clearcoated", self.coated_materials));
+        }
+        if !kinds.is_empty() {
+            write!(f, " ({})", kinds.join(", "))?;
         }
         writeln!(f)?;
         writeln!(f, "textures            {}", self.textures)?;

@@ -114,7 +114,7 @@ impl Writer<'_> {
             );
         }
         // glTF with specularFactor 0 and metallic 0 is exactly Lambertian (albedo/π).
-        if mat.specular == 0.0 && mat.metallic == 0.0 {
+        if mat.specular == 0.0 && mat.metallic == 0.0 && mat.clearcoat == 0.0 {
             s.push_str("    <bsdf type=\"diffuse\">\n");
             s.push_str(&colour);
             s.push_str("    </bsdf>\n");
@@ -150,6 +150,20 @@ impl Writer<'_> {
                 "      <float name=\"specular\" value=\"{}\"/>",
                 (f0 / 0.08).clamp(1e-4, 1.0)
             );
+            if mat.clearcoat > 0.0 {
+                // Mitsuba's coat is Disney's (GTR1 lobe, F at the half vector, the base
+                // not darkened), not glTF's fresnel_coat: an approximation.
+                self.approximations.push(format!(
+                    "material `{name}`: its clearcoat (factor {}, roughness {}) approximated by `principled`'s clearcoat",
+                    mat.clearcoat, mat.clearcoat_roughness
+                ));
+                let _ = writeln!(
+                    s,
+                    "      <float name=\"clearcoat\" value=\"{}\"/>\n      <float name=\"clearcoat_gloss\" value=\"{}\"/>",
+                    mat.clearcoat,
+                    1.0 - mat.clearcoat_roughness
+                );
+            }
             s.push_str("    </bsdf>\n");
         }
         s.push_str("  </bsdf>\n");
