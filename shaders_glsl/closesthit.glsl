@@ -150,8 +150,9 @@ DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
     if (!ds.guided) {
         vec3 wi_local;
         // A solid's boundary chooses between reflection and refraction after drawing its
-        // microfacet normal, with a number of its own; a coat is chosen with it too.
-        float u_fresnel = s.bsdf.eta > 0.0 || d.bsdf.coat_prob > 0.0 ? rng_next(rng) : 0.0;
+        // microfacet normal, with a number of its own; a coat and a sheen are chosen with
+        // it too.
+        float u_fresnel = s.bsdf.eta > 0.0 || d.bsdf.coat_prob > 0.0 || d.bsdf.sheen_prob > 0.0 ? rng_next(rng) : 0.0;
         bool ok = bsdf_sample(s.bsdf, d.bsdf, u, u_fresnel, wi_local);
         ds.wi = ok ? surface_to_world(s, wi_local) : s.n;
         if (!ok) {

@@ -57,6 +57,9 @@ struct Case {
     coat: f64,
     coat_alpha: f64,
     coat_n: [f64; 3],
+    /// KHR_materials_sheen: its colour (black: none) and roughness.
+    sheen: [f64; 3],
+    sheen_roughness: f64,
 }
 
 impl Case {
@@ -81,6 +84,10 @@ impl Case {
             self.coat_n[0],
             self.coat_n[1],
             self.coat_n[2],
+            self.sheen[0],
+            self.sheen[1],
+            self.sheen[2],
+            self.sheen_roughness,
         ];
         v.iter().flat_map(|&x| (x as f32).to_le_bytes()).collect()
     }
@@ -113,6 +120,8 @@ fn cases() -> Vec<(&'static str, Case)> {
         coat: 0.0,
         coat_alpha: 1.0,
         coat_n: [0.0, 0.0, 1.0],
+        sheen: [0.0; 3],
+        sheen_roughness: 0.5,
     };
     vec![
         ("rough plastic, oblique", plastic),
@@ -157,6 +166,8 @@ fn cases() -> Vec<(&'static str, Case)> {
                 coat: 0.0,
                 coat_alpha: 1.0,
                 coat_n: [0.0, 0.0, 1.0],
+                sheen: [0.0; 3],
+                sheen_roughness: 0.5,
             },
         ),
         (
@@ -194,6 +205,8 @@ fn cases() -> Vec<(&'static str, Case)> {
                 coat: 0.0,
                 coat_alpha: 1.0,
                 coat_n: [0.0, 0.0, 1.0],
+                sheen: [0.0; 3],
+                sheen_roughness: 0.5,
             },
         ),
         (
@@ -242,6 +255,8 @@ fn cases() -> Vec<(&'static str, Case)> {
                 coat: 0.0,
                 coat_alpha: 1.0,
                 coat_n: [0.0, 0.0, 1.0],
+                sheen: [0.0; 3],
+                sheen_roughness: 0.5,
             },
         ),
         (
@@ -285,6 +300,40 @@ fn cases() -> Vec<(&'static str, Case)> {
                 transmission: 0.5,
                 coat: 0.8,
                 coat_alpha: 0.1,
+                ..plastic
+            },
+        ),
+        (
+            "rough plastic with a red velvet sheen, oblique",
+            Case {
+                sheen: [0.9, 0.2, 0.3],
+                sheen_roughness: 0.6,
+                ..plastic
+            },
+        ),
+        (
+            "dark metal with a white, fine sheen under a coat, grazing",
+            Case {
+                base_color: [0.1, 0.1, 0.12],
+                metallic: 1.0,
+                alpha: 0.2,
+                wo: grazing,
+                coat: 0.5,
+                coat_alpha: 0.05,
+                sheen: [1.0; 3],
+                sheen_roughness: 0.2,
+                ..plastic
+            },
+        ),
+        (
+            "half-transmitting thin wall with a sheen, near the normal",
+            Case {
+                base_color: [0.7, 0.8, 0.9],
+                alpha: 0.1,
+                wo: near_normal,
+                transmission: 0.5,
+                sheen: [0.5, 0.5, 0.2],
+                sheen_roughness: 1.0,
                 ..plastic
             },
         ),
@@ -376,7 +425,7 @@ fn walter_f_cos(c: &Case, wi: [f64; 3]) -> [f64; 3] {
 /// the specular BTDF tinted by the base colour; for a thin wall that is D·V with the
 /// incident direction mirrored through the surface plane (the sample viewer's form).
 fn gltf_f_cos(c: &Case, wi: [f64; 3]) -> [f64; 3] {
-    let base = base_f_cos(c, wi);
+    let base = sheen_f_cos(c, wi);
     if c.coat <= 0.0 {
         return base;
     }
@@ -400,7 +449,99 @@ fn gltf_f_cos(c: &Case, wi: [f64; 3]) -> [f64; 3] {
     base.map(|b| (1.0 - w) * b + w * coat)
 }
 
-/// The material under the coat.
+/// KHR_materials_sheen over the base (the material under the coat): the spec's albedo
+/// scaling, sheen colour × D·V·cosθi + min(1 − max(C)·E(ωo), 1 − max(C)·E(ωi)) × base,
+/// with E looked up in the kernel's table (the spec's "lookup table"; the table itself
+/// is checked against the integral in `sheen_albedo_table_is_the_lobes_albedo`).
+fn sheen_f_cos(c: &Case, wi: [f64; 3]) -> [f64; 3] {
+    let base = base_f_cos(c, wi);
+    let m = c.sheen.iter().cloned().fold(0.0, f64::max);
+    if m <= 0.0 {
+        return base;
+    }
+    let table = SheenTable::kernels();
+    let scale = (1.0 - m * table.at(c.wo[2], c.sheen_roughness))
+        .min(1.0 - m * table.at(wi[2].abs(), c.sheen_roughness))
+        .max(0.0);
+    let lobe = if c.wo[2] > 0.0 && wi[2] > 0.0 {
+        sheen_lobe(c.wo, wi, c.sheen_roughness)
+    } else {
+        0.0
+    };
+    std::array::from_fn(|k| base[k] * scale + c.sheen[k] * lobe)
+}
+
+/// The sheen's α: roughness², at least 0.01.
+fn sheen_alpha(r: f64) -> f64 {
+    (r * r).max(0.01)
+}
+
+/// Estevez & Kulla's Λ for the sheen (their fit, as KHR_materials_sheen gives it).
+fn sheen_lambda(cos: f64, a: f64) -> f64 {
+    let t = (1.0 - a).powi(2);
+    let lerp = |x: f64, y: f64| x + (y - x) * t;
+    let l = |x: f64| {
+        lerp(21.5473, 25.3245) / (1.0 + lerp(3.82987, 3.32435) * x.powf(lerp(0.19823, 0.16801)))
+            + lerp(-1.97760, -1.27393) * x
+            + lerp(-4.32054, -4.85967)
+    };
+    let c = cos.abs();
+    if c < 0.5 {
+        l(c).exp()
+    } else {
+        (2.0 * l(0.5) - l(1.0 - c)).exp()
+    }
+}
+
+/// The white sheen lobe's D·V·cosθi: the Charlie distribution and the visibility
+/// 1 / ((1 + Λ(ωo) + Λ(ωi))·4·cosθo·cosθi), clamped to 1.
+fn sheen_lobe(wo: [f64; 3], wi: [f64; 3], r: f64) -> f64 {
+    let a = sheen_alpha(r);
+    let h = unit([wo[0] + wi[0], wo[1] + wi[1], wo[2] + wi[2]]);
+    let d = (2.0 + 1.0 / a) * (1.0 - h[2] * h[2]).max(0.0).powf(0.5 / a) / (2.0 * PI);
+    let v = (1.0 / ((1.0 + sheen_lambda(wo[2], a) + sheen_lambda(wi[2], a)) * 4.0 * wo[2] * wi[2]))
+        .min(1.0);
+    d * v * wi[2]
+}
+
+/// The sheen albedo table E(μ, r) on the kernel's grid (√μ and r at k/(N − 1)), read
+/// from the kernel's source, with its bilinear interpolation.
+struct SheenTable {
+    n: usize,
+    values: Vec<f64>,
+}
+
+impl SheenTable {
+    fn kernels() -> &'static SheenTable {
+        static TABLE: std::sync::OnceLock<SheenTable> = std::sync::OnceLock::new();
+        TABLE.get_or_init(|| {
+            let path = concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/shaders_glsl/inc/sheen_albedo.glsl"
+            );
+            let src = std::fs::read_to_string(path).unwrap();
+            let body = &src[src.find("float[](").unwrap() + 8..src.rfind(");").unwrap()];
+            let values: Vec<f64> = body.split(',').map(|x| x.trim().parse().unwrap()).collect();
+            let n = (values.len() as f64).sqrt() as usize;
+            assert_eq!(n * n, values.len());
+            SheenTable { n, values }
+        })
+    }
+
+    fn at(&self, mu: f64, r: f64) -> f64 {
+        let last = (self.n - 1) as f64;
+        let x = mu.clamp(0.0, 1.0).sqrt() * last;
+        let y = r.clamp(0.0, 1.0) * last;
+        let (i, j) = ((x as usize).min(self.n - 2), (y as usize).min(self.n - 2));
+        let (fx, fy) = (x - i as f64, y - j as f64);
+        let v = |i: usize, j: usize| self.values[j * self.n + i];
+        let lo = v(i, j) + (v(i + 1, j) - v(i, j)) * fx;
+        let hi = v(i, j + 1) + (v(i + 1, j + 1) - v(i, j + 1)) * fx;
+        lo + (hi - lo) * fy
+    }
+}
+
+/// The material under the sheen and the coat.
 fn base_f_cos(c: &Case, wi: [f64; 3]) -> [f64; 3] {
     if c.eta > 0.0 {
         // A solid's boundary: the interface takes (1 − metallic)·transmission, the rest
@@ -710,6 +851,8 @@ fn white_metal_reflects_at_most_all_light() {
             coat: 0.0,
             coat_alpha: 1.0,
             coat_n: [0.0, 0.0, 1.0],
+            sheen: [0.0; 3],
+            sheen_roughness: 0.5,
         };
         let eval = run(&c, 1, &cells);
         let mut albedo = 0.0;
@@ -751,6 +894,8 @@ fn white_thin_glass_scatters_at_most_all_light() {
             coat: 0.0,
             coat_alpha: 1.0,
             coat_n: [0.0, 0.0, 1.0],
+            sheen: [0.0; 3],
+            sheen_roughness: 0.5,
         };
         let mut parts = [0.0; 2];
         for (part, cells) in parts.iter_mut().zip(&halves) {
@@ -800,6 +945,8 @@ fn white_glass_solid_reflects_the_fresnel_share_and_refracts_the_rest() {
             coat: 0.0,
             coat_alpha: 1.0,
             coat_n: [0.0, 0.0, 1.0],
+            sheen: [0.0; 3],
+            sheen_roughness: 0.5,
         };
         let mut parts = [0.0; 2];
         for (part, cells) in parts.iter_mut().zip(&halves) {
@@ -856,6 +1003,8 @@ fn clearcoat_reflects_its_fresnel_share_over_the_base() {
             coat,
             coat_alpha: 0.02,
             coat_n,
+            sheen: [0.0; 3],
+            sheen_roughness: 0.5,
         };
         let white = Case {
             base_color: [1.0; 3],
@@ -884,6 +1033,104 @@ fn clearcoat_reflects_its_fresnel_share_over_the_base() {
         assert!(
             (over_white - (1.0 - w) - over_black).abs() < 2e-3,
             "coat {coat}, ωo {wo:?}: over a white base {over_white}, expected 1 − w + {over_black}"
+        );
+    }
+    testing::assert_no_validation_errors();
+}
+
+/// The sheen albedo table the kernels interpolate (`shaders_glsl/inc/sheen_albedo.glsl`,
+/// written by `scripts/sheen_albedo_table.py` with numpy) holds the white sheen lobe's
+/// directional albedo E(μ, r) = ∫ D·V·cosθi dωi: integrated again here with another
+/// quadrature (a midpoint rule over (cosθi, φ) rather than (θi, φ)) at every node.
+#[test]
+fn sheen_albedo_table_is_the_lobes_albedo() {
+    let table = SheenTable::kernels();
+    let n = table.n;
+    let (n_cos, n_phi) = (2048usize, 256usize);
+    let mut worst = (0.0f64, 0usize, 0usize);
+    for j in 0..n {
+        let r = j as f64 / (n - 1) as f64;
+        for i in 0..n {
+            let mu = ((i as f64 / (n - 1) as f64).powi(2)).max(1e-4);
+            let wo = [(1.0 - mu * mu).sqrt(), 0.0, mu];
+            let mut e = 0.0;
+            for a in 0..n_cos {
+                let ci = (a as f64 + 0.5) / n_cos as f64;
+                let si = (1.0 - ci * ci).sqrt();
+                for b in 0..n_phi {
+                    // φ over [0, π], doubled: the lobe is symmetric about the plane of ωo.
+                    let p = (b as f64 + 0.5) / n_phi as f64 * PI;
+                    e += sheen_lobe(wo, [si * p.cos(), si * p.sin(), ci], r);
+                }
+            }
+            e *= (1.0 / n_cos as f64) * (PI / n_phi as f64) * 2.0;
+            let err = (e - table.values[j * n + i]).abs();
+            if err > worst.0 {
+                worst = (err, i, j);
+            }
+        }
+    }
+    eprintln!(
+        "sheen albedo table: largest difference {:.2e} at √μ node {}, r node {}",
+        worst.0, worst.1, worst.2
+    );
+    assert!(
+        worst.0 < 3e-3,
+        "the sheen table is not the lobe's albedo: {worst:?}"
+    );
+}
+
+/// A sheen over a black base reflects its colour times the table's albedo at ωo (the
+/// base contributes nothing); over a white Lambertian base the two reflect at most all
+/// the light where the lobe's albedo is at most 1 (the albedo scaling's purpose).
+#[test]
+fn sheen_reflects_its_albedo_and_scales_the_base() {
+    let grid = Grid::fine();
+    let cells = grid.items(false);
+    let table = SheenTable::kernels();
+    for (r, wo) in [
+        (0.3, unit([0.1, 0.0, 0.99])),
+        (0.6, unit([0.8, 0.3, 0.52])),
+        (1.0, unit([0.0, 0.96, 0.28])),
+    ] {
+        let black = Case {
+            base_color: [0.0; 3],
+            metallic: 0.0,
+            f0: [0.0; 3],
+            alpha: 0.5,
+            wo,
+            specular: 0.0,
+            transmission: 0.0,
+            eta: 0.0,
+            coat: 0.0,
+            coat_alpha: 1.0,
+            coat_n: [0.0, 0.0, 1.0],
+            sheen: [1.0; 3],
+            sheen_roughness: r,
+        };
+        let white = Case {
+            base_color: [1.0; 3],
+            ..black
+        };
+        let albedo = |c: &Case| {
+            let eval = run(c, 1, &cells);
+            let mut a = 0.0;
+            grid.for_each_cell(|i, j, dw| a += eval[i * grid.n_phi + j].f[1] * dw);
+            a
+        };
+        let (over_black, over_white) = (albedo(&black), albedo(&white));
+        let e = table.at(wo[2], r);
+        eprintln!(
+            "sheen r {r}, cosθo {:.2}: over black {over_black:.4} (E {e:.4}), over white {over_white:.4}",
+            wo[2]
+        );
+        assert!(
+            (over_black - e).abs() < 5e-3,
+            "sheen r {r}: over a black base {over_black}, the table's E {e}"
+        );
+        assert!(
+            over_white <= 1.0 + 5e-3 && over_white > over_black,
+            "sheen r {r}: over a white base {over_white}"
         );
     }
     testing::assert_no_validation_errors();

@@ -739,6 +739,15 @@ fn wrong_values_are_refused() {
             }),
             "clearcoatTexture has no texture index",
         ),
+        // KHR_materials_sheen: a colour that is not three numbers.
+        (
+            scene_with(|j| {
+                j["extensionsUsed"] = json!(["KHR_materials_sheen"]);
+                j["materials"][0]["extensions"] =
+                    json!({"KHR_materials_sheen": {"sheenColorFactor": [1, "red", 0]}});
+            }),
+            "KHR_materials_sheen sheenColorFactor must be three finite numbers",
+        ),
     ];
     for (s, says) in scenes {
         let before = snapshot(s.dir.path());

@@ -24,11 +24,19 @@
 // (1 − w)·base + w·D·G2/(4|ωo·nc||ωi·nc|) with the coat's own α and normal, the coat's
 // value taken with its own cosine |ωi·nc|. Sampling picks the coat with a probability
 // from w and the base's albedo (its visible normals about nc), else the base as above.
+//
+// KHR_materials_sheen lies between the two (the spec's albedo scaling): under the coat
+// the material is C·D·V·cosθi + min(1 − max(C)·E(ωo), 1 − max(C)·E(ωi))·base, with the
+// Charlie distribution D at α = r² (r ≥ 0.1), Estevez & Kulla's visibility V (clamped to
+// 1, as the glTF sample viewer has it), and E the white lobe's directional albedo,
+// interpolated from a table (inc/sheen_albedo.glsl). Sampling picks the sheen with a
+// probability from max(C)·E(ωo) and the base's albedo, and then samples the cosine.
 #ifndef INC_BSDF_GLSL
 #define INC_BSDF_GLSL
 
 #include "common.glsl"
 #include "sampling.glsl"
+#include "sheen_albedo.glsl"
 
 struct BsdfParams {
     vec3 base_color;
@@ -43,6 +51,8 @@ struct BsdfParams {
     float coat;            // KHR_materials_clearcoat: the coat's weight (0: no coat)
     float coat_alpha;      // its GGX α (clearcoat roughness², clamped to MIN_GGX_ALPHA)
     vec3 coat_n;           // its unit normal in the local frame (upper hemisphere)
+    vec3 sheen_color;      // KHR_materials_sheen: the sheen's colour (black: no sheen)
+    float sheen_roughness; // its roughness r (α = r², r taken as at least 0.1)
 };
 
 // GGX's D of a microfacet normal at cosine `c` from the macro normal.
@@ -93,6 +103,8 @@ struct BsdfWo {
     float coat_weight;  // the coat's share w = clearcoat·F(ωo·nc); the base has 1 − w
     float coat_prob;    // probability of sampling the coat (0: no coat lobe toward wo)
     float coat_lambda_wo;  // the coat's Smith Λ(wo)
+    float sheen_albedo_wo; // the white sheen lobe's albedo E(ωo)
+    float sheen_prob;      // probability of sampling the sheen, below the coat's choice
 };
 
 // Visible GGX normal for wo (Dupuy & Benyoub 2023).
@@ -204,6 +216,53 @@ bool coat_sample(BsdfParams p, vec3 wo, vec2 u, out vec3 wi) {
     return wi.z > 0.0 && dot(wi, p.coat_n) > 0.0;
 }
 
+// ---- the sheen (max3(p.sheen_color) > 0) ----
+
+// Sheen roughness r → the Charlie distribution's α.
+float sheen_alpha(float r) { return max(r * r, 0.01); }
+
+// The white sheen lobe's directional albedo E at cosine mu (bilinear in √μ and r).
+float sheen_albedo(float mu, float r) {
+    float last = float(SHEEN_ALBEDO_N - 1);
+    float x = sqrt(clamp(mu, 0.0, 1.0)) * last;
+    float y = clamp(r, 0.0, 1.0) * last;
+    int i = min(int(x), SHEEN_ALBEDO_N - 2);
+    int j = min(int(y), SHEEN_ALBEDO_N - 2);
+    float fx = x - float(i);
+    float fy = y - float(j);
+    int k = j * SHEEN_ALBEDO_N + i;
+    float lo = mix(SHEEN_ALBEDO[k], SHEEN_ALBEDO[k + 1], fx);
+    float hi = mix(SHEEN_ALBEDO[k + SHEEN_ALBEDO_N], SHEEN_ALBEDO[k + SHEEN_ALBEDO_N + 1], fx);
+    return mix(lo, hi, fy);
+}
+
+// Estevez & Kulla's fit of the sheen's Λ (their exponent of a rational in cosθ, blended
+// between α = 0 and 1 by (1 − α)²).
+float sheen_lambda_fit(float x, float a) {
+    float t = sqr(1.0 - a);
+    float fa = mix(21.5473, 25.3245, t);
+    float fb = mix(3.82987, 3.32435, t);
+    float fc = mix(0.19823, 0.16801, t);
+    float fd = mix(-1.97760, -1.27393, t);
+    float fe = mix(-4.32054, -4.85967, t);
+    return fa / (1.0 + fb * pow(x, fc)) + fd * x + fe;
+}
+
+float sheen_lambda(float c, float a) {
+    c = abs(c);
+    return c < 0.5 ? exp(sheen_lambda_fit(c, a)) : exp(2.0 * sheen_lambda_fit(0.5, a) - sheen_lambda_fit(1.0 - c, a));
+}
+
+// The white sheen lobe's D·V·cosθi toward wi (above the surface).
+float sheen_eval(BsdfParams p, vec3 wo, vec3 wi) {
+    if (wo.z <= 0.0 || wi.z <= 0.0) return 0.0;
+    float a = sheen_alpha(p.sheen_roughness);
+    vec3 h = normalize(wo + wi);
+    float d = (2.0 + 1.0 / a) * pow(max(1.0 - h.z * h.z, 0.0), 0.5 / a) * (0.5 * INV_PI);
+    float v = min(1.0 / ((1.0 + sheen_lambda(wo.z, a) + sheen_lambda(wi.z, a)) * 4.0 * wo.z * wi.z), 1.0);
+    return d * v * wi.z;
+}
+
 BsdfWo bsdf_at(BsdfParams p, vec3 wo) {
     BsdfWo c;
     c.wo = wo;
@@ -218,6 +277,15 @@ BsdfWo bsdf_at(BsdfParams p, vec3 wo) {
         c.coat_weight = p.coat * (0.04 + 0.96 * schlick_weight(abs(co)));
         c.coat_prob = co > 0.0 ? coat_probability(p, c.coat_weight) : 0.0;
         c.coat_lambda_wo = ggx_lambda_cos(co, p.coat_alpha);
+    }
+    c.sheen_albedo_wo = 0.0;
+    c.sheen_prob = 0.0;
+    float sheen = max3(p.sheen_color);
+    if (sheen > 0.0) {
+        c.sheen_albedo_wo = sheen_albedo(wo.z, p.sheen_roughness);
+        float lobe = sheen * c.sheen_albedo_wo;
+        float base = max(luminance(p.base_color), 0.04) * max(1.0 - lobe, 0.0);
+        c.sheen_prob = lobe > 0.0 ? clamp(lobe / (lobe + base), 0.1, 0.9) : 0.0;
     }
     return c;
 }
@@ -270,9 +338,15 @@ vec3 bsdf_eval_pdf_base(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
     return f;
 }
 
-// The whole BSDF: the base, and the coat over it.
+// The whole BSDF: the base, the sheen over it, and the coat over both.
 vec3 bsdf_eval_pdf(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
     vec3 f = bsdf_eval_pdf_base(p, c, wi, pdf);
+    float sheen = max3(p.sheen_color);
+    if (sheen > 0.0) {
+        float scale = 1.0 - sheen * max(c.sheen_albedo_wo, sheen_albedo(abs(wi.z), p.sheen_roughness));
+        f = f * max(scale, 0.0) + p.sheen_color * sheen_eval(p, c.wo, wi);
+        pdf = pdf * (1.0 - c.sheen_prob) + c.sheen_prob * max(wi.z, 0.0) * INV_PI;
+    }
     if (p.coat <= 0.0) return f;
     float coat_pdf;
     float coat_f = coat_eval_pdf(p, c, wi, coat_pdf);
@@ -281,17 +355,19 @@ vec3 bsdf_eval_pdf(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
     return f;
 }
 
-// Probability that bsdf_sample draws from the diffuse lobe.
+// Probability that bsdf_sample draws from the diffuse lobe (the sheen counted with it:
+// both sample the cosine).
 float bsdf_diffuse_probability(BsdfParams p, BsdfWo c) {
-    float base = 1.0 - c.coat_prob;
-    if (p.eta > 0.0) return base * (1.0 - volume_share(p)) * (1.0 - c.spec_prob);
-    return base * (1.0 - c.spec_prob) * (1.0 - p.transmission);
+    float under = 1.0 - c.coat_prob;
+    float base = under * (1.0 - c.sheen_prob);
+    if (p.eta > 0.0) return under * c.sheen_prob + base * (1.0 - volume_share(p)) * (1.0 - c.spec_prob);
+    return under * c.sheen_prob + base * (1.0 - c.spec_prob) * (1.0 - p.transmission);
 }
 
 // Probability that bsdf_sample draws from the lobe through a thin wall, or from a
 // solid's interface (both of its sides).
 float bsdf_glass_probability(BsdfParams p, BsdfWo c) {
-    float base = 1.0 - c.coat_prob;
+    float base = (1.0 - c.coat_prob) * (1.0 - c.sheen_prob);
     if (p.eta > 0.0) return base * volume_share(p);
     return base * (1.0 - c.spec_prob) * p.transmission;
 }
@@ -318,9 +394,10 @@ float bsdf_pdf(BsdfParams p, vec3 wo, vec3 wi) {
 // opaque rest takes u.x rescaled and u.z as above. (u.y is not used there: the caller
 // derives it from u.x for the lobe choice of the walls' case.)
 //
-// With a coat, `u_fresnel` first chooses the coat (u_fresnel < coat_prob), which then
-// takes u.yz as its visible normal's numbers; otherwise u_fresnel, rescaled, goes on to
-// the base.
+// With a coat or a sheen, `u_fresnel` first chooses the coat (u_fresnel < coat_prob),
+// which then takes u.yz as its visible normal's numbers, then, rescaled, the sheen
+// (below sheen_prob), which takes u.yz for the cosine; otherwise, rescaled again, it goes
+// on to the base.
 bool bsdf_sample(BsdfParams p, BsdfWo c, vec3 u, float u_fresnel, out vec3 wi) {
     wi = vec3(0.0);
     vec3 wo = c.wo;
@@ -328,6 +405,13 @@ bool bsdf_sample(BsdfParams p, BsdfWo c, vec3 u, float u_fresnel, out vec3 wi) {
     if (c.coat_prob > 0.0) {
         if (u_fresnel < c.coat_prob) return coat_sample(p, wo, u.yz, wi);
         u_fresnel = min((u_fresnel - c.coat_prob) / (1.0 - c.coat_prob), 0.99999994);
+    }
+    if (c.sheen_prob > 0.0) {
+        if (u_fresnel < c.sheen_prob) {
+            wi = square_to_cosine_hemisphere(u.yz);
+            return wi.z > 0.0;
+        }
+        u_fresnel = min((u_fresnel - c.sheen_prob) / (1.0 - c.sheen_prob), 0.99999994);
     }
     if (p.eta > 0.0) {
         float share = volume_share(p);

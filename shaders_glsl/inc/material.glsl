@@ -168,6 +168,19 @@ Surface make_surface(Hit h, vec3 ray_dir) {
         s.bsdf.coat_alpha = max(sqr(clamp(coat_roughness, 0.0, 1.0)), MIN_GGX_ALPHA);
         s.bsdf.coat_n = normalize(to_local(coat_n, s.t, s.b, s.n));
     }
+    // KHR_materials_sheen.
+    s.bsdf.sheen_color = vec3(0.0);
+    s.bsdf.sheen_roughness = 1.0;
+    if (SHEEN && max3(m.sheen_color) > 0.0) {
+        vec3 sheen = m.sheen_color;
+        if (m.sheen_color_tex.index >= 0)
+            sheen *= sample_texture(m.sheen_color_tex, m.sheen_color_tex.uv_set == 1u ? s.uv1 : s.uv0).rgb;
+        float r = m.sheen_roughness;
+        if (m.sheen_roughness_tex.index >= 0)
+            r *= sample_texture(m.sheen_roughness_tex, m.sheen_roughness_tex.uv_set == 1u ? s.uv1 : s.uv0).a;
+        s.bsdf.sheen_color = clamp(sheen, 0.0, 1.0);
+        s.bsdf.sheen_roughness = clamp(r, 0.0, 1.0);
+    }
 
     // Emission: front face only unless the material is double-sided.
     bool emits = s.front || (m.flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;

@@ -15,5 +15,7 @@ layout(constant_id = 4) const bool SOLIDS = false;
 // The scene has coated materials (KHR_materials_clearcoat): without, the coat compiles
 // away.
 layout(constant_id = 5) const bool CLEARCOAT = false;
+// The scene has sheen (KHR_materials_sheen): without, the sheen lobe compiles away.
+layout(constant_id = 6) const bool SHEEN = false;
 
 #endif

@@ -76,6 +76,13 @@ struct Material {
     TextureRef clearcoat_tex;
     TextureRef clearcoat_roughness_tex;
     TextureRef clearcoat_normal_tex;
+    // KHR_materials_sheen: a Charlie sheen lobe over the base (colour = factor × texture
+    // RGB, roughness = factor × texture A; black: none). Counted in the content hash only
+    // where a material has a sheen.
+    vec3 sheen_color;
+    float sheen_roughness;
+    TextureRef sheen_color_tex;
+    TextureRef sheen_roughness_tex;
 };
 
 // One emissive triangle in world space.

@@ -18,6 +18,8 @@ struct BsdfCase {
     float coat;
     float coat_alpha;
     vec3 coat_n;
+    vec3 sheen_color;
+    float sheen_roughness;
 };
 
 layout(local_size_x = 64) in;
@@ -40,6 +42,8 @@ void main() {
     p.coat = bsdf_case.coat;
     p.coat_alpha = bsdf_case.coat_alpha;
     p.coat_n = bsdf_case.coat_n;
+    p.sheen_color = bsdf_case.sheen_color;
+    p.sheen_roughness = bsdf_case.sheen_roughness;
     BsdfWo c = bsdf_at(p, bsdf_case.wo);
     vec3 wi = items[t].xyz;
     bool valid = true;

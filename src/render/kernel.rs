@@ -24,6 +24,8 @@ pub(super) struct Variant {
     pub solids: bool,
     /// The scene has coated materials (KHR_materials_clearcoat).
     pub clearcoat: bool,
+    /// The scene has materials with sheen (KHR_materials_sheen).
+    pub sheen: bool,
 }
 
 /// Texture slots of the descriptor-set layout come in multiples of this many.
@@ -153,11 +155,12 @@ impl Renderer {
             v.aovs as u32,
             v.solids as u32,
             v.clearcoat as u32,
+            v.sheen as u32,
         ];
         let started = Instant::now();
         let name = format!(
-            "render (ris={}, guiding={}, training={}, aovs={}, solids={}, clearcoat={}, debug={}, lanes={}, traversal={})",
-            v.ris, v.guiding, v.training, v.aovs, v.solids, v.clearcoat, v.debug, v.lanes, self.traversal.kind
+            "render (ris={}, guiding={}, training={}, aovs={}, solids={}, clearcoat={}, sheen={}, debug={}, lanes={}, traversal={})",
+            v.ris, v.guiding, v.training, v.aovs, v.solids, v.clearcoat, v.sheen, v.debug, v.lanes, self.traversal.kind
         );
         let p = ComputePipeline::new(
             &self.device,
@@ -234,6 +237,7 @@ impl Renderer {
             lanes: self.settings.lane_stats,
             solids: self.has_solids,
             clearcoat: self.has_clearcoat,
+            sheen: self.has_sheen,
         }
     }
 

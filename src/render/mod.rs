@@ -162,6 +162,8 @@ pub struct Renderer {
     has_solids: bool,
     /// Whether any material has a clearcoat (the kernels' CLEARCOAT constant).
     has_clearcoat: bool,
+    /// Whether any material has a sheen (the kernels' SHEEN constant).
+    has_sheen: bool,
     guide: GuideBuffers,
     /// A trained SD-tree to render with instead of training (`--load-guiding`).
     pub preloaded_tree: Option<crate::guiding::SdTree>,
@@ -260,6 +262,10 @@ impl Renderer {
             has_pixel_emitters: !emitters.pieces.is_empty(),
             has_solids: scene.materials.iter().any(crate::scene::bounds_solid),
             has_clearcoat: scene.materials.iter().any(|m| m.clearcoat > 0.0),
+            has_sheen: scene
+                .materials
+                .iter()
+                .any(|m| m.sheen_color.iter().any(|&c| c > 0.0)),
             guide,
             preloaded_tree: None,
             bounds: (scene.bounds_min, scene.bounds_max),

@@ -103,9 +103,14 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         if let Some(sg) = m.pbr_specular_glossiness() {
             mark(sg.diffuse_texture().map(|i| i.texture()));
         }
-        // Malformed coats are reported by the conversion below.
+        // Malformed coats and sheens are reported by the conversion below.
         if let Ok(Some(coat)) = material::Clearcoat::read(&m, &document) {
             for t in [coat.texture, coat.roughness_texture, coat.normal_texture] {
+                mark(t.map(|t| t.texture));
+            }
+        }
+        if let Ok(Some(sheen)) = material::Sheen::read(&m, &document) {
+            for t in [sheen.colour_texture, sheen.roughness_texture] {
                 mark(t.map(|t| t.texture));
             }
         }
@@ -581,14 +586,15 @@ fn rebase(scene: &mut Scene) {
 
 /// glTF extensions lanterna reads. A file may use others without requiring them (a
 /// required one it does not know is refused when the file is parsed); their data is then
-/// ignored, which a user should hear about: a `KHR_materials_sheen` material renders
-/// without its sheen, a `KHR_materials_unlit` material lit.
+/// ignored, which a user should hear about: a `KHR_materials_iridescence` material
+/// renders without its iridescence, a `KHR_materials_unlit` material lit.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
     "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_pbrSpecularGlossiness",
+    "KHR_materials_sheen",
     "KHR_materials_specular",
     "KHR_materials_transmission",
     "KHR_materials_volume",
@@ -648,10 +654,11 @@ fn content_hash(scene: &Scene) -> String {
     }
     eat(bytemuck::cast_slice(&scene.indices));
     // Materials up to their transmission fields, which count only where a material
-    // transmits, and the coat's, which count only where it has one (scenes without
-    // either keep their hashes, as for vertex colours).
+    // transmits, and the coat's and the sheen's, which count only where it has one
+    // (scenes without keep their hashes, as for vertex colours).
     let opaque_part = std::mem::offset_of!(crate::gpu::Material, transmission);
     let coat_part = std::mem::offset_of!(crate::gpu::Material, clearcoat);
+    let sheen_part = std::mem::offset_of!(crate::gpu::Material, sheen_color);
     for m in &scene.materials {
         let bytes = bytemuck::bytes_of(m);
         eat(&bytes[..opaque_part]);
@@ -659,7 +666,10 @@ fn content_hash(scene: &Scene) -> String {
             eat(&bytes[opaque_part..coat_part]);
         }
         if m.clearcoat > 0.0 {
-            eat(&bytes[coat_part..]);
+            eat(&bytes[coat_part..sheen_part]);
+        }
+        if m.sheen_color.iter().any(|&c| c > 0.0) {
+            eat(&bytes[sheen_part..]);
         }
     }
     for i in &scene.instances {

@@ -1,6 +1,6 @@
 //! glTF materials → the kernels' `Material`: metallic-roughness with
 //! KHR_materials_specular / emissive_strength / ior / texture_transform / transmission /
-//! volume / clearcoat, and KHR_materials_pbrSpecularGlossiness converted to
+//! volume / clearcoat / sheen, and KHR_materials_pbrSpecularGlossiness converted to
 //! metallic-roughness.
 
 use super::texture::{to_rgba8, TextureData, TextureKey};
@@ -175,6 +175,10 @@ pub fn default_material() -> gpu::Material {
         clearcoat_tex: no_texture(),
         clearcoat_roughness_tex: no_texture(),
         clearcoat_normal_tex: no_texture(),
+        sheen_color: [0.0; 3],
+        sheen_roughness: 0.0,
+        sheen_color_tex: no_texture(),
+        sheen_roughness_tex: no_texture(),
     }
 }
 
@@ -234,16 +238,26 @@ pub fn convert(
     if let Some(coat) = Clearcoat::read(m, doc)? {
         out.clearcoat = coat.factor;
         out.clearcoat_roughness = coat.roughness;
-        let mut slot = |t: Option<CoatTexture<'_>>, format| match t {
-            Some(t) => reg.reference(t.texture, t.tex_coord, t.transform.as_ref(), format),
+        let mut slot = |t: &Option<RawTexture<'_>>| match t {
+            Some(t) => t.reference(reg, TextureFormat::Linear),
             None => no_texture(),
         };
-        out.clearcoat_tex = slot(coat.texture, TextureFormat::Linear);
-        out.clearcoat_roughness_tex = slot(coat.roughness_texture, TextureFormat::Linear);
+        out.clearcoat_tex = slot(&coat.texture);
+        out.clearcoat_roughness_tex = slot(&coat.roughness_texture);
+        out.clearcoat_normal_tex = slot(&coat.normal_texture);
         if let Some(n) = &coat.normal_texture {
             out.clearcoat_normal_scale = n.scale;
         }
-        out.clearcoat_normal_tex = slot(coat.normal_texture, TextureFormat::Linear);
+    }
+    if let Some(sheen) = Sheen::read(m, doc)? {
+        out.sheen_color = sheen.colour;
+        out.sheen_roughness = sheen.roughness;
+        if let Some(t) = &sheen.colour_texture {
+            out.sheen_color_tex = t.reference(reg, TextureFormat::Srgb);
+        }
+        if let Some(t) = &sheen.roughness_texture {
+            out.sheen_roughness_tex = t.reference(reg, TextureFormat::Linear);
+        }
     }
     if let Some(ior) = m
         .extension_value("KHR_materials_ior")
@@ -304,12 +318,14 @@ pub fn convert(
         out.clearcoat,
         out.clearcoat_roughness,
         out.clearcoat_normal_scale,
+        out.sheen_roughness,
     ];
     let finite = out
         .base_color
         .iter()
         .chain(&out.emission)
         .chain(&out.specular_color)
+        .chain(&out.sheen_color)
         .chain(&scalars)
         .all(|v| v.is_finite());
     if !finite {
@@ -328,96 +344,181 @@ pub fn convert(
     out.transmission = out.transmission.clamp(0.0, 1.0);
     out.clearcoat = out.clearcoat.clamp(0.0, 1.0);
     out.clearcoat_roughness = out.clearcoat_roughness.clamp(0.0, 1.0);
+    out.sheen_color = out.sheen_color.map(|c| c.clamp(0.0, 1.0));
+    out.sheen_roughness = out.sheen_roughness.clamp(0.0, 1.0);
     Ok(out)
 }
 
-/// A texture slot of KHR_materials_clearcoat (read from the extension's JSON: the gltf
-/// crate has no typed access to it).
-pub struct CoatTexture<'a> {
+/// A texture slot of an extension the gltf crate has no typed access to
+/// (KHR_materials_clearcoat, KHR_materials_sheen), read from the extension's JSON.
+pub struct RawTexture<'a> {
     pub texture: gltf::Texture<'a>,
     tex_coord: u32,
     transform: Option<serde_json::Value>,
     scale: f32,
 }
 
+impl RawTexture<'_> {
+    fn reference(&self, reg: &mut TextureRegistry<'_>, format: TextureFormat) -> gpu::TextureRef {
+        reg.reference(
+            self.texture.clone(),
+            self.tex_coord,
+            self.transform.as_ref(),
+            format,
+        )
+    }
+}
+
+/// Reads an extension's JSON `v` for one material: its numbers and texture slots, with
+/// errors naming the material and the extension.
+struct ExtensionReader<'a, 'v> {
+    v: &'v serde_json::Value,
+    doc: &'a gltf::Document,
+    what: String,
+}
+
+impl<'a> ExtensionReader<'a, '_> {
+    fn new<'v>(
+        m: &gltf::Material<'_>,
+        doc: &'a gltf::Document,
+        extension: &str,
+        v: &'v serde_json::Value,
+    ) -> ExtensionReader<'a, 'v> {
+        let name = m
+            .name()
+            .map(str::to_string)
+            .unwrap_or_else(|| format!("#{}", m.index().unwrap_or(0)));
+        ExtensionReader {
+            v,
+            doc,
+            what: format!("material `{name}`: {extension}"),
+        }
+    }
+
+    fn bad(&self, what: String) -> String {
+        format!("{} {what}", self.what)
+    }
+
+    fn number(&self, key: &str, default: f32) -> Result<f32, String> {
+        match self.v.get(key) {
+            None => Ok(default),
+            Some(x) => x
+                .as_f64()
+                .filter(|x| x.is_finite())
+                .map(|x| x as f32)
+                .ok_or_else(|| self.bad(format!("{key} is not a finite number"))),
+        }
+    }
+
+    fn colour(&self, key: &str, default: [f32; 3]) -> Result<[f32; 3], String> {
+        match self.v.get(key) {
+            None => Ok(default),
+            Some(c) => c
+                .as_array()
+                .filter(|a| a.len() == 3)
+                .and_then(|a| {
+                    a.iter()
+                        .map(|x| x.as_f64().filter(|x| x.is_finite()).map(|x| x as f32))
+                        .collect::<Option<Vec<f32>>>()
+                })
+                .map(|p| [p[0], p[1], p[2]])
+                .ok_or_else(|| self.bad(format!("{key} must be three finite numbers"))),
+        }
+    }
+
+    fn texture(&self, key: &str) -> Result<Option<RawTexture<'a>>, String> {
+        let Some(info) = self.v.get(key) else {
+            return Ok(None);
+        };
+        let index = info
+            .get("index")
+            .and_then(|i| i.as_u64())
+            .ok_or_else(|| self.bad(format!("{key} has no texture index")))?;
+        let texture = usize::try_from(index)
+            .ok()
+            .and_then(|i| self.doc.textures().nth(i))
+            .ok_or_else(|| {
+                self.bad(format!(
+                    "{key} refers to texture {index}, which does not exist"
+                ))
+            })?;
+        let tex_coord = match info.get("texCoord") {
+            None => 0,
+            Some(t) => t
+                .as_u64()
+                .and_then(|t| u32::try_from(t).ok())
+                .ok_or_else(|| self.bad(format!("{key} texCoord is not a small integer")))?,
+        };
+        let scale = match info.get("scale") {
+            None => 1.0,
+            Some(x) => x
+                .as_f64()
+                .filter(|x| x.is_finite())
+                .map(|x| x as f32)
+                .ok_or_else(|| self.bad(format!("{key} scale is not a finite number")))?,
+        };
+        Ok(Some(RawTexture {
+            texture,
+            tex_coord,
+            transform: info
+                .get("extensions")
+                .and_then(|e| e.get("KHR_texture_transform"))
+                .cloned(),
+            scale,
+        }))
+    }
+}
+
 /// KHR_materials_clearcoat of one material.
 pub struct Clearcoat<'a> {
     factor: f32,
     roughness: f32,
-    pub texture: Option<CoatTexture<'a>>,
-    pub roughness_texture: Option<CoatTexture<'a>>,
-    pub normal_texture: Option<CoatTexture<'a>>,
+    pub texture: Option<RawTexture<'a>>,
+    pub roughness_texture: Option<RawTexture<'a>>,
+    pub normal_texture: Option<RawTexture<'a>>,
 }
 
 impl<'a> Clearcoat<'a> {
     /// The material's coat, if it has the extension; malformed values and texture
     /// references are errors naming the material.
-    pub fn read(m: &gltf::Material<'a>, doc: &'a gltf::Document) -> Result<Option<Self>, String> {
-        let Some(v) = m.extension_value("KHR_materials_clearcoat") else {
+    pub fn read(m: &gltf::Material<'_>, doc: &'a gltf::Document) -> Result<Option<Self>, String> {
+        const NAME: &str = "KHR_materials_clearcoat";
+        let Some(v) = m.extension_value(NAME) else {
             return Ok(None);
         };
-        let name = m
-            .name()
-            .map(str::to_string)
-            .unwrap_or_else(|| format!("#{}", m.index().unwrap_or(0)));
-        let bad = |what: String| format!("material `{name}`: KHR_materials_clearcoat {what}");
-        let number = |key: &str, default: f32| -> Result<f32, String> {
-            match v.get(key) {
-                None => Ok(default),
-                Some(x) => x
-                    .as_f64()
-                    .filter(|x| x.is_finite())
-                    .map(|x| x as f32)
-                    .ok_or_else(|| bad(format!("{key} is not a finite number"))),
-            }
-        };
-        let texture = |key: &str| -> Result<Option<CoatTexture<'a>>, String> {
-            let Some(info) = v.get(key) else {
-                return Ok(None);
-            };
-            let index = info
-                .get("index")
-                .and_then(|i| i.as_u64())
-                .ok_or_else(|| bad(format!("{key} has no texture index")))?;
-            let texture = usize::try_from(index)
-                .ok()
-                .and_then(|i| doc.textures().nth(i))
-                .ok_or_else(|| {
-                    bad(format!(
-                        "{key} refers to texture {index}, which does not exist"
-                    ))
-                })?;
-            let tex_coord = match info.get("texCoord") {
-                None => 0,
-                Some(t) => t
-                    .as_u64()
-                    .and_then(|t| u32::try_from(t).ok())
-                    .ok_or_else(|| bad(format!("{key} texCoord is not a small integer")))?,
-            };
-            let scale = match info.get("scale") {
-                None => 1.0,
-                Some(x) => x
-                    .as_f64()
-                    .filter(|x| x.is_finite())
-                    .map(|x| x as f32)
-                    .ok_or_else(|| bad(format!("{key} scale is not a finite number")))?,
-            };
-            Ok(Some(CoatTexture {
-                texture,
-                tex_coord,
-                transform: info
-                    .get("extensions")
-                    .and_then(|e| e.get("KHR_texture_transform"))
-                    .cloned(),
-                scale,
-            }))
-        };
+        let r = ExtensionReader::new(m, doc, NAME, v);
         Ok(Some(Clearcoat {
-            factor: number("clearcoatFactor", 0.0)?,
-            roughness: number("clearcoatRoughnessFactor", 0.0)?,
-            texture: texture("clearcoatTexture")?,
-            roughness_texture: texture("clearcoatRoughnessTexture")?,
-            normal_texture: texture("clearcoatNormalTexture")?,
+            factor: r.number("clearcoatFactor", 0.0)?,
+            roughness: r.number("clearcoatRoughnessFactor", 0.0)?,
+            texture: r.texture("clearcoatTexture")?,
+            roughness_texture: r.texture("clearcoatRoughnessTexture")?,
+            normal_texture: r.texture("clearcoatNormalTexture")?,
+        }))
+    }
+}
+
+/// KHR_materials_sheen of one material.
+pub struct Sheen<'a> {
+    colour: [f32; 3],
+    roughness: f32,
+    pub colour_texture: Option<RawTexture<'a>>,
+    pub roughness_texture: Option<RawTexture<'a>>,
+}
+
+impl<'a> Sheen<'a> {
+    /// The material's sheen, if it has the extension; malformed values and texture
+    /// references are errors naming the material.
+    pub fn read(m: &gltf::Material<'_>, doc: &'a gltf::Document) -> Result<Option<Self>, String> {
+        const NAME: &str = "KHR_materials_sheen";
+        let Some(v) = m.extension_value(NAME) else {
+            return Ok(None);
+        };
+        let r = ExtensionReader::new(m, doc, NAME, v);
+        Ok(Some(Sheen {
+            colour: r.colour("sheenColorFactor", [0.0; 3])?,
+            roughness: r.number("sheenRoughnessFactor", 0.0)?,
+            colour_texture: r.texture("sheenColorTexture")?,
+            roughness_texture: r.texture("sheenRoughnessTexture")?,
         }))
     }
 }

@@ -17,8 +17,10 @@ pub struct SceneStats {
     /// (KHR_materials_transmission, with KHR_materials_volume).
     pub thin_glass_materials: u64,
     pub solid_materials: u64,
-    /// Materials with a clearcoat (KHR_materials_clearcoat).
+    /// Materials with a clearcoat (KHR_materials_clearcoat) and with sheen
+    /// (KHR_materials_sheen).
     pub coated_materials: u64,
+    pub sheen_materials: u64,
     pub textures: u64,
     pub cameras: u64,
     pub light_models: u64,
@@ -74,6 +76,11 @@ impl SceneStats {
             thin_glass_materials: transmitting().filter(|m| !super::bounds_solid(m)).count() as u64,
             solid_materials: transmitting().filter(|m| super::bounds_solid(m)).count() as u64,
             coated_materials: scene.materials.iter().filter(|m| m.clearcoat > 0.0).count() as u64,
+            sheen_materials: scene
+                .materials
+                .iter()
+                .filter(|m| m.sheen_color.iter().any(|&c| c > 0.0))
+                .count() as u64,
             textures: scene.textures.len() as u64,
             cameras: scene.cameras.len() as u64,
             light_models: lights.models.len() as u64,
@@ -112,6 +119,9 @@ impl fmt::Display for SceneStats {
         }
         if self.coated_materials > 0 {
             kinds.push(format!("{} clearcoated", self.coated_materials));
+        }
+        if self.sheen_materials > 0 {
+            kinds.push(format!("{} with sheen", self.sheen_materials));
         }
         if !kinds.is_empty() {
             write!(f, " ({})", kinds.join(", "))?;

@@ -114,7 +114,8 @@ impl Writer<'_> {
             );
         }
         // glTF with specularFactor 0 and metallic 0 is exactly Lambertian (albedo/π).
-        if mat.specular == 0.0 && mat.metallic == 0.0 && mat.clearcoat == 0.0 {
+        let sheen = mat.sheen_color.iter().cloned().fold(0.0, f32::max);
+        if mat.specular == 0.0 && mat.metallic == 0.0 && mat.clearcoat == 0.0 && sheen == 0.0 {
             s.push_str("    <bsdf type=\"diffuse\">\n");
             s.push_str(&colour);
             s.push_str("    </bsdf>\n");
@@ -163,6 +164,15 @@ impl Writer<'_> {
                     mat.clearcoat,
                     1.0 - mat.clearcoat_roughness
                 );
+            }
+            if sheen > 0.0 {
+                // Mitsuba's sheen is Disney's (a Schlick-weighted lobe tinted toward the
+                // base colour), not glTF's Charlie sheen: an approximation.
+                self.approximations.push(format!(
+                    "material `{name}`: its sheen (colour {:?}, roughness {}) approximated by `principled`'s sheen",
+                    mat.sheen_color, mat.sheen_roughness
+                ));
+                let _ = writeln!(s, "      <float name=\"sheen\" value=\"{sheen}\"/>");
             }
             s.push_str("    </bsdf>\n");
         }
