@@ -976,6 +976,15 @@ fn white_glass_solid_reflects_the_fresnel_share_and_refracts_the_rest() {
     testing::assert_no_validation_errors();
 }
 
+/// The directional albedo ∫ f·cosθi dωi (green channel) over the upper hemisphere at the
+/// grid's cells (`cells` = `grid.items(false)`).
+fn directional_albedo(c: &Case, grid: &Grid, cells: &[[f32; 4]]) -> f64 {
+    let eval = run(c, 1, cells);
+    let mut a = 0.0;
+    grid.for_each_cell(|i, j, dw| a += eval[i * grid.n_phi + j].f[1] * dw);
+    a
+}
+
 /// A smooth clearcoat (α 0.02) against the spec's closed form: over a black base (no
 /// diffuse, specular 0) it reflects w = clearcoat·F(ωo·n), F = 0.04 + 0.96(1 − ωo·n)⁵;
 /// over a white Lambertian base (albedo 1) the base keeps 1 − w, so the two reflect
@@ -1010,12 +1019,7 @@ fn clearcoat_reflects_its_fresnel_share_over_the_base() {
             base_color: [1.0; 3],
             ..black
         };
-        let albedo = |c: &Case| {
-            let eval = run(c, 1, &cells);
-            let mut a = 0.0;
-            grid.for_each_cell(|i, j, dw| a += eval[i * grid.n_phi + j].f[1] * dw);
-            a
-        };
+        let albedo = |c: &Case| directional_albedo(c, &grid, &cells);
         let (over_black, over_white) = (albedo(&black), albedo(&white));
         let w = coat * (0.04 + 0.96 * (1.0 - dot(wo, coat_n)).powi(5));
         eprintln!(
@@ -1112,12 +1116,7 @@ fn sheen_reflects_its_albedo_and_scales_the_base() {
             base_color: [1.0; 3],
             ..black
         };
-        let albedo = |c: &Case| {
-            let eval = run(c, 1, &cells);
-            let mut a = 0.0;
-            grid.for_each_cell(|i, j, dw| a += eval[i * grid.n_phi + j].f[1] * dw);
-            a
-        };
+        let albedo = |c: &Case| directional_albedo(c, &grid, &cells);
         let (over_black, over_white) = (albedo(&black), albedo(&white));
         let e = table.at(wo[2], r);
         eprintln!(

@@ -495,6 +495,27 @@ fn coated_glossy(dir: &Path, name: &str, edit: impl FnOnce(&mut serde_json::Valu
     load(&path)
 }
 
+/// The scene's image (`pt`) differs from the plain `glossy.gltf`'s in its mean (Welch,
+/// p < 10⁻⁶): what `what` added to its materials is drawn.
+fn assert_differs_from_plain_glossy(scene: &Scene, what: &str) {
+    let plain = load(&root().join("tests/data/mitsuba/glossy.gltf"));
+    let camera = plain.cameras[0].clone();
+    let settings = testing::settings(Method::Pt, 32, 24);
+    let a = render_batches(scene, &camera, settings.clone(), 8, 64);
+    let b = render_batches(&plain, &camera, settings, 8, 64);
+    let (wa, wb) = (
+        a.region_estimates(0, 0, 32, 24),
+        b.region_estimates(0, 0, 32, 24),
+    );
+    let p = stats::welch(&wa[1], &wb[1]);
+    assert!(
+        p < 1e-6,
+        "{what} change nothing: image means {} and {} (p = {p:.2e})",
+        stats::mean_var(&wa[1]).0,
+        stats::mean_var(&wb[1]).0
+    );
+}
+
 /// KHR_materials_clearcoat: NEE + direction sampling under MIS, for every method (guided
 /// ones trained per batch), agrees with `pt`'s direction sampling alone on `glossy.gltf`
 /// with coats over a matte floor and a glossy plastic: the coat's density (chosen with
@@ -512,22 +533,7 @@ fn clearcoat_nee_and_direction_sampling_agree() {
     let stats = lanterna::scene::SceneStats::new(&coated, &LightTable::build(&coated).unwrap());
     assert_eq!(stats.coated_materials, 2);
     assert_methods_agree_with_direction_sampling_alone(&coated, 4);
-    let plain = load(&root().join("tests/data/mitsuba/glossy.gltf"));
-    let camera = plain.cameras[0].clone();
-    let settings = testing::settings(Method::Pt, 32, 24);
-    let a = render_batches(&coated, &camera, settings.clone(), 8, 64);
-    let b = render_batches(&plain, &camera, settings, 8, 64);
-    let (wa, wb) = (
-        a.region_estimates(0, 0, 32, 24),
-        b.region_estimates(0, 0, 32, 24),
-    );
-    let p = stats::welch(&wa[1], &wb[1]);
-    assert!(
-        p < 1e-6,
-        "the coats change nothing: image means {} and {} (p = {p:.2e})",
-        stats::mean_var(&wa[1]).0,
-        stats::mean_var(&wb[1]).0
-    );
+    assert_differs_from_plain_glossy(&coated, "the coats");
 }
 
 /// The clearcoat's textures multiply its factors (KHR_materials_clearcoat): the coat's
@@ -584,22 +590,7 @@ fn sheen_nee_and_direction_sampling_agree() {
     let stats = lanterna::scene::SceneStats::new(&sheen, &LightTable::build(&sheen).unwrap());
     assert_eq!((stats.sheen_materials, stats.coated_materials), (2, 1));
     assert_methods_agree_with_direction_sampling_alone(&sheen, 4);
-    let plain = load(&root().join("tests/data/mitsuba/glossy.gltf"));
-    let camera = plain.cameras[0].clone();
-    let settings = testing::settings(Method::Pt, 32, 24);
-    let a = render_batches(&sheen, &camera, settings.clone(), 8, 64);
-    let b = render_batches(&plain, &camera, settings, 8, 64);
-    let (wa, wb) = (
-        a.region_estimates(0, 0, 32, 24),
-        b.region_estimates(0, 0, 32, 24),
-    );
-    let p = stats::welch(&wa[1], &wb[1]);
-    assert!(
-        p < 1e-6,
-        "the sheens change nothing: image means {} and {} (p = {p:.2e})",
-        stats::mean_var(&wa[1]).0,
-        stats::mean_var(&wb[1]).0
-    );
+    assert_differs_from_plain_glossy(&sheen, "the sheens");
 }
 
 /// The sheen's textures multiply its factors (KHR_materials_sheen): its colour by
