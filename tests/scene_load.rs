@@ -543,28 +543,17 @@ fn clearcoat_nee_and_direction_sampling_agree() {
 /// the weight texture's green channel read, and with the roughness texture ignored.
 #[test]
 fn clearcoat_textures_scale_the_factors() {
-    let dir = tempfile::tempdir().unwrap();
-    image::RgbaImage::from_pixel(2, 2, image::Rgba([128, 64, 0, 255]))
-        .save(dir.path().join("t.png"))
-        .unwrap();
-    let textured = coated_glossy(dir.path(), "textured", |j| {
-        j["images"] = serde_json::json!([{ "uri": "t.png" }]);
-        j["textures"] = serde_json::json!([{ "source": 0 }]);
-        j["materials"][0]["extensions"]["KHR_materials_clearcoat"] = serde_json::json!({
+    assert_textures_act_like_factors(
+        [128, 64, 0, 255],
+        "KHR_materials_clearcoat",
+        serde_json::json!({
             "clearcoatFactor": 1.0, "clearcoatTexture": { "index": 0 },
             "clearcoatRoughnessFactor": 0.8, "clearcoatRoughnessTexture": { "index": 0 }
-        });
-    });
-    let factor = coated_glossy(dir.path(), "factor", |j| {
-        j["materials"][0]["extensions"]["KHR_materials_clearcoat"] = serde_json::json!({
+        }),
+        serde_json::json!({
             "clearcoatFactor": 128.0 / 255.0, "clearcoatRoughnessFactor": 0.8 * 64.0 / 255.0
-        });
-    });
-    let camera = factor.cameras[0].clone();
-    let settings = testing::settings(Method::Pt, 32, 24);
-    let a = render_batches(&textured, &camera, settings.clone(), 8, 64);
-    let b = render_batches(&factor, &camera, settings, 8, 64);
-    testing::assert_same_expectation(&a, &b, 8, 1e-3);
+        }),
+    );
 }
 
 /// KHR_materials_sheen (on `glossy.gltf`'s matte floor and walls a pale velvet, on its
@@ -601,10 +590,6 @@ fn sheen_nee_and_direction_sampling_agree() {
 /// from the green channel.
 #[test]
 fn sheen_textures_scale_the_factors() {
-    let dir = tempfile::tempdir().unwrap();
-    image::RgbaImage::from_pixel(2, 2, image::Rgba([188, 128, 64, 230]))
-        .save(dir.path().join("t.png"))
-        .unwrap();
     let srgb = |c: f64| {
         let c = c / 255.0;
         if c <= 0.04045 {
@@ -613,19 +598,39 @@ fn sheen_textures_scale_the_factors() {
             ((c + 0.055) / 1.055).powf(2.4)
         }
     };
+    assert_textures_act_like_factors(
+        [188, 128, 64, 230],
+        "KHR_materials_sheen",
+        serde_json::json!({
+            "sheenColorFactor": [1, 1, 1], "sheenColorTexture": { "index": 0 },
+            "sheenRoughnessFactor": 1, "sheenRoughnessTexture": { "index": 0 }
+        }),
+        serde_json::json!({
+            "sheenColorFactor": [srgb(188.0), srgb(128.0), srgb(64.0)],
+            "sheenRoughnessFactor": 230.0 / 255.0
+        }),
+    );
+}
+
+/// `coated_glossy` with `extension` on its matte floor set to `textured` (whose textures
+/// are texture 0, a constant 2×2 image of `texel`) renders like it set to `factor`.
+fn assert_textures_act_like_factors(
+    texel: [u8; 4],
+    extension: &str,
+    textured: serde_json::Value,
+    factor: serde_json::Value,
+) {
+    let dir = tempfile::tempdir().unwrap();
+    image::RgbaImage::from_pixel(2, 2, image::Rgba(texel))
+        .save(dir.path().join("t.png"))
+        .unwrap();
     let textured = coated_glossy(dir.path(), "textured", |j| {
         j["images"] = serde_json::json!([{ "uri": "t.png" }]);
         j["textures"] = serde_json::json!([{ "source": 0 }]);
-        j["materials"][0]["extensions"]["KHR_materials_sheen"] = serde_json::json!({
-            "sheenColorFactor": [1, 1, 1], "sheenColorTexture": { "index": 0 },
-            "sheenRoughnessFactor": 1, "sheenRoughnessTexture": { "index": 0 }
-        });
+        j["materials"][0]["extensions"][extension] = textured;
     });
     let factor = coated_glossy(dir.path(), "factor", |j| {
-        j["materials"][0]["extensions"]["KHR_materials_sheen"] = serde_json::json!({
-            "sheenColorFactor": [srgb(188.0), srgb(128.0), srgb(64.0)],
-            "sheenRoughnessFactor": 230.0 / 255.0
-        });
+        j["materials"][0]["extensions"][extension] = factor;
     });
     let camera = factor.cameras[0].clone();
     let settings = testing::settings(Method::Pt, 32, 24);
