@@ -293,6 +293,7 @@ struct RisCandidate {
     vec3 f;            // BSDF f·cos toward ls.wi, cached by ris_target
     float bsdf_pdf;    // the BSDF's density of ls.wi, cached by ris_target
     bool from_direction;
+    float direction_pdf;  // the direction candidate's true density (its sample's mixture pdf)
 };
 
 RisCandidate ris_draw(RisContext ctx, vec4 u) {
@@ -301,6 +302,7 @@ RisCandidate ris_draw(RisContext ctx, vec4 u) {
     c.f = vec3(0.0);
     c.bsdf_pdf = 0.0;
     c.from_direction = false;
+    c.direction_pdf = 0.0;
     return c;
 }
 
@@ -320,21 +322,27 @@ float ris_target(RisContext ctx, inout RisCandidate c) {
     return luminance(c.f * c.ls.Le_G);
 }
 
+void ris_keep_target(inout RisCandidate into, RisCandidate c) {
+    into.f = c.f;
+    into.bsdf_pdf = c.bsdf_pdf;
+}
+
 // Source densities of all candidate slots at c, in the candidate's measure: area for
 // area lights (direction pdf converted with cosθy/d²), pmf for punctual lights (which
 // direction sampling cannot produce). The direction slot's density is the stand-in of
 // direction_pdf_for_ris; the direction candidate itself is further scaled by its true
-// density over the stand-in, so that its weight is m_direction·p̂/q_direction.
+// density over the stand-in, so that its weight is m_direction·p̂/q_direction. (Its
+// ls.pdf is the light source's density of its point and its direction_pdf the mixture
+// density its direction was sampled with, both set by nee_ris: the loop that calls this
+// for every candidate walks no table or quadtree for them.)
 float ris_denominator(RisContext ctx, RisCandidate c, uint M) {
-    float q_light = c.from_direction ? light_source_pdf(ctx.d.lights, c.ls.tri) : c.ls.pdf;
-    float denominator = float(M) * q_light;
+    float denominator = float(M) * c.ls.pdf;
     // The direction candidate only exists for area lights under MIS.
     if (c.ls.area && params.strategy == STRATEGY_MIS) {
         float stand_in = direction_pdf_for_ris(ctx.s, ctx.d, c.ls.wi, c.bsdf_pdf);
         denominator += stand_in * c.ls.cos_y / max(c.ls.dist * c.ls.dist, 1e-20);
         if (c.from_direction && ctx.d.bsdf_fraction < 1.0 && stand_in > 0.0) {
-            float tree_pdf;
-            denominator *= direction_pdf_mix(ctx.s, ctx.d, c.ls.wi, c.bsdf_pdf, tree_pdf) / stand_in;
+            denominator *= c.direction_pdf / stand_in;
         }
     }
     return denominator;
@@ -370,6 +378,8 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
         extra.f = vec3(0.0);
         extra.bsdf_pdf = 0.0;
         extra.from_direction = true;
+        // ds.pdf is direction_pdf_mix at ds.wi with the BSDF density ris_target finds.
+        extra.direction_pdf = ds.pdf;
     }
     // The candidates' model numbers are stratified over [0, 1) (strata offset: this
     // vertex's stratified light pair), so that they spread over the light list.

@@ -11,6 +11,8 @@
 //   float ris_denominator(RisContext ctx, RisCandidate c, uint M);
 //        Σ over candidate slots of their source densities at c: M·q(c) for M light
 //        candidates, plus q_extra(c) when an extra candidate takes part.
+//   void ris_keep_target(inout RisCandidate into, RisCandidate c);
+//        copies what ris_target cached in c into `into` (the same candidate)
 // ris_target is called on a candidate before ris_denominator, which may use what the
 // former cached in it.
 // A candidate's resampling weight is w = p̂ / denominator; the selected y gets the
@@ -52,33 +54,40 @@ RisResult ris_resample(RisContext ctx, uint M, inout Rng rng, bool has_extra, Ri
     res.p_hat = 0.0;
     uint slots = M;
     vec4 u_kept = vec4(0.0);
-    for (uint i = 0u; i < M; ++i) {
-        vec4 u = rng_next4(rng);
-        if (strata_offset >= 0.0) u.x = fract(strata_offset + (float(i) + u.x) / float(M));
-        RisCandidate c = ris_draw(ctx, u);
+    // The extra candidate takes the stream's last slot, M, in the same loop body as the
+    // light candidates, so that ris_target and ris_denominator are inlined once for both
+    // (the driver's compile time grows faster than the kernel's size). Each slot draws a
+    // light candidate and the extra one replaces it by a select, not a branch: a branch
+    // would merge the whole candidate at its end, which costs SIMD devices a masked copy
+    // of it in every slot. What the stream keeps of the extra candidate is what
+    // ris_target adds to it. (The extra slot's draw is wasted and takes no numbers.)
+    uint n = M + (has_extra ? 1u : 0u);
+    for (uint i = 0u; i < n; ++i) {
+        bool is_extra = i == M;
+        vec4 u = vec4(0.0);
+        if (!is_extra) {
+            u = rng_next4(rng);
+            if (strata_offset >= 0.0) u.x = fract(strata_offset + (float(i) + u.x) / float(M));
+        }
+        RisCandidate drawn = ris_draw(ctx, u);
+        RisCandidate c = is_extra ? extra : drawn;
         float p = ris_target(ctx, c);
         float w = p > 0.0 ? p / ris_denominator(ctx, c, slots) : 0.0;
         bool kept = reservoir_update(r, w, rng_next(rng));
         TRACE4("    candidate %u: p_hat=%f w=%f kept=%u\n", i, p, w, uint(kept));
+        if (is_extra) ris_keep_target(extra, c);
         if (kept) {
             u_kept = u;
             res.p_hat = p;
             res.found = true;
+            res.extra_chosen = is_extra;
         }
     }
-    if (res.found) {
+    if (res.extra_chosen) {
+        res.y = extra;
+    } else if (res.found) {
         res.y = ris_draw(ctx, u_kept);
         ris_target(ctx, res.y);  // f and its pdf for the caller; p̂ is the one kept above
-    }
-    if (has_extra) {
-        float p = ris_target(ctx, extra);
-        float w = p > 0.0 ? p / ris_denominator(ctx, extra, slots) : 0.0;
-        if (reservoir_update(r, w, rng_next(rng))) {
-            res.y = extra;
-            res.p_hat = p;
-            res.found = true;
-            res.extra_chosen = true;
-        }
     }
     res.W = res.found && res.p_hat > 0.0 ? r.w_sum / res.p_hat : 0.0;
     return res;

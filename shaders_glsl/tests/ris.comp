@@ -31,6 +31,8 @@ float ris_target(RisContext ctx, inout RisCandidate c) { return target[c.index];
 
 float ris_denominator(RisContext ctx, RisCandidate c, uint M) { return float(M) * c.q; }
 
+void ris_keep_target(inout RisCandidate into, RisCandidate c) {}  // ris_target caches nothing
+
 #include "../inc/ris.glsl"
 
 void main() {
