@@ -105,12 +105,6 @@ float direction_pdf_mix(Surface s, DirectionSampler d, vec3 wi, float bsdf_pdf, 
     return p;
 }
 
-float direction_pdf(Surface s, DirectionSampler d, vec3 wi) {
-    float bsdf_pdf, tree_pdf;
-    surface_bsdf_eval_pdf(s, d.bsdf, wi, bsdf_pdf);
-    return direction_pdf_mix(s, d, wi, bsdf_pdf, tree_pdf);
-}
-
 // The direction strategy's density as RIS's resampling weights see it: the BSDF part
 // exact, the guided part replaced by the uniform density over the upper hemisphere
 // (where the folded guided density lives; the sphere where the surface transmits), so
@@ -135,8 +129,16 @@ float reuse_choice(float u, float p, bool upper) {
     return clamp(r, 0.0, 0.99999994);
 }
 
-DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
+// The direction of the vertex's sample, without its value: wi, and whether the tree or
+// the BSDF drew it (valid false where the BSDF could not sample). direction_complete
+// adds the value once the BSDF has been evaluated at wi.
+DirectionSample direction_choose(Surface s, DirectionSampler d, inout Rng rng) {
     DirectionSample ds;
+    ds.pdf = 0.0;
+    ds.bsdf_pdf = 0.0;
+    ds.guide_pdf = 0.0;
+    ds.weight = vec3(0.0);
+    ds.valid = true;
     // Both choices (BSDF or guided, then the BSDF's lobe) are made on the warp's first
     // number, which is then rescaled to [0, 1) within the chosen range: the samples of a
     // pixel that take one strategy or lobe are then themselves stratified, as they would
@@ -153,26 +155,34 @@ DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
         // microfacet normal, with a number of its own; a coat and a sheen are chosen with
         // it too.
         float u_fresnel = s.bsdf.eta > 0.0 || d.bsdf.coat_prob > 0.0 || d.bsdf.sheen_prob > 0.0 ? rng_next(rng) : 0.0;
-        bool ok = bsdf_sample(s.bsdf, d.bsdf, u, u_fresnel, wi_local);
-        ds.wi = ok ? surface_to_world(s, wi_local) : s.n;
-        if (!ok) {
-            ds.valid = false;
-            ds.pdf = 0.0;
-            ds.bsdf_pdf = 0.0;
-            ds.guide_pdf = 0.0;
-            ds.weight = vec3(0.0);
-            return ds;
-        }
+        ds.valid = bsdf_sample(s.bsdf, d.bsdf, u, u_fresnel, wi_local);
+        ds.wi = ds.valid ? surface_to_world(s, wi_local) : s.n;
     } else {
         float unused_pdf;
         ds.wi = fold_above(s, guide_sample(d.leaf, u.yz, unused_pdf));  // the warp pair
     }
-    vec3 f = surface_bsdf_eval_pdf(s, d.bsdf, ds.wi, ds.bsdf_pdf);
-    ds.pdf = direction_pdf_mix(s, d, ds.wi, ds.bsdf_pdf, ds.guide_pdf);
+    return ds;
+}
+
+// The sample's value from the BSDF's f·cos and density at ds.wi and the mixture's
+// density there (direction_pdf_mix).
+void direction_complete(inout DirectionSample ds, DirectionSampler d, vec3 f, float bsdf_pdf, float pdf, float tree_pdf) {
+    ds.bsdf_pdf = bsdf_pdf;
+    ds.pdf = pdf;
+    ds.guide_pdf = tree_pdf;
     ds.valid = ds.pdf > 0.0 && max3(f) > 0.0;
     ds.weight = ds.valid ? f / ds.pdf : vec3(0.0);
     TRACE6("  direction (guided=%u) wi=%v3f pdf=%f (bsdf pdf %f, guide share %f) weight=%v3f\n", uint(ds.guided),
            ds.wi, ds.pdf, ds.bsdf_pdf, 1.0 - d.bsdf_fraction, ds.weight);
+}
+
+DirectionSample sample_direction(Surface s, DirectionSampler d, inout Rng rng) {
+    DirectionSample ds = direction_choose(s, d, rng);
+    if (!ds.valid) return ds;
+    float bsdf_pdf, tree_pdf;
+    vec3 f = surface_bsdf_eval_pdf(s, d.bsdf, ds.wi, bsdf_pdf);
+    float pdf = direction_pdf_mix(s, d, ds.wi, bsdf_pdf, tree_pdf);
+    direction_complete(ds, d, f, bsdf_pdf, pdf, tree_pdf);
     return ds;
 }
 
@@ -248,25 +258,33 @@ void shadow_ray(Surface s, LightSample ls, inout NeeResult r) {
     else r.shadow = segment_between(s.p, side, ls.p, ls.n);
 }
 
-// One light sample from the source distribution, MIS-weighted against direction sampling;
-// its contribution as if the light were visible, and the shadow ray that decides it.
+// NEE with the source distribution, in two halves around the BSDF's evaluation at the
+// light sample's direction (sample_vertex evaluates it). nee_single_choose draws the light
+// sample; it returns whether the BSDF is needed there (a light with positive pdf and
+// emission toward the vertex).
+bool nee_single_choose(Surface s, DirectionSampler d, inout Rng rng, out NeeResult r, out LightSample ls) {
+    r = nee_none();
+    if (params.strategy == STRATEGY_BSDF_ONLY) return false;
+    vec4 u = vec4(rng_stratified2(rng, RNG_PAIR_LIGHT), rng_stratified2(rng, RNG_PAIR_LIGHT_POINT));
+    ls = sample_light(d.lights, u, true);
+    r.chosen_model = light_model_of(ls);
+    return ls.pdf > 0.0 && max3(ls.Le_G) > 0.0;
+}
+
+// Whether NEE's MIS weight needs the direction mixture's density at the light sample.
+bool nee_single_needs_mix(LightSample ls) { return ls.area && params.strategy == STRATEGY_MIS; }
+
+// The light sample's contribution, MIS-weighted against direction sampling (power
+// heuristic; `mix_pdf` is the direction mixture's density at ls.wi), as if the light
+// were visible, and the shadow ray that decides it. `f` is the BSDF's f·cos toward ls.wi.
 // `medium`: the absorption where the path reached s (raygen's path state), which the
 // light is seen through unless the shadow ray crosses into a solid or out of it.
-NeeResult nee_single(Surface s, DirectionSampler d, vec3 medium, inout Rng rng) {
-    NeeResult r = nee_none();
-    if (params.strategy == STRATEGY_BSDF_ONLY) return r;
-    vec4 u = vec4(rng_stratified2(rng, RNG_PAIR_LIGHT), rng_stratified2(rng, RNG_PAIR_LIGHT_POINT));
-    LightSample ls = sample_light(d.lights, u, true);
-    r.chosen_model = light_model_of(ls);
-    if (!(ls.pdf > 0.0) || max3(ls.Le_G) <= 0.0) return r;
-    float bsdf_pdf;
-    vec3 f = surface_bsdf_eval_pdf(s, d.bsdf, ls.wi, bsdf_pdf);
-    if (max3(f) <= 0.0) return r;
+void nee_single_complete(inout NeeResult r, Surface s, LightSample ls, vec3 f, float mix_pdf, vec3 medium) {
+    if (max3(f) <= 0.0) return;
     float w = 1.0;
-    if (ls.area && params.strategy == STRATEGY_MIS) {
+    if (nee_single_needs_mix(ls)) {
         float p_light = ls.pdf * ls.dist * ls.dist / max(ls.cos_y, 1e-12);
-        float tree_pdf;
-        w = power_heuristic(p_light, direction_pdf_mix(s, d, ls.wi, bsdf_pdf, tree_pdf));
+        w = power_heuristic(p_light, mix_pdf);
     }
     shadow_ray(s, ls, r);
     TRACE5("  nee light model %u tri %u pdf=%f mis=%f f=%v3f\n", r.chosen_model, ls.tri, ls.pdf, w, f);
@@ -279,7 +297,41 @@ NeeResult nee_single(Surface s, DirectionSampler d, vec3 medium, inout Rng rng) 
         r.record_pdf = ls.pdf * ls.dist * ls.dist / max(ls.cos_y, 1e-12);
     }
     nee_absorb(r, medium_toward(s, ls.wi, medium), ls.dist);
-    return r;
+}
+
+// `pt` and `guided` (NEE with the source distribution): a vertex's direction sample and
+// its NEE light sample, drawn as sample_direction and a one-sample NEE would draw them,
+// with both BSDF evaluations, and both mixture densities, through one two-iteration
+// loop. The kernel then holds one inlined copy of each instead of two; lavapipe's cold
+// compile grows faster than the code (bench/README.md, "where a cold kernel compile
+// goes"). NEE does not depend on where the direction sample's ray lands, so both are
+// known here; raygen traces the direction ray, then NEE's shadow ray.
+void sample_vertex(Surface s, DirectionSampler d, vec3 medium, inout Rng rng, out DirectionSample ds, out NeeResult nee) {
+    ds = direction_choose(s, d, rng);
+    LightSample ls;
+    bool nee_eval = nee_single_choose(s, d, rng, nee, ls);
+    vec3 f_dir = vec3(0.0), f_nee = vec3(0.0);
+    float bsdf_pdf_dir = 0.0, mix_dir = 0.0, tree_dir = 0.0, mix_nee = 0.0;
+    [[dont_unroll]] for (uint j = 0u; j < 2u; ++j) {
+        bool dir = j == 0u;
+        if (dir ? !ds.valid : !nee_eval) continue;
+        vec3 wi = dir ? ds.wi : ls.wi;
+        float bsdf_pdf, tree_pdf = 0.0;
+        vec3 f = surface_bsdf_eval_pdf(s, d.bsdf, wi, bsdf_pdf);
+        float mix = 0.0;
+        if (dir || (max3(f) > 0.0 && nee_single_needs_mix(ls))) mix = direction_pdf_mix(s, d, wi, bsdf_pdf, tree_pdf);
+        if (dir) {
+            f_dir = f;
+            bsdf_pdf_dir = bsdf_pdf;
+            mix_dir = mix;
+            tree_dir = tree_pdf;
+        } else {
+            f_nee = f;
+            mix_nee = mix;
+        }
+    }
+    if (ds.valid) direction_complete(ds, d, f_dir, bsdf_pdf_dir, mix_dir, tree_dir);
+    if (nee_eval) nee_single_complete(nee, s, ls, f_nee, mix_nee, medium);
 }
 
 // RIS over the scene's lights, implementing the interface of inc/ris.glsl.

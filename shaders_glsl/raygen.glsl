@@ -273,11 +273,11 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
             info.position = ns.p;
             L = seen;
         } else if (!shadow_step) {
-            // The direction sample's hit is known: choose NEE's light (RIS takes an
-            // emitter hit there as a candidate); its shadow ray is the next step.
+            // The direction sample's hit is known: RIS chooses NEE's light now (it takes
+            // an emitter hit there as a candidate; without RIS, sample_vertex chose it
+            // with the direction). Its shadow ray is the next step.
             rng.vertex = depth;
-            nee = NEE_MODE == NEE_RIS ? nee_ris(s, d, ds, next.valid, ns, next.t, medium, rng)
-                                      : nee_single(s, d, medium, rng);
+            if (NEE_MODE == NEE_RIS) nee = nee_ris(s, d, ds, next.valid, ns, next.t, medium, rng);
             continue;
         } else {
             bool hit_next = next.valid;
@@ -350,7 +350,8 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
                beta);
         d = direction_sampler(s);
         rng.vertex = depth + 1u;
-        ds = sample_direction(s, d, rng);
+        if (NEE_MODE == NEE_RIS) ds = sample_direction(s, d, rng);
+        else sample_vertex(s, d, medium, rng, ds, nee);
         info.directions += 1.0;
         if (ds.guided) info.guided += 1.0;
         origin = offset_ray(s.p, surface_side_normal(s, ds.wi));
