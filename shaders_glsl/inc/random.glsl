@@ -96,7 +96,7 @@ vec2 stratified_pixel_sample(uint pixel, uint sample_index, uint seed) {
 // rest (RIS's candidates, Russian roulette, training records) from rng_next*. Pair k of
 // vertex r.vertex (≥ 1):
 const uint RNG_PAIR_DIRECTION = 0u;    // the direction: its warp, and (reused) the choices
-                                       // of strategy and lobe (sample_direction)
+                                       // of strategy and lobe (direction_choose)
 const uint RNG_PAIR_LIGHT = 1u;        // light model and triangle (RIS: its strata offset)
 const uint RNG_PAIR_LIGHT_POINT = 2u;  // the point on the light triangle
 const uint RNG_PAIRS_PER_VERTEX = 3u;
