@@ -380,3 +380,86 @@ fn pixel_emitters_keep_the_expectation_and_remove_the_coverage_noise() {
     );
     testing::assert_no_validation_errors();
 }
+
+/// A device makes each compute pipeline once (`ComputePipeline`'s cache): a second one
+/// from the same SPIR-V, bindings, push constants and specialization shares the first's
+/// objects, any difference in those makes a new one, idle pipelines beyond the cache's
+/// limit are destroyed, and a render through a cached kernel equals the first render.
+/// On a device of its own, so that the counts are this test's alone.
+#[test]
+fn pipelines_are_made_once_per_device() {
+    use lanterna::shaders::ShaderSource;
+    use lanterna::vk::{BindingSpec, ComputePipeline, Device, DeviceSelector, Instance};
+    use std::sync::Arc;
+    let instance = Instance::new(&lanterna::vk::InstanceOptions {
+        validation: true,
+        debug_printf: false,
+    })
+    .unwrap();
+    let device = Device::new(Arc::new(instance), &DeviceSelector::Auto).unwrap();
+    let spirv = ShaderSource::Builtin.load("tests/floor_to_uint").unwrap();
+    use lanterna::gpu::{TEST_BINDING_AUX as AUX, TEST_BINDING_IN as IN, TEST_BINDING_OUT as OUT};
+    let bindings = [BindingSpec::buffer(IN), BindingSpec::buffer(OUT)];
+    let make = |bindings: &[BindingSpec], push: u32, spec: &[u32]| {
+        ComputePipeline::new(&device, &spirv, bindings, push, spec, "cache test").unwrap()
+    };
+    let a = make(&bindings, 128, &[]);
+    let same = make(&bindings, 128, &[]);
+    assert_eq!(a.raw, same.raw, "the same inputs made a second pipeline");
+    assert_eq!(a.layout, same.layout);
+    assert_eq!(device.cached_pipelines(), 1);
+    let others = [
+        make(&bindings, 128, &[1]),
+        make(&bindings, 64, &[]),
+        make(
+            &[bindings[0], bindings[1], BindingSpec::buffer(AUX)],
+            128,
+            &[],
+        ),
+        make(
+            &[bindings[0], bindings[1], BindingSpec::images(AUX, 4)],
+            128,
+            &[],
+        ),
+        make(
+            &[bindings[0], bindings[1], BindingSpec::images(AUX, 8)],
+            128,
+            &[],
+        ),
+    ];
+    for (i, o) in others.iter().enumerate() {
+        assert_ne!(o.raw, a.raw, "variant {i} was served the first pipeline");
+    }
+    assert_eq!(device.cached_pipelines(), 6);
+    drop(others);
+    drop((a, same));
+    // 40 variants, each dropped at once: only the cache's idle limit stays.
+    for k in 0..40u32 {
+        make(&bindings, 128, &[k, 7]);
+    }
+    let kept = device.cached_pipelines();
+    assert!(kept <= 16, "{kept} idle pipelines kept");
+    // The most recently used survive: asking for the last one again adds nothing.
+    let last = make(&bindings, 128, &[39, 7]);
+    assert_eq!(device.cached_pipelines(), kept);
+    drop(last);
+
+    let t = testing::generated(Kind::CornellLights, &Options::default());
+    for method in [Method::Pt, Method::Ris] {
+        let s = testing::settings(method, 8, 8);
+        let first =
+            testing::render_batches_on(device.clone(), &t.scene, &t.camera, s.clone(), 1, 4);
+        let n = device.cached_pipelines();
+        let again = testing::render_batches_on(device.clone(), &t.scene, &t.camera, s, 1, 4);
+        assert_eq!(
+            device.cached_pipelines(),
+            n,
+            "{method}: the second render compiled again"
+        );
+        assert_eq!(
+            first.images, again.images,
+            "{method}: the cached kernel rendered another image"
+        );
+    }
+    testing::assert_no_validation_errors();
+}

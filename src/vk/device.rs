@@ -11,6 +11,7 @@
 
 use super::device_info::{describe, list_devices, DeviceInfo, DeviceSelector};
 use super::instance::Instance;
+use super::pipeline::PipelineCache;
 use super::{CheckVk, Result, VkError};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
@@ -29,6 +30,8 @@ pub struct Device {
     pub accel: ash::khr::acceleration_structure::Device,
     debug_utils: Option<ash::ext::debug_utils::Device>,
     command_pool: Mutex<vk::CommandPool>,
+    /// Compute pipelines by what they are made from (see [`super::ComputePipeline`]).
+    pipelines: PipelineCache,
 }
 
 impl Device {
@@ -210,6 +213,7 @@ impl Device {
             accel,
             debug_utils,
             command_pool: Mutex::new(command_pool),
+            pipelines: PipelineCache::default(),
         }))
     }
 
@@ -369,6 +373,16 @@ impl Device {
         };
     }
 
+    /// The device's compute pipelines.
+    pub(crate) fn pipeline_cache(&self) -> &PipelineCache {
+        &self.pipelines
+    }
+
+    /// How many compute pipelines the device holds, in use or kept for reuse (tests).
+    pub fn cached_pipelines(&self) -> usize {
+        self.pipelines.len()
+    }
+
     pub fn wait_idle(&self) {
         unsafe {
             let _ = self.raw.device_wait_idle();
@@ -380,6 +394,9 @@ impl Drop for Device {
     fn drop(&mut self) {
         unsafe {
             let _ = self.raw.device_wait_idle();
+            // Every ComputePipeline holds the device, so only the cache still holds
+            // pipelines here.
+            self.pipelines.clear();
             self.raw
                 .destroy_command_pool(*self.command_pool.lock().unwrap(), None);
             ManuallyDrop::drop(&mut self.allocator);

@@ -4,7 +4,7 @@
 use super::device::Device;
 use super::{CheckVk, Result};
 use ash::vk;
-use std::sync::Arc;
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 
 /// What a binding holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -57,8 +57,18 @@ impl BindingSpec {
 }
 
 /// A compute pipeline with one descriptor set.
+///
+/// Its Vulkan objects come from the device's pipeline cache: a second pipeline made on the
+/// same device from the same SPIR-V, bindings, push-constant size and specialization
+/// constants shares the first one's objects instead of compiling again. On lavapipe a
+/// path kernel takes 2–6 s to create even when Mesa's disk cache holds its machine code
+/// (the SPIR-V is translated and optimised as NIR before the cache is consulted), and a
+/// process that renders several times (the tests, `compare`, the Python package) paid
+/// that per render.
 pub struct ComputePipeline {
     device: Arc<Device>,
+    /// Keeps the shared objects alive; `raw`, `layout` and `set_layout` are its handles.
+    _objects: Arc<PipelineObjects>,
     pub raw: vk::Pipeline,
     pub layout: vk::PipelineLayout,
     pub set_layout: vk::DescriptorSetLayout,
@@ -67,8 +77,175 @@ pub struct ComputePipeline {
     pub name: String,
 }
 
+/// The Vulkan objects of one compute pipeline, destroyed when the last user and the
+/// device's cache have let go of them.
+pub(crate) struct PipelineObjects {
+    device: ash::Device,
+    raw: vk::Pipeline,
+    layout: vk::PipelineLayout,
+    set_layout: vk::DescriptorSetLayout,
+}
+
+impl Drop for PipelineObjects {
+    fn drop(&mut self) {
+        unsafe {
+            self.device.destroy_pipeline(self.raw, None);
+            self.device.destroy_pipeline_layout(self.layout, None);
+            self.device
+                .destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
+
+/// Everything a compute pipeline's objects are made from.
+#[derive(PartialEq, Eq)]
+struct PipelineKey {
+    bindings: Vec<(u32, BindingKind, u32)>,
+    push_constant_size: u32,
+    specialization: Vec<u32>,
+    spirv: Vec<u32>,
+}
+
+struct CacheEntry {
+    key: PipelineKey,
+    /// None while a thread is creating it.
+    objects: Option<Arc<PipelineObjects>>,
+    /// Unique per entry; raised each time the entry is used.
+    last_used: u64,
+}
+
+#[derive(Default)]
+struct CacheState {
+    entries: Vec<CacheEntry>,
+    clock: u64,
+}
+
+/// A device's compute pipelines, by what they are made from. Pipelines in use stay;
+/// of those no [`ComputePipeline`] holds, the [`PipelineCache::IDLE_LIMIT`] most recently
+/// used are kept for the next render. A thread asking for a pipeline another thread is
+/// creating waits for it instead of compiling it a second time (a cold compile of a path
+/// kernel takes 20–100 s on lavapipe). The device empties the cache before it is
+/// destroyed.
+#[derive(Default)]
+pub(crate) struct PipelineCache {
+    state: Mutex<CacheState>,
+    created: Condvar,
+}
+
+impl PipelineCache {
+    /// Idle pipelines kept: a process rendering every method of one scene, with and
+    /// without AOVs, needs about this many variants.
+    const IDLE_LIMIT: usize = 12;
+
+    /// The state; a poisoned lock still holds a consistent state (nothing panics
+    /// half-way through a change of it).
+    fn lock(&self) -> MutexGuard<'_, CacheState> {
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// The pipeline made from `key`: the cached one, or the one `create` makes (without
+    /// the lock held, so that other kernels compile meanwhile).
+    fn get_or_create(
+        &self,
+        key: PipelineKey,
+        create: impl FnOnce() -> Result<PipelineObjects>,
+    ) -> Result<Arc<PipelineObjects>> {
+        let mut state = self.lock();
+        let id = loop {
+            state.clock += 1;
+            let clock = state.clock;
+            match state.entries.iter_mut().find(|e| e.key == key) {
+                Some(entry) => match &entry.objects {
+                    Some(objects) => {
+                        entry.last_used = clock;
+                        return Ok(objects.clone());
+                    }
+                    None => state = self.created.wait(state).unwrap_or_else(|e| e.into_inner()),
+                },
+                None => {
+                    state.entries.push(CacheEntry {
+                        key,
+                        objects: None,
+                        last_used: clock,
+                    });
+                    break clock;
+                }
+            }
+        };
+        drop(state);
+        // Whatever happens to `create` (an error, a panic), the placeholder goes and the
+        // waiting threads wake up: they then try to create it themselves.
+        let mut pending = Pending {
+            cache: self,
+            id,
+            objects: None,
+        };
+        let objects = Arc::new(create()?);
+        pending.objects = Some(objects.clone());
+        Ok(objects)
+    }
+
+    /// Drop the least recently used idle pipelines beyond [`Self::IDLE_LIMIT`].
+    fn evict(state: &mut CacheState) {
+        loop {
+            let idle = state.entries.iter().filter(|e| {
+                e.objects
+                    .as_ref()
+                    .is_some_and(|o| Arc::strong_count(o) == 1)
+            });
+            if idle.clone().count() <= Self::IDLE_LIMIT {
+                return;
+            }
+            let oldest = idle.map(|e| e.last_used).min().expect("an idle entry");
+            state.entries.retain(|e| e.last_used != oldest);
+        }
+    }
+
+    /// Destroy every pipeline (the device is about to be destroyed).
+    pub(crate) fn clear(&self) {
+        self.lock().entries.clear();
+    }
+
+    /// Pipelines held, in use or idle.
+    pub(crate) fn len(&self) -> usize {
+        self.lock()
+            .entries
+            .iter()
+            .filter(|e| e.objects.is_some())
+            .count()
+    }
+}
+
+/// A placeholder entry of [`PipelineCache`]: filled in with `objects` when dropped, or
+/// removed when `objects` is None; waiting threads are woken either way.
+struct Pending<'a> {
+    cache: &'a PipelineCache,
+    id: u64,
+    objects: Option<Arc<PipelineObjects>>,
+}
+
+impl Drop for Pending<'_> {
+    fn drop(&mut self) {
+        let mut state = self.cache.lock();
+        let objects = self.objects.take();
+        match objects {
+            Some(objects) => {
+                if let Some(e) = state.entries.iter_mut().find(|e| e.last_used == self.id) {
+                    e.objects = Some(objects);
+                }
+                PipelineCache::evict(&mut state);
+            }
+            None => state.entries.retain(|e| e.last_used != self.id),
+        }
+        drop(state);
+        self.cache.created.notify_all();
+    }
+}
+
 impl ComputePipeline {
-    /// Create a pipeline from SPIR-V. `specialization[i]` sets `constant_id = i`.
+    /// Create a pipeline from SPIR-V. `specialization[i]` sets `constant_id = i`. The
+    /// device's cache serves one made before from the same inputs (see the type's
+    /// documentation).
     pub fn new(
         device: &Arc<Device>,
         spirv: &[u32],
@@ -77,100 +254,35 @@ impl ComputePipeline {
         specialization: &[u32],
         name: &str,
     ) -> Result<ComputePipeline> {
-        let raw_bindings: Vec<vk::DescriptorSetLayoutBinding> = bindings
-            .iter()
-            .map(|b| {
-                vk::DescriptorSetLayoutBinding::default()
-                    .binding(b.binding)
-                    .descriptor_type(b.descriptor_type())
-                    .descriptor_count(b.count)
-                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
-            })
-            .collect();
-        let flags: Vec<vk::DescriptorBindingFlags> = bindings
-            .iter()
-            .map(|b| match b.kind {
-                BindingKind::SampledImages => vk::DescriptorBindingFlags::PARTIALLY_BOUND,
-                _ => vk::DescriptorBindingFlags::empty(),
-            })
-            .collect();
-        let mut flags_info =
-            vk::DescriptorSetLayoutBindingFlagsCreateInfo::default().binding_flags(&flags);
-        let set_info = vk::DescriptorSetLayoutCreateInfo::default()
-            .bindings(&raw_bindings)
-            .push_next(&mut flags_info);
-        // The value owns every handle from its first one on (destroying null handles is
-        // a no-op), so an error at any later step frees what was made before it.
-        let mut pipeline = ComputePipeline {
+        let key = PipelineKey {
+            bindings: bindings
+                .iter()
+                .map(|b| (b.binding, b.kind, b.count))
+                .collect(),
+            push_constant_size,
+            specialization: specialization.to_vec(),
+            spirv: spirv.to_vec(),
+        };
+        let objects = device.pipeline_cache().get_or_create(key, || {
+            create_objects(
+                device,
+                spirv,
+                bindings,
+                push_constant_size,
+                specialization,
+                name,
+            )
+        })?;
+        Ok(ComputePipeline {
             device: device.clone(),
-            raw: vk::Pipeline::null(),
-            layout: vk::PipelineLayout::null(),
-            set_layout: vk::DescriptorSetLayout::null(),
+            raw: objects.raw,
+            layout: objects.layout,
+            set_layout: objects.set_layout,
+            _objects: objects,
             bindings: bindings.to_vec(),
             push_constant_size,
             name: name.to_string(),
-        };
-        pipeline.set_layout = unsafe { device.raw.create_descriptor_set_layout(&set_info, None) }
-            .check("vkCreateDescriptorSetLayout")?;
-        device.set_name(pipeline.set_layout, &format!("{name} set layout"));
-
-        let ranges = [vk::PushConstantRange::default()
-            .stage_flags(vk::ShaderStageFlags::COMPUTE)
-            .size(push_constant_size)];
-        let set_layouts = [pipeline.set_layout];
-        let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
-        if push_constant_size > 0 {
-            layout_info = layout_info.push_constant_ranges(&ranges);
-        }
-        pipeline.layout = unsafe { device.raw.create_pipeline_layout(&layout_info, None) }
-            .check("vkCreatePipelineLayout")?;
-        device.set_name(pipeline.layout, &format!("{name} layout"));
-
-        let module_info = vk::ShaderModuleCreateInfo::default().code(spirv);
-        let module = unsafe { device.raw.create_shader_module(&module_info, None) }
-            .check("vkCreateShaderModule")?;
-        let entries: Vec<vk::SpecializationMapEntry> = (0..specialization.len() as u32)
-            .map(|i| {
-                vk::SpecializationMapEntry::default()
-                    .constant_id(i)
-                    .offset(i * 4)
-                    .size(4)
-            })
-            .collect();
-        let spec_data: &[u8] = bytemuck::cast_slice(specialization);
-        let spec_info = vk::SpecializationInfo::default()
-            .map_entries(&entries)
-            .data(spec_data);
-        let stage = vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::COMPUTE)
-            .module(module)
-            .name(c"main")
-            .specialization_info(&spec_info);
-        let info = [vk::ComputePipelineCreateInfo::default()
-            .stage(stage)
-            .layout(pipeline.layout)];
-        let started = std::time::Instant::now();
-        let created = unsafe {
-            device
-                .raw
-                .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
-        };
-        unsafe { device.raw.destroy_shader_module(module, None) };
-        pipeline.raw = match created {
-            Ok(p) => p[0],
-            Err((_, e)) => {
-                return Err(super::VkError::Call {
-                    call: "vkCreateComputePipelines",
-                    result: e,
-                })
-            }
-        };
-        log::debug!(
-            "pipeline {name} created in {:.2} s",
-            started.elapsed().as_secs_f64()
-        );
-        device.set_name(pipeline.raw, name);
-        Ok(pipeline)
+        })
     }
 
     /// Record a dispatch with `set` bound and `push` as push constants.
@@ -200,14 +312,104 @@ impl ComputePipeline {
     }
 }
 
-impl Drop for ComputePipeline {
-    fn drop(&mut self) {
-        unsafe {
-            self.device.raw.destroy_pipeline(self.raw, None);
-            self.device.raw.destroy_pipeline_layout(self.layout, None);
-            self.device
-                .raw
-                .destroy_descriptor_set_layout(self.set_layout, None);
-        }
+/// Compile a compute pipeline and make its layouts.
+fn create_objects(
+    device: &Device,
+    spirv: &[u32],
+    bindings: &[BindingSpec],
+    push_constant_size: u32,
+    specialization: &[u32],
+    name: &str,
+) -> Result<PipelineObjects> {
+    let raw_bindings: Vec<vk::DescriptorSetLayoutBinding> = bindings
+        .iter()
+        .map(|b| {
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(b.binding)
+                .descriptor_type(b.descriptor_type())
+                .descriptor_count(b.count)
+                .stage_flags(vk::ShaderStageFlags::COMPUTE)
+        })
+        .collect();
+    let flags: Vec<vk::DescriptorBindingFlags> = bindings
+        .iter()
+        .map(|b| match b.kind {
+            BindingKind::SampledImages => vk::DescriptorBindingFlags::PARTIALLY_BOUND,
+            _ => vk::DescriptorBindingFlags::empty(),
+        })
+        .collect();
+    let mut flags_info =
+        vk::DescriptorSetLayoutBindingFlagsCreateInfo::default().binding_flags(&flags);
+    let set_info = vk::DescriptorSetLayoutCreateInfo::default()
+        .bindings(&raw_bindings)
+        .push_next(&mut flags_info);
+    // The value owns every handle from its first one on (destroying null handles is a
+    // no-op), so an error at any later step frees what was made before it.
+    let mut objects = PipelineObjects {
+        device: device.raw.clone(),
+        raw: vk::Pipeline::null(),
+        layout: vk::PipelineLayout::null(),
+        set_layout: vk::DescriptorSetLayout::null(),
+    };
+    objects.set_layout = unsafe { device.raw.create_descriptor_set_layout(&set_info, None) }
+        .check("vkCreateDescriptorSetLayout")?;
+    device.set_name(objects.set_layout, &format!("{name} set layout"));
+
+    let ranges = [vk::PushConstantRange::default()
+        .stage_flags(vk::ShaderStageFlags::COMPUTE)
+        .size(push_constant_size)];
+    let set_layouts = [objects.set_layout];
+    let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+    if push_constant_size > 0 {
+        layout_info = layout_info.push_constant_ranges(&ranges);
     }
+    objects.layout = unsafe { device.raw.create_pipeline_layout(&layout_info, None) }
+        .check("vkCreatePipelineLayout")?;
+    device.set_name(objects.layout, &format!("{name} layout"));
+
+    let module_info = vk::ShaderModuleCreateInfo::default().code(spirv);
+    let module = unsafe { device.raw.create_shader_module(&module_info, None) }
+        .check("vkCreateShaderModule")?;
+    let entries: Vec<vk::SpecializationMapEntry> = (0..specialization.len() as u32)
+        .map(|i| {
+            vk::SpecializationMapEntry::default()
+                .constant_id(i)
+                .offset(i * 4)
+                .size(4)
+        })
+        .collect();
+    let spec_data: &[u8] = bytemuck::cast_slice(specialization);
+    let spec_info = vk::SpecializationInfo::default()
+        .map_entries(&entries)
+        .data(spec_data);
+    let stage = vk::PipelineShaderStageCreateInfo::default()
+        .stage(vk::ShaderStageFlags::COMPUTE)
+        .module(module)
+        .name(c"main")
+        .specialization_info(&spec_info);
+    let info = [vk::ComputePipelineCreateInfo::default()
+        .stage(stage)
+        .layout(objects.layout)];
+    let started = std::time::Instant::now();
+    let created = unsafe {
+        device
+            .raw
+            .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
+    };
+    unsafe { device.raw.destroy_shader_module(module, None) };
+    objects.raw = match created {
+        Ok(p) => p[0],
+        Err((_, e)) => {
+            return Err(super::VkError::Call {
+                call: "vkCreateComputePipelines",
+                result: e,
+            })
+        }
+    };
+    log::debug!(
+        "pipeline {name} created in {:.2} s",
+        started.elapsed().as_secs_f64()
+    );
+    device.set_name(objects.raw, name);
+    Ok(objects)
 }
