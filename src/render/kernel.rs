@@ -134,47 +134,86 @@ impl Renderer {
     }
 
     pub(super) fn pipeline(&mut self, v: Variant) -> Result<()> {
-        if self.pipelines.contains_key(&v) {
+        self.pipelines_for(&[v])
+    }
+
+    /// Create the pipelines of `variants` that the renderer does not have yet, each on a
+    /// thread of its own: lavapipe translates and optimises a kernel on the calling
+    /// thread for 2–6 s even when its machine code is cached, so a guided method's
+    /// training and render variants take the time of one.
+    fn pipelines_for(&mut self, variants: &[Variant]) -> Result<()> {
+        let mut wanted: Vec<Variant> = Vec::new();
+        for &v in variants {
+            if !self.pipelines.contains_key(&v) && !wanted.contains(&v) {
+                wanted.push(v);
+            }
+        }
+        if wanted.is_empty() {
             return Ok(());
         }
-        let spirv = self.shaders.load(&self.traversal.kind.kernel(if v.debug {
-            "render_debug"
-        } else if v.lanes {
-            "render_lanes"
-        } else {
-            "render"
-        }))?;
-        let spec = [
-            if v.ris {
-                gpu::NEE_RIS
+        let mut requests = Vec::new();
+        for &v in &wanted {
+            let spirv = self.shaders.load(&self.traversal.kind.kernel(if v.debug {
+                "render_debug"
+            } else if v.lanes {
+                "render_lanes"
             } else {
-                gpu::NEE_UNIFORM
-            },
-            v.guiding as u32,
-            v.training as u32,
-            v.aovs as u32,
-            v.solids as u32,
-            v.clearcoat as u32,
-            v.sheen as u32,
-        ];
-        let started = Instant::now();
-        let name = format!(
-            "render (ris={}, guiding={}, training={}, aovs={}, solids={}, clearcoat={}, sheen={}, debug={}, lanes={}, traversal={})",
-            v.ris, v.guiding, v.training, v.aovs, v.solids, v.clearcoat, v.sheen, v.debug, v.lanes, self.traversal.kind
-        );
-        let p = ComputePipeline::new(
-            &self.device,
-            &spirv,
-            &self.bindings(),
-            std::mem::size_of::<gpu::PushConstants>() as u32,
-            &spec,
-            &name,
-        )?;
-        log::debug!(
-            "compiled {name} in {:.1} s",
-            started.elapsed().as_secs_f64()
-        );
-        self.pipelines.insert(v, p);
+                "render"
+            }))?;
+            let spec = [
+                if v.ris {
+                    gpu::NEE_RIS
+                } else {
+                    gpu::NEE_UNIFORM
+                },
+                v.guiding as u32,
+                v.training as u32,
+                v.aovs as u32,
+                v.solids as u32,
+                v.clearcoat as u32,
+                v.sheen as u32,
+            ];
+            let name = format!(
+                "render (ris={}, guiding={}, training={}, aovs={}, solids={}, clearcoat={}, sheen={}, debug={}, lanes={}, traversal={})",
+                v.ris, v.guiding, v.training, v.aovs, v.solids, v.clearcoat, v.sheen, v.debug, v.lanes, self.traversal.kind
+            );
+            requests.push((v, spirv, spec, name));
+        }
+        let bindings = self.bindings();
+        let device = &self.device;
+        let create = |(v, spirv, spec, name): &(Variant, Vec<u32>, [u32; 7], String)| {
+            let started = Instant::now();
+            let p = ComputePipeline::new(
+                device,
+                spirv,
+                &bindings,
+                std::mem::size_of::<gpu::PushConstants>() as u32,
+                spec,
+                name,
+            );
+            log::debug!(
+                "compiled {name} in {:.1} s",
+                started.elapsed().as_secs_f64()
+            );
+            (*v, p)
+        };
+        let made: Vec<_> = if requests.len() == 1 {
+            requests.iter().map(create).collect()
+        } else {
+            std::thread::scope(|scope| {
+                let handles: Vec<_> = requests
+                    .iter()
+                    .map(|r| scope.spawn(move || create(r)))
+                    .collect();
+                handles
+                    .into_iter()
+                    .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                    .collect()
+            })
+        };
+        for (v, p) in made {
+            self.pipelines.insert(v, p?);
+        }
         Ok(())
     }
 
@@ -208,8 +247,8 @@ impl Renderer {
         if self.settings.method.uses_guiding() {
             variants.push(self.variant(true));
         }
+        self.pipelines_for(&variants)?;
         for v in variants {
-            self.pipeline(v)?;
             // Some drivers (lavapipe) compile at the first dispatch: run an empty one.
             let set = self.descriptor_set(v)?;
             let push = gpu::PushConstants::default();
