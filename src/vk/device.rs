@@ -11,7 +11,7 @@
 
 use super::device_info::{describe, list_devices, DeviceInfo, DeviceSelector};
 use super::instance::Instance;
-use super::pipeline::PipelineCache;
+use super::pipeline_cache::PipelineCache;
 use super::{CheckVk, Result, VkError};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};

@@ -14,6 +14,7 @@ mod image;
 mod instance;
 pub mod lavapipe;
 mod pipeline;
+mod pipeline_cache;
 
 pub use accel::{AccelStructure, BlasGeometry, TlasInstance};
 pub use buffer::Buffer;
