@@ -489,5 +489,45 @@ fn pipelines_are_made_once_per_device() {
             "{method}: the cached kernel rendered another image"
         );
     }
+
+    // `prepare_methods` (what `compare` calls first) makes every variant the four methods
+    // need, so their runs create none: on a fresh device, 6 pipelines (the guided
+    // methods have a training and a render variant), and still 6 after every method ran.
+    let fresh = Device::new(
+        Arc::new(
+            Instance::new(&lanterna::vk::InstanceOptions {
+                validation: true,
+                debug_printf: false,
+            })
+            .unwrap(),
+        ),
+        &DeviceSelector::Auto,
+    )
+    .unwrap();
+    let mut r = testing::test_renderer_on(
+        fresh.clone(),
+        &t.scene,
+        &t.camera,
+        &testing::settings(Method::Pt, 8, 8),
+    );
+    r.prepare_methods(&Method::ALL).unwrap();
+    assert_eq!(fresh.cached_pipelines(), 6);
+    for method in Method::ALL {
+        r.set_settings(testing::settings(method, 8, 8)).unwrap();
+        r.prepare().unwrap();
+        lanterna::render::run::run_method(
+            &mut r,
+            lanterna::render::run::Budget::Spp(4),
+            0,
+            &AtomicBool::new(false),
+            &mut |_| {},
+        )
+        .unwrap();
+    }
+    assert_eq!(
+        fresh.cached_pipelines(),
+        6,
+        "a method's run created a pipeline"
+    );
     testing::assert_no_validation_errors();
 }

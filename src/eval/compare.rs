@@ -42,6 +42,12 @@ pub trait MethodRunner {
     /// result must hold exactly that many spp; for [`Budget::Seconds`] rendering stops
     /// once the wall-clock budget is used up (whole passes) and `spp` says how far it got.
     fn render(&mut self, method: &str, budget: Budget) -> Result<MethodResult, BoxError>;
+
+    /// Called once before the first render with every method the comparison will run
+    /// (e.g. to compile their kernels side by side). Does nothing unless implemented.
+    fn prepare(&mut self, _methods: &[String]) -> Result<(), BoxError> {
+        Ok(())
+    }
 }
 
 /// Everything the comparison needs besides the runner and the reference.
@@ -191,6 +197,13 @@ pub fn run_compare(
         std::fs::create_dir_all(&dir).map_err(io(&dir))?;
     }
 
+    runner
+        .prepare(&config.methods)
+        .map_err(|source| CompareError::Runner {
+            method: config.methods.join(", "),
+            budget: config.budgets()[0],
+            source,
+        })?;
     let grid_budget = config.grid_budget();
     let mut records = Vec::new();
     let mut grid_images: Vec<(String, Image)> = Vec::new();

@@ -197,19 +197,26 @@ impl Renderer {
             );
             (*v, p)
         };
-        let made: Vec<_> = if requests.len() == 1 {
+        // At most one thread per core: more would only share the cores.
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let made: Vec<_> = if requests.len() == 1 || threads == 1 {
             requests.iter().map(create).collect()
         } else {
-            std::thread::scope(|scope| {
-                let handles: Vec<_> = requests
-                    .iter()
-                    .map(|r| scope.spawn(move || create(r)))
-                    .collect();
-                handles
-                    .into_iter()
-                    .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-                    .collect()
-            })
+            requests
+                .chunks(threads)
+                .flat_map(|chunk| {
+                    std::thread::scope(|scope| {
+                        let handles: Vec<_> = chunk
+                            .iter()
+                            .map(|r| scope.spawn(move || create(r)))
+                            .collect();
+                        handles
+                            .into_iter()
+                            .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                            .collect::<Vec<_>>()
+                    })
+                })
+                .collect()
         };
         for (v, p) in made {
             self.pipelines.insert(v, p?);
@@ -264,6 +271,28 @@ impl Renderer {
             );
         }
         Ok(())
+    }
+
+    /// Create, side by side, the pipelines every one of `methods` needs with the current
+    /// settings, so that a run switching methods (`compare`) does not wait for each in
+    /// turn. [`Self::prepare`] still warms each before it is timed.
+    pub fn prepare_methods(&mut self, methods: &[super::Method]) -> Result<()> {
+        let mut variants = Vec::new();
+        for &m in methods {
+            let base = Variant {
+                ris: m.uses_ris(),
+                guiding: m.uses_guiding(),
+                ..self.variant(false)
+            };
+            variants.push(base);
+            if m.uses_guiding() {
+                variants.push(Variant {
+                    training: true,
+                    ..base
+                });
+            }
+        }
+        self.pipelines_for(&variants)
     }
 
     pub(super) fn variant(&self, training: bool) -> Variant {

@@ -26,6 +26,22 @@ pub struct CompareRunner<'a> {
 }
 
 impl MethodRunner for CompareRunner<'_> {
+    fn prepare(&mut self, methods: &[String]) -> Result<(), BoxError> {
+        let methods: Vec<Method> = methods
+            .iter()
+            .map(|m| m.parse())
+            .collect::<Result<_, _>>()?;
+        let prep = Instant::now();
+        self.renderer.set_settings(self.base.clone())?;
+        self.renderer.prepare_methods(&methods)?;
+        log::debug!(
+            "pipelines of {} methods created in {:.1} s",
+            methods.len(),
+            prep.elapsed().as_secs_f64()
+        );
+        Ok(())
+    }
+
     fn render(&mut self, method: &str, budget: Budget) -> Result<MethodResult, BoxError> {
         let method: Method = method.parse()?;
         let settings = RenderSettings {
