@@ -51,7 +51,7 @@ struct CacheState {
 }
 
 /// A device's compute pipelines, by what they are made from. Pipelines in use stay;
-/// of those no [`ComputePipeline`] holds, the [`PipelineCache::IDLE_LIMIT`] most recently
+/// of those no [`super::ComputePipeline`] holds, the [`PipelineCache::IDLE_LIMIT`] most recently
 /// used are kept for the next render. A thread asking for a pipeline another thread is
 /// creating waits for it instead of compiling it a second time (a cold compile of a path
 /// kernel takes 20–100 s on lavapipe). The device empties the cache before it is
