@@ -250,10 +250,7 @@ impl Renderer {
     /// Compile the pipeline(s) the current method needs (pipeline creation can take a
     /// while on lavapipe; call this before timing a render).
     pub fn prepare(&mut self) -> Result<()> {
-        let mut variants = vec![self.variant(false)];
-        if self.settings.method.uses_guiding() {
-            variants.push(self.variant(true));
-        }
+        let variants = self.method_variants(self.settings.method);
         self.pipelines_for(&variants)?;
         for v in variants {
             // Some drivers (lavapipe) compile at the first dispatch: run an empty one.
@@ -277,28 +274,31 @@ impl Renderer {
     /// settings, so that a run switching methods (`compare`) does not wait for each in
     /// turn. [`Self::prepare`] still warms each before it is timed.
     pub fn prepare_methods(&mut self, methods: &[super::Method]) -> Result<()> {
-        let mut variants = Vec::new();
-        for &m in methods {
-            let base = Variant {
-                ris: m.uses_ris(),
-                guiding: m.uses_guiding(),
-                ..self.variant(false)
-            };
-            variants.push(base);
-            if m.uses_guiding() {
-                variants.push(Variant {
-                    training: true,
-                    ..base
-                });
-            }
-        }
+        let variants: Vec<Variant> = methods
+            .iter()
+            .flat_map(|&m| self.method_variants(m))
+            .collect();
         self.pipelines_for(&variants)
     }
 
+    /// The variants `method` renders with under the current settings: its render pass,
+    /// and for guided methods the training pass.
+    fn method_variants(&self, method: super::Method) -> Vec<Variant> {
+        let mut variants = vec![self.variant_of(method, false)];
+        if method.uses_guiding() {
+            variants.push(self.variant_of(method, true));
+        }
+        variants
+    }
+
     pub(super) fn variant(&self, training: bool) -> Variant {
+        self.variant_of(self.settings.method, training)
+    }
+
+    fn variant_of(&self, method: super::Method, training: bool) -> Variant {
         Variant {
-            ris: self.settings.method.uses_ris(),
-            guiding: self.settings.method.uses_guiding(),
+            ris: method.uses_ris(),
+            guiding: method.uses_guiding(),
             training,
             aovs: self.settings.aovs,
             debug: false,
