@@ -393,12 +393,15 @@ fn pipelines_are_made_once_per_device() {
     use lanterna::shaders::ShaderSource;
     use lanterna::vk::{BindingSpec, ComputePipeline, Device, DeviceSelector, Instance};
     use std::sync::Arc;
-    let instance = Instance::new(&lanterna::vk::InstanceOptions {
-        validation: true,
-        debug_printf: false,
-    })
-    .unwrap();
-    let device = Device::new(Arc::new(instance), &DeviceSelector::Auto).unwrap();
+    let new_device = || {
+        let instance = Instance::new(&lanterna::vk::InstanceOptions {
+            validation: true,
+            debug_printf: false,
+        })
+        .unwrap();
+        Device::new(Arc::new(instance), &DeviceSelector::Auto).unwrap()
+    };
+    let device = new_device();
     let spirv = ShaderSource::Builtin.load("tests/floor_to_uint").unwrap();
     use lanterna::gpu::{TEST_BINDING_AUX as AUX, TEST_BINDING_IN as IN, TEST_BINDING_OUT as OUT};
     let bindings = [BindingSpec::buffer(IN), BindingSpec::buffer(OUT)];
@@ -493,17 +496,7 @@ fn pipelines_are_made_once_per_device() {
     // `prepare_methods` (what `compare` calls first) makes every variant the four methods
     // need, so their runs create none: on a fresh device, 6 pipelines (the guided
     // methods have a training and a render variant), and still 6 after every method ran.
-    let fresh = Device::new(
-        Arc::new(
-            Instance::new(&lanterna::vk::InstanceOptions {
-                validation: true,
-                debug_printf: false,
-            })
-            .unwrap(),
-        ),
-        &DeviceSelector::Auto,
-    )
-    .unwrap();
+    let fresh = new_device();
     let mut r = testing::test_renderer_on(
         fresh.clone(),
         &t.scene,
