@@ -495,17 +495,24 @@ def main(argv=None):
                 # Mitsuba's speed grows with the spp of one call (per-call costs), so
                 # the rate of the comparison runs can give it well under lanterna's
                 # time (seen: 0.63 s of 0.88 s). Re-render with the spp scaled by the
-                # time taken until it is within 5 % of lanterna's (3 tries at most);
-                # the last render counts.
+                # time taken until it is within 5 % of lanterna's (6 tries at most).
+                # The render whose time came closest counts: at budgets of a tenth of
+                # a second one call's time can jump (seen: 0.05 s for the third try
+                # of a 0.13-s budget), and the last try is not the best one.
                 spp_eq = max(1, int(round(m_rate * t_l / pixels)))
-                for attempt in range(3):
+                best = None
+                for attempt in range(6):
                     t0 = time.perf_counter()
                     img = np.array(mi.render(scene, spp=spp_eq, seed=30_000_000 + attempt),
                                    dtype=np.float64)
                     t_m = time.perf_counter() - t0
-                    if abs(t_m / t_l - 1.0) <= 0.05 or attempt == 2:
+                    off = abs(t_m / t_l - 1.0)
+                    if best is None or off < best[0]:
+                        best = (off, spp_eq, t_m, img)
+                    if off <= 0.05:
                         break
                     spp_eq = max(1, int(round(spp_eq * t_l / t_m)))
+                _, spp_eq, t_m, img = best
                 eq["equal_time"] = {
                     "seconds": t_l,
                     "lanterna": {"spp": lt_spp, "mae": mae(lt[0], ref)},

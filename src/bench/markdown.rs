@@ -329,7 +329,7 @@ fn mitsuba(md: &mut String, r: &BenchReport) {
         "Scenes exported with `lanterna scene export-mitsuba`, rendered by Mitsuba's `path` integrator at the same max depth and size \
          (`{}`). Agreement: lanterna `pt` batches vs Mitsuba runs, Welch tests of the image mean, of 8×8 blocks and of pixels \
          (family-wise α = 10⁻³); it applies only where the export is exact. Equal time: every lanterna method and Mitsuba's `path` \
-         get the time of one lanterna `pt` batch (Mitsuba's spp is rescaled by the time it took until within 5 %; the seconds each render took are shown); MAE against a Mitsuba reference.\n",
+         get the time of one lanterna `pt` batch (Mitsuba's spp is rescaled by the time it took until within 5 %; the seconds each render took are shown; a ratio whose two renders missed the budget by more than 10 % is marked \"not equal time\"); MAE against a Mitsuba reference.\n",
         p.script
     );
     let _ = writeln!(
@@ -350,7 +350,7 @@ fn mitsuba(md: &mut String, r: &BenchReport) {
             .find(|m| m.method == s.best_method);
         let _ = writeln!(
             md,
-            "| {} | {}×{} | {} | {} | {} / {} | {} | {} | {} | {:.2} s | {} ({}, {:.2} s) | `{}`: {} ({}, {:.2} s) | **{:.2}** |",
+            "| {} | {}×{} | {} | {} | {} / {} | {} | {} | {} | {:.2} s | {} ({}, {:.2} s) | `{}`: {} ({}, {:.2} s) | **{:.2}**{} |",
             s.scene,
             s.width,
             s.height,
@@ -369,7 +369,12 @@ fn mitsuba(md: &mut String, r: &BenchReport) {
             best.map(|b| spread(&b.mae, 1.0)).unwrap_or_default(),
             best.map(|b| num(b.spp.median)).unwrap_or_default(),
             best.map_or(0.0, |b| b.seconds.median),
-            s.best_mae_ratio_to_mitsuba
+            s.best_mae_ratio_to_mitsuba,
+            unequal_time_note(
+                s.equal_time_seconds,
+                s.mitsuba_equal_time_seconds,
+                best.map_or(s.equal_time_seconds, |b| b.seconds.median)
+            )
         );
     }
     let _ = writeln!(md);
@@ -407,6 +412,23 @@ fn mitsuba(md: &mut String, r: &BenchReport) {
          (`DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1` with Debian's libllvm19; the bench sets it when that \
          file exists) and falls back to `scalar_rgb` otherwise. See `bench/README.md`.\n"
     );
+}
+
+/// How far a render's time may miss the equal-time budget before the comparison is
+/// marked as not at equal time.
+const EQUAL_TIME_TOLERANCE: f64 = 0.10;
+
+/// A note for a peer row whose Mitsuba render or best lanterna method took more than
+/// `EQUAL_TIME_TOLERANCE` away from the budget (empty when both are within it). At
+/// budgets of a tenth of a second neither side always lands on it: lanterna renders
+/// whole passes, and one Mitsuba call's time can jump between tries.
+fn unequal_time_note(budget: f64, mitsuba: f64, lanterna: f64) -> String {
+    let off = |s: f64| !(budget > 0.0 && (s / budget - 1.0).abs() <= EQUAL_TIME_TOLERANCE);
+    if off(mitsuba) || off(lanterna) {
+        format!(" (not equal time: Mitsuba {mitsuba:.2} s, lanterna {lanterna:.2} s, budget {budget:.2} s)")
+    } else {
+        String::new()
+    }
 }
 
 fn profile(md: &mut String, p: &super::profile::Profile, r: &BenchReport) {
@@ -594,4 +616,23 @@ fn trend(md: &mut String, t: &super::trend::Trend) {
         }
     }
     let _ = writeln!(md);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::unequal_time_note;
+
+    #[test]
+    fn peer_rows_off_the_budget_are_marked() {
+        // Within 10 % on both sides: a plain ratio.
+        assert_eq!(unequal_time_note(6.49, 6.50, 6.50), "");
+        assert_eq!(unequal_time_note(1.0, 0.91, 1.09), "");
+        // The short row of 2026-11-26: Mitsuba's last try took 0.05 s of 0.13 s.
+        assert!(unequal_time_note(0.134, 0.0496, 0.134).contains("not equal time"));
+        // lanterna's whole passes overshoot a tiny budget.
+        assert!(unequal_time_note(0.134, 0.134, 0.162).contains("not equal time"));
+        // No budget, or one that is not a number, never reads as equal time.
+        assert!(!unequal_time_note(0.0, 0.0, 0.0).is_empty());
+        assert!(!unequal_time_note(f64::NAN, 1.0, 1.0).is_empty());
+    }
 }
