@@ -329,7 +329,7 @@ fn mitsuba(md: &mut String, r: &BenchReport) {
         "Scenes exported with `lanterna scene export-mitsuba`, rendered by Mitsuba's `path` integrator at the same max depth and size \
          (`{}`). Agreement: lanterna `pt` batches vs Mitsuba runs, Welch tests of the image mean, of 8×8 blocks and of pixels \
          (family-wise α = 10⁻³); it applies only where the export is exact. Equal time: every lanterna method and Mitsuba's `path` \
-         get the time of one lanterna `pt` batch (Mitsuba's spp is rescaled by the time it took until within 5 %; the seconds each render took are shown; a ratio whose two renders missed the budget by more than 10 % is marked \"not equal time\"); MAE against a Mitsuba reference.\n",
+         get the time of one lanterna `pt` batch (Mitsuba's spp is rescaled by the time it took until within 5 %, and the closest of up to six tries counts; the seconds each render took are shown; a ratio where either side missed the budget by more than 10 % is marked \"not equal time\"); MAE against a Mitsuba reference.\n",
         p.script
     );
     let _ = writeln!(
