@@ -1,5 +1,8 @@
 #!/bin/bash
 # GPU speed of older builds against the current one, same machine, alternated rounds.
+# Run from the repository root on the GPU machine: stripped builds xz-compressed as
+# .gpu/bis/<order>-<commit>.xz (7-HEAD.xz the current one), the Vulkan loader's .deb
+# files in .gl/; one line per render is appended to $OUT/bisect.txt.
 set -u
 for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig >/dev/null 2>&1
 [ -f /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ] && export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json

@@ -1,6 +1,10 @@
 #!/bin/bash
 # Paper-scale study on the lent GPU: current defaults, learned light mix for guided-ris,
 # guide history 1; bistro-night and street at 1024x576, 16,384-spp ris references.
+# Run from the repository root on the GPU machine, with the Vulkan loader's .deb files in
+# .gl/ and a stripped release build at .gpu/lanterna (libstdc++ in .gpu/lib if that
+# machine lacks it); results go to $OUT/res.tar.gz after every step. W, RS, SP and TT
+# (size, reference spp, spp list, time list) shrink it for a dry run on lavapipe.
 set -u
 for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig
 [ -f /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ] && export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
