@@ -28,6 +28,9 @@ pub struct Device {
     queue: Mutex<vk::Queue>,
     allocator: ManuallyDrop<Mutex<Allocator>>,
     pub accel: ash::khr::acceleration_structure::Device,
+    /// The driver's statistics of compiled kernels, where it reports them and `--log
+    /// debug` asks for them (see `pipeline.rs`).
+    pub executable_statistics: Option<ash::khr::pipeline_executable_properties::Device>,
     debug_utils: Option<ash::ext::debug_utils::Device>,
     command_pool: Mutex<vk::CommandPool>,
     /// Compute pipelines by what they are made from (see [`super::ComputePipeline`]).
@@ -131,6 +134,11 @@ impl Device {
         if f.non_semantic_info {
             ext_names.push(ash::khr::shader_non_semantic_info::NAME.as_ptr());
         }
+        // Capturing statistics may cost compile time, so only when they will be logged.
+        let statistics = f.executable_statistics && log::log_enabled!(log::Level::Debug);
+        if statistics {
+            ext_names.push(ash::khr::pipeline_executable_properties::NAME.as_ptr());
+        }
 
         let base = vk::PhysicalDeviceFeatures::default().shader_int64(true);
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
@@ -148,6 +156,8 @@ impl Device {
             .shader_buffer_float32_atomic_add(true);
         let mut f_clock =
             vk::PhysicalDeviceShaderClockFeaturesKHR::default().shader_subgroup_clock(true);
+        let mut f_exec = vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default()
+            .pipeline_executable_info(true);
         let mut features2 = vk::PhysicalDeviceFeatures2::default()
             .features(base)
             .push_next(&mut f12);
@@ -159,6 +169,9 @@ impl Device {
         }
         if f.shader_clock {
             features2 = features2.push_next(&mut f_clock);
+        }
+        if statistics {
+            features2 = features2.push_next(&mut f_exec);
         }
         let priorities = [1.0f32];
         let queue_info = [vk::DeviceQueueCreateInfo::default()
@@ -185,6 +198,8 @@ impl Device {
             error,
         })?;
         let accel = ash::khr::acceleration_structure::Device::new(raw_instance, &raw);
+        let executable_statistics = statistics
+            .then(|| ash::khr::pipeline_executable_properties::Device::new(raw_instance, &raw));
         let debug_utils = instance
             .has_debug_utils()
             .then(|| ash::ext::debug_utils::Device::new(raw_instance, &raw));
@@ -211,6 +226,7 @@ impl Device {
             queue: Mutex::new(queue),
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             accel,
+            executable_statistics,
             debug_utils,
             command_pool: Mutex::new(command_pool),
             pipelines: PipelineCache::default(),

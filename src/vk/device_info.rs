@@ -46,6 +46,9 @@ pub struct FeatureReport {
     pub float_atomics: bool,
     pub shader_clock: bool,
     pub non_semantic_info: bool,
+    /// VK_KHR_pipeline_executable_properties: the driver's statistics of each compiled
+    /// kernel (registers, spills, instructions), logged at `--log debug`.
+    pub executable_statistics: bool,
     pub timestamps: bool,
 }
 
@@ -109,6 +112,11 @@ impl FeatureReport {
                 "VK_KHR_shader_non_semantic_info",
                 self.non_semantic_info,
                 "--pixel traces",
+            ),
+            (
+                "VK_KHR_pipeline_executable_properties",
+                self.executable_statistics,
+                "kernel statistics at --log debug",
             ),
         ]
     }
@@ -203,6 +211,8 @@ pub(super) fn describe(
     let mut f_rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
     let mut f_af = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
     let mut f_clock = vk::PhysicalDeviceShaderClockFeaturesKHR::default();
+    let mut f_exec = vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default();
+    let has_exec = has_ext(&exts, ash::khr::pipeline_executable_properties::NAME);
     let has_rq = has_ext(&exts, ash::khr::ray_query::NAME);
     let has_af = has_ext(&exts, ash::ext::shader_atomic_float::NAME);
     let has_clock = has_ext(&exts, ash::khr::shader_clock::NAME);
@@ -218,6 +228,9 @@ pub(super) fn describe(
     }
     if has_clock {
         features2 = features2.push_next(&mut f_clock);
+    }
+    if has_exec {
+        features2 = features2.push_next(&mut f_exec);
     }
     unsafe { raw.get_physical_device_features2(pd, &mut features2) };
     let base = features2.features;
@@ -248,6 +261,7 @@ pub(super) fn describe(
         shader_clock: has_clock && f_clock.shader_subgroup_clock == vk::TRUE,
         // Enabled as an extension even on 1.3 devices: the instance asks for Vulkan 1.2.
         non_semantic_info: has_ext(&exts, ash::khr::shader_non_semantic_info::NAME),
+        executable_statistics: has_exec && f_exec.pipeline_executable_info == vk::TRUE,
         timestamps: timestamps && props.limits.timestamp_compute_and_graphics == vk::TRUE,
     };
     let name = props

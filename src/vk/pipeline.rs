@@ -223,7 +223,13 @@ fn create_objects(
         .module(module)
         .name(c"main")
         .specialization_info(&spec_info);
+    let flags = if device.executable_statistics.is_some() {
+        vk::PipelineCreateFlags::CAPTURE_STATISTICS_KHR
+    } else {
+        vk::PipelineCreateFlags::empty()
+    };
     let info = [vk::ComputePipelineCreateInfo::default()
+        .flags(flags)
         .stage(stage)
         .layout(objects.layout)];
     let started = std::time::Instant::now();
@@ -247,5 +253,57 @@ fn create_objects(
         started.elapsed().as_secs_f64()
     );
     device.set_name(objects.raw, name);
+    log_statistics(device, objects.raw, name);
     Ok(objects)
+}
+
+/// Log the driver's statistics of a compiled kernel (registers, spills, instruction
+/// counts: whatever the driver reports), where it reports them (`--log debug`).
+fn log_statistics(device: &Device, pipeline: vk::Pipeline, name: &str) {
+    let Some(ext) = &device.executable_statistics else {
+        return;
+    };
+    let info = vk::PipelineInfoKHR::default().pipeline(pipeline);
+    let Ok(executables) = (unsafe { ext.get_pipeline_executable_properties(&info) }) else {
+        log::debug!("pipeline {name}: the driver reported no executables");
+        return;
+    };
+    for (i, exe) in executables.iter().enumerate() {
+        let exe_info = vk::PipelineExecutableInfoKHR::default()
+            .pipeline(pipeline)
+            .executable_index(i as u32);
+        let Ok(stats) = (unsafe { ext.get_pipeline_executable_statistics(&exe_info) }) else {
+            continue;
+        };
+        let values: Vec<String> = stats
+            .iter()
+            .map(|s| {
+                let value = unsafe {
+                    match s.format {
+                        vk::PipelineExecutableStatisticFormatKHR::BOOL32 => {
+                            (s.value.b32 == vk::TRUE).to_string()
+                        }
+                        vk::PipelineExecutableStatisticFormatKHR::INT64 => s.value.i64.to_string(),
+                        vk::PipelineExecutableStatisticFormatKHR::UINT64 => s.value.u64.to_string(),
+                        vk::PipelineExecutableStatisticFormatKHR::FLOAT64 => {
+                            s.value.f64.to_string()
+                        }
+                        _ => "?".into(),
+                    }
+                };
+                format!("{} = {value}", c_text(s.name_as_c_str()))
+            })
+            .collect();
+        log::debug!(
+            "pipeline {name}, executable {i} ({}, subgroup {}): {}",
+            c_text(exe.name_as_c_str()),
+            exe.subgroup_size,
+            values.join(", ")
+        );
+    }
+}
+
+fn c_text(s: std::result::Result<&std::ffi::CStr, std::ffi::FromBytesUntilNulError>) -> String {
+    s.map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
 }
