@@ -146,7 +146,7 @@ fn learned_distributions_approach_the_incident_radiance() {
             &mut stats,
         )
         .unwrap();
-        let training = r.guide_buffers().read_training().unwrap();
+        let training = r.guide_buffers().read_training(&r.device).unwrap();
         probe.load_training_readback(&training).unwrap();
         halves.push(probe);
     }

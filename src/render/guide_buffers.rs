@@ -2,11 +2,15 @@
 //! each refit, and the training copies read back after each pass.
 
 use crate::gpu;
-use crate::vk::{self, Buffer, Device};
+use crate::vk::{self, Buffer, Device, MemoryLocation, Staging};
 use ash::vk as raw;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// Buffers bound at the guiding bindings (the SD-tree's flat arrays).
+///
+/// A training run uploads the tree and reads the training copies back after every pass,
+/// so the buffers are kept and refilled ([`GuideBuffers::refill`]) while large enough,
+/// and the transfers go through staging kept between passes, one submission each way.
 pub struct GuideBuffers {
     pub spatial: Buffer,
     pub leaves: Buffer,
@@ -22,7 +26,31 @@ pub struct GuideBuffers {
     /// a head with capacity 0 unless `add_selection_records` made room.
     pub selection: Buffer,
     pub selection_capacity: u32,
+    uploads: Staging,
+    /// Behind a lock so that reading back needs no `&mut` (the bound buffers do not
+    /// change).
+    readbacks: Mutex<Staging>,
 }
+
+/// What a training pass left in the guiding buffers.
+pub struct PassReadback {
+    pub training: Vec<gpu::GuideQuadNode>,
+    /// Empty unless the pass recorded the selection.
+    pub selection: Vec<gpu::GuideSelectionRecord>,
+    /// Empty unless asked for.
+    pub lights: Vec<gpu::GuideLightTrainingSlot>,
+}
+
+const HEAD_BYTES: usize = std::mem::size_of::<gpu::GuideSelectionHead>();
+const RECORD_BYTES: usize = std::mem::size_of::<gpu::GuideSelectionRecord>();
+
+/// A selection head recording nothing.
+const NO_SELECTION: gpu::GuideSelectionHead = gpu::GuideSelectionHead {
+    count: 0,
+    capacity: 0,
+    rate: 0.0,
+    pad: 0,
+};
 
 /// A zero-capacity selection head: the kernel appends nothing.
 fn empty_selection(device: &Arc<Device>) -> vk::Result<Buffer> {
@@ -32,6 +60,28 @@ fn empty_selection(device: &Arc<Device>) -> vk::Result<Buffer> {
         raw::BufferUsageFlags::STORAGE_BUFFER,
         "guide selection records (none)",
     )
+}
+
+/// Make `buffer` hold at least `len` bytes: kept if it does, else replaced by a new
+/// device-local one with a quarter to spare (the tree grows over the training passes).
+fn make_room(
+    device: &Arc<Device>,
+    buffer: &mut Buffer,
+    len: usize,
+    usage: raw::BufferUsageFlags,
+    name: &str,
+) -> vk::Result<()> {
+    let len = len as u64;
+    if buffer.size < len {
+        *buffer = Buffer::new(
+            device,
+            len + len / 4,
+            usage | raw::BufferUsageFlags::TRANSFER_DST | raw::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::GpuOnly,
+            name,
+        )?;
+    }
+    Ok(())
 }
 
 impl GuideBuffers {
@@ -49,56 +99,90 @@ impl GuideBuffers {
             light_slots: 0,
             selection: empty_selection(device)?,
             selection_capacity: 0,
+            uploads: Staging::for_uploads("guide upload staging"),
+            readbacks: Mutex::new(Staging::for_readbacks("guide read-back staging")),
         })
     }
 
-    /// Upload an SD-tree's arrays.
+    /// Upload an SD-tree's arrays into new buffers.
     pub fn upload(
         device: &Arc<Device>,
         arrays: &crate::guiding::GuideArrays,
     ) -> vk::Result<GuideBuffers> {
-        let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
-        Ok(GuideBuffers {
-            spatial: Buffer::from_slice(
-                device,
-                &arrays.spatial_buffer(),
-                usage,
+        let mut buffers = GuideBuffers::empty(device)?;
+        buffers.refill(device, arrays)?;
+        Ok(buffers)
+    }
+
+    /// Upload an SD-tree's arrays, into the buffers already made where they are large
+    /// enough, in one submission. The selection head is reset to record nothing (a pass
+    /// that learns the selection asks with `add_selection_records`).
+    pub fn refill(
+        &mut self,
+        device: &Arc<Device>,
+        arrays: &crate::guiding::GuideArrays,
+    ) -> vk::Result<()> {
+        let storage = raw::BufferUsageFlags::STORAGE_BUFFER;
+        let spatial = arrays.spatial_buffer();
+        let lights = arrays.light_buffer();
+        let parts: [(&[u8], &mut Buffer, &str); 6] = [
+            (
+                bytemuck::cast_slice(&spatial),
+                &mut self.spatial,
                 "guide spatial tree",
-            )?,
-            leaves: Buffer::from_slice(device, &arrays.leaves, usage, "guide leaves")?,
-            sampling: Buffer::from_slice(
-                device,
-                &arrays.sampling,
-                usage,
+            ),
+            (
+                bytemuck::cast_slice(&arrays.leaves),
+                &mut self.leaves,
+                "guide leaves",
+            ),
+            (
+                bytemuck::cast_slice(&arrays.sampling),
+                &mut self.sampling,
                 "guide sampling quadtrees",
-            )?,
-            training: Buffer::from_slice(
-                device,
-                &arrays.training,
-                usage | raw::BufferUsageFlags::TRANSFER_SRC,
+            ),
+            (
+                bytemuck::cast_slice(&arrays.training),
+                &mut self.training,
                 "guide training quadtrees",
-            )?,
-            training_nodes: arrays.training.len(),
-            lights: Buffer::from_slice(
-                device,
-                &arrays.light_buffer(),
-                usage,
+            ),
+            (
+                bytemuck::cast_slice(&lights),
+                &mut self.lights,
                 "guide light tables",
-            )?,
-            light_training: Buffer::from_slice(
-                device,
-                &arrays.light_training,
-                usage | raw::BufferUsageFlags::TRANSFER_SRC,
+            ),
+            (
+                bytemuck::cast_slice(&arrays.light_training),
+                &mut self.light_training,
                 "guide light training",
-            )?,
-            light_slots: arrays.light_training.len(),
-            selection: empty_selection(device)?,
-            selection_capacity: 0,
-        })
+            ),
+        ];
+        let mut bytes = Vec::with_capacity(parts.len());
+        for (data, buffer, name) in parts {
+            make_room(device, buffer, data.len(), storage, name)?;
+            bytes.push(data);
+        }
+        let targets = [
+            &self.spatial,
+            &self.leaves,
+            &self.sampling,
+            &self.training,
+            &self.lights,
+            &self.light_training,
+        ];
+        let mut copies: Vec<(&Buffer, &[u8])> = targets.into_iter().zip(bytes).collect();
+        copies.push((&self.selection, bytemuck::bytes_of(&NO_SELECTION)));
+        self.uploads.upload(device, &copies)?;
+        self.training_nodes = arrays.training.len();
+        self.light_slots = arrays.light_training.len();
+        self.selection_capacity = 0;
+        Ok(())
     }
 
     /// Make room for `capacity` selection records, each guided direction sample being
-    /// recorded with probability `rate` (a training pass of the learned selection).
+    /// recorded with probability `rate` (a training pass of the learned selection). The
+    /// buffer is kept for later passes; only its head is written (records are read up
+    /// to its count).
     pub fn add_selection_records(
         &mut self,
         device: &Arc<Device>,
@@ -111,41 +195,64 @@ impl GuideBuffers {
             rate,
             pad: 0,
         };
-        let record = std::mem::size_of::<gpu::GuideSelectionRecord>();
-        // Only the head needs contents: records are read up to its count.
-        self.selection = Buffer::zeroed(
-            device,
-            (std::mem::size_of_val(&head) + record * capacity as usize) as u64,
-            raw::BufferUsageFlags::STORAGE_BUFFER,
-            "guide selection records",
-        )?;
-        self.selection.upload(0, bytemuck::bytes_of(&head))?;
+        let size = (HEAD_BYTES + RECORD_BYTES * capacity as usize) as u64;
+        if self.selection.size < size {
+            self.selection = Buffer::new(
+                device,
+                size,
+                raw::BufferUsageFlags::STORAGE_BUFFER
+                    | raw::BufferUsageFlags::TRANSFER_DST
+                    | raw::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::GpuOnly,
+                "guide selection records",
+            )?;
+        }
+        self.uploads
+            .upload(device, &[(&self.selection, bytemuck::bytes_of(&head))])?;
         self.selection_capacity = capacity;
         Ok(())
     }
 
-    /// Read the selection records a pass appended (at most the capacity).
-    pub fn read_selection(&self) -> vk::Result<Vec<gpu::GuideSelectionRecord>> {
-        if self.selection_capacity == 0 {
-            return Ok(Vec::new());
-        }
-        let head: gpu::GuideSelectionHead = self.selection.read(1)?[0];
-        let n = head.count.min(self.selection_capacity) as usize;
-        let head_bytes = std::mem::size_of::<gpu::GuideSelectionHead>();
-        let record = std::mem::size_of::<gpu::GuideSelectionRecord>();
-        let bytes = self
-            .selection
-            .read_bytes((head_bytes + n * record) as u64)?;
-        Ok(bytemuck::pod_collect_to_vec(&bytes[head_bytes..]))
-    }
-
-    /// Read the light training tables back after a pass.
-    pub fn read_light_training(&self) -> vk::Result<Vec<gpu::GuideLightTrainingSlot>> {
-        self.light_training.read(self.light_slots)
+    /// Read back what a training pass recorded: the training quadtrees, the selection
+    /// records if it made room for them, the light training tables if `lights`. Two
+    /// submissions: the selection head (how many records), then everything else.
+    pub fn read_pass(&self, device: &Arc<Device>, lights: bool) -> vk::Result<PassReadback> {
+        let mut staging = self.readbacks.lock().unwrap();
+        let records = if self.selection_capacity > 0 {
+            let head: gpu::GuideSelectionHead =
+                staging.read(device, &[(&self.selection, HEAD_BYTES as u64)], |b| {
+                    bytemuck::pod_read_unaligned(b[0])
+                })?;
+            head.count.min(self.selection_capacity) as usize
+        } else {
+            0
+        };
+        let node = std::mem::size_of::<gpu::GuideQuadNode>();
+        let slot = std::mem::size_of::<gpu::GuideLightTrainingSlot>();
+        let parts = [
+            (&self.training, (self.training_nodes * node) as u64),
+            (
+                &self.selection,
+                (HEAD_BYTES + records * RECORD_BYTES) as u64,
+            ),
+            (
+                &self.light_training,
+                (lights as usize * self.light_slots * slot) as u64,
+            ),
+        ];
+        staging.read(device, &parts, |b| PassReadback {
+            training: bytemuck::pod_collect_to_vec(b[0]),
+            selection: if records > 0 {
+                bytemuck::pod_collect_to_vec(&b[1][HEAD_BYTES..])
+            } else {
+                Vec::new()
+            },
+            lights: bytemuck::pod_collect_to_vec(b[2]),
+        })
     }
 
     /// Read the training quadtrees back after a pass.
-    pub fn read_training(&self) -> vk::Result<Vec<gpu::GuideQuadNode>> {
-        self.training.read(self.training_nodes)
+    pub fn read_training(&self, device: &Arc<Device>) -> vk::Result<Vec<gpu::GuideQuadNode>> {
+        Ok(self.read_pass(device, false)?.training)
     }
 }

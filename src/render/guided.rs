@@ -14,7 +14,7 @@
 
 use super::budget::{deadline_after, Budget, RunOutcome, SAMPLE_INDEX_END};
 use super::pass_output::KeptPasses;
-use super::{Film, GuideBuffers, RenderError, RenderStats, Renderer, Result};
+use super::{Film, RenderError, RenderStats, Renderer, Result};
 use crate::guiding::{GuidingConfig, SdTree, SppSchedule, TimeSchedule};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -277,7 +277,8 @@ pub fn run_guided(
         });
     }
     let upload = Instant::now();
-    renderer.set_guide_buffers(GuideBuffers::upload(&renderer.device, &tree.gpu_arrays())?);
+    let arrays = tree.gpu_arrays();
+    renderer.update_guide_buffers(|b, device| b.refill(device, &arrays))?;
     log::debug!(
         "final SD-tree uploaded in {:.3} s",
         upload.elapsed().as_secs_f64()
@@ -399,7 +400,8 @@ fn train_iteration(
     // Pass k > 0 renders with what the previous pass uploaded after its refit (the same
     // arrays, training sums zero); only the first uploads here.
     if k == 0 {
-        renderer.set_guide_buffers(GuideBuffers::upload(&renderer.device, &tree.gpu_arrays())?);
+        let arrays = tree.gpu_arrays();
+        renderer.update_guide_buffers(|b, device| b.refill(device, &arrays))?;
     }
     // As in the reference implementation, the selection probability only learns once
     // the leaves have sampling trees: against the first pass's uniform stand-in every
@@ -466,29 +468,30 @@ fn train_iteration(
     let render_seconds = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let training = renderer.guide_buffers().read_training()?;
-    let selection_records = if learn_selection {
-        renderer.guide_buffers().read_selection()?
-    } else {
-        Vec::new()
-    };
+    let learn_lights = renderer.settings.guiding.learn_lights;
+    let pass = renderer
+        .guide_buffers()
+        .read_pass(&renderer.device, learn_lights)?;
     let readback_seconds = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
     // Before the refit: the records name the leaves of the tree that rendered the pass.
-    let selection = tree.learn_selection(&selection_records);
-    tree.load_training_readback(&training)
+    let selection = tree.learn_selection(&pass.selection);
+    let selection_seconds = t.elapsed().as_secs_f64();
+    tree.load_training_readback(&pass.training)
         .map_err(guiding_error)?;
-    if renderer.settings.guiding.learn_lights {
-        let lights = renderer.guide_buffers().read_light_training()?;
-        tree.load_light_readback(&lights, &renderer.source_model_pmf())
+    if learn_lights {
+        tree.load_light_readback(&pass.lights, &renderer.source_model_pmf())
             .map_err(guiding_error)?;
     }
+    let load_seconds = t.elapsed().as_secs_f64() - selection_seconds;
     let refit = tree.refit(next_spp);
     let refit_seconds = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    renderer.set_guide_buffers(GuideBuffers::upload(&renderer.device, &tree.gpu_arrays())?);
+    let arrays = tree.gpu_arrays();
+    let flatten_seconds = t.elapsed().as_secs_f64();
+    renderer.update_guide_buffers(|b, device| b.refill(device, &arrays))?;
     upload_seconds += t.elapsed().as_secs_f64();
     let it = IterationStats {
         iteration: k,
@@ -510,12 +513,16 @@ fn train_iteration(
         mean_light_mix: tree.mean_light_mix(),
     };
     log::debug!(
-        "guiding iteration {k}: {done} spp in {:.2} s (GPU {:.2} s), read-back {:.3} s, refit {:.3} s, upload {:.3} s; {} leaves, {} + {} nodes, {:.1} KiB; selection: {} records, mean BSDF fraction {:.3}, mean light mix {:.3}",
+        "guiding iteration {k}: {done} spp in {:.2} s (GPU {:.2} s), read-back {:.3} s, refit {:.3} s (selection {:.3}, training sums in {:.3}, refit {:.3}), upload {:.3} s (flatten {:.3}); {} leaves, {} + {} nodes, {:.1} KiB; selection: {} records, mean BSDF fraction {:.3}, mean light mix {:.3}",
         it.render_seconds,
         it.gpu_seconds,
         it.readback_seconds,
         it.refit_seconds,
+        selection_seconds,
+        load_seconds,
+        it.refit_seconds - selection_seconds - load_seconds,
         it.upload_seconds,
+        flatten_seconds,
         it.leaves,
         it.sampling_nodes,
         it.training_nodes,

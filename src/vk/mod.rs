@@ -15,6 +15,7 @@ mod instance;
 pub mod lavapipe;
 mod pipeline;
 mod pipeline_cache;
+mod staging;
 
 pub use accel::{AccelStructure, BlasGeometry, TlasInstance};
 pub use buffer::Buffer;
@@ -24,6 +25,7 @@ pub use device_info::{DeviceInfo, DeviceSelector, FeatureReport};
 pub use image::{srgb_decode, Sampler, SamplerDesc, Texture, TextureFormat, WrapMode};
 pub use instance::{take_debug_printf_messages, validation_error_count, Instance, InstanceOptions};
 pub use pipeline::{BindingKind, BindingSpec, ComputePipeline};
+pub use staging::Staging;
 
 pub use ash::vk;
 pub use gpu_allocator::MemoryLocation;
