@@ -418,24 +418,36 @@ impl SdTree {
                 training.len()
             )));
         }
-        for (leaf, &root) in self.leaves.iter().zip(&roots) {
-            let nodes = &training[root as usize..root as usize + leaf.training.node_count()];
-            let same = nodes
+        // Per leaf on the host's cores: check every leaf's topology, then (only if all
+        // agree, so a refused read-back changes nothing) take the sums.
+        let cost: Vec<u64> = self
+            .leaves
+            .iter()
+            .map(|l| l.training.node_count() as u64 + 1)
+            .collect();
+        let nodes_of = |leaf: &Leaf, root: u32| {
+            &training[root as usize..root as usize + leaf.training.node_count()]
+        };
+        let mismatched = super::parallel::map_mut_by_cost(&mut self.leaves, &cost, |i, leaf| {
+            let root = roots[i];
+            let same = nodes_of(leaf, root)
                 .iter()
                 .zip(leaf.training.nodes())
                 .all(|(g, c)| g.child == to_gpu_node(c, root).child);
-            if !same {
-                return Err(GuidingError::TrainingMismatch(format!(
-                    "the training tree at node {root} has another topology than the one uploaded"
-                )));
-            }
+            (!same).then_some(root)
+        });
+        if let Some(root) = mismatched.into_iter().flatten().next() {
+            return Err(GuidingError::TrainingMismatch(format!(
+                "the training tree at node {root} has another topology than the one uploaded"
+            )));
         }
-        for (leaf, &root) in self.leaves.iter_mut().zip(&roots) {
-            leaf.training_weight = training[root as usize - 1].sum[0];
-            leaf.light_second = training[root as usize - 1].sum[1];
-            let nodes = &training[root as usize..root as usize + leaf.training.node_count()];
+        super::parallel::map_mut_by_cost(&mut self.leaves, &cost, |i, leaf| {
+            let root = roots[i] as usize;
+            leaf.training_weight = training[root - 1].sum[0];
+            leaf.light_second = training[root - 1].sum[1];
+            let nodes = &training[root..root + leaf.training.node_count()];
             leaf.training.set_sums(nodes.iter().map(|n| n.sum));
-        }
+        });
         Ok(())
     }
 

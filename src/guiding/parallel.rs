@@ -43,6 +43,54 @@ pub(crate) fn map_mut<T: Send, R: Send>(
     })
 }
 
+/// Like [`map_mut`], with the items split among the threads by `cost` (one per item)
+/// rather than by count: per-leaf work is skewed (a few leaves near the camera hold most
+/// of a pass's records), and equal counts left most threads waiting on one.
+pub(crate) fn map_mut_by_cost<T: Send, R: Send>(
+    items: &mut [T],
+    cost: &[u64],
+    f: impl Fn(usize, &mut T) -> R + Sync,
+) -> Vec<R> {
+    assert_eq!(items.len(), cost.len(), "one cost per item");
+    let threads = threads_for(items.len());
+    if threads <= 1 {
+        return items.iter_mut().enumerate().map(|(i, t)| f(i, t)).collect();
+    }
+    // Chunk ends where the running cost passes each thread's equal share.
+    let total: u64 = cost.iter().sum::<u64>().max(1);
+    let mut ends = Vec::with_capacity(threads);
+    let mut running = 0u64;
+    for (i, &c) in cost.iter().enumerate() {
+        running += c;
+        if running * threads as u64 >= total * (ends.len() as u64 + 1) && ends.len() + 1 < threads {
+            ends.push(i + 1);
+        }
+    }
+    ends.push(items.len());
+    let f = &f;
+    std::thread::scope(|scope| {
+        let mut rest = items;
+        let mut start = 0usize;
+        let mut handles = Vec::with_capacity(ends.len());
+        for &end in &ends {
+            let (part, tail) = std::mem::take(&mut rest).split_at_mut(end - start);
+            rest = tail;
+            let first = start;
+            handles.push(scope.spawn(move || {
+                part.iter_mut()
+                    .enumerate()
+                    .map(|(i, t)| f(first + i, t))
+                    .collect::<Vec<R>>()
+            }));
+            start = end;
+        }
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().expect("a refit thread panicked"))
+            .collect()
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -57,6 +105,28 @@ mod tests {
             });
             assert_eq!(items, (1..=n as u64).collect::<Vec<_>>());
             assert_eq!(out, (0..n as u64).map(|i| i * 10).collect::<Vec<_>>());
+        }
+    }
+
+    #[test]
+    fn map_mut_by_cost_visits_every_item_once_in_order() {
+        for n in [0usize, 1, 63, 64, 200, 1000, 4097] {
+            // Skewed costs: one heavy item, zeros, and uniform ones.
+            for cost in [
+                (0..n)
+                    .map(|i| if i == n / 3 { 1_000_000 } else { 1 })
+                    .collect::<Vec<u64>>(),
+                vec![0; n],
+                vec![5; n],
+            ] {
+                let mut items: Vec<u64> = (0..n as u64).collect();
+                let out = map_mut_by_cost(&mut items, &cost, |i, x| {
+                    *x += 1;
+                    i as u64 * 10
+                });
+                assert_eq!(items, (1..=n as u64).collect::<Vec<_>>());
+                assert_eq!(out, (0..n as u64).map(|i| i * 10).collect::<Vec<_>>());
+            }
         }
     }
 }

@@ -143,8 +143,11 @@ impl SelectionState {
     }
 
     /// Feed one record: its gradient joins the batch, and a full batch takes a step.
-    pub fn append(&mut self, r: &GuideSelectionRecord) {
-        let Some(g) = self.gradient(r) else { return };
+    /// False for a record without a usable gradient (it is skipped).
+    pub fn append(&mut self, r: &GuideSelectionRecord) -> bool {
+        let Some(g) = self.gradient(r) else {
+            return false;
+        };
         self.batch_gradient += g;
         self.batch_weight += 1.0;
         if self.batch_weight > BATCH {
@@ -153,6 +156,7 @@ impl SelectionState {
             self.batch_gradient = 0.0;
             self.batch_weight = 0.0;
         }
+        true
     }
 
     /// One Adam step (Kingma and Ba 2014) on gradient `g`, then θ is projected back into
@@ -207,14 +211,14 @@ impl super::SdTree {
                 fill[l] += 1;
             }
         }
-        let learned = super::parallel::map_mut(&mut self.leaves, |l, leaf| {
+        let cost: Vec<u64> = start.windows(2).map(|w| (w[1] - w[0]) as u64 + 1).collect();
+        let learned = super::parallel::map_mut_by_cost(&mut self.leaves, &cost, |l, leaf| {
             let mut used = 0u64;
             for &i in &order[start[l]..start[l + 1]] {
                 let r = &records[i as usize];
-                if leaf.selection.gradient(r).is_some() {
-                    leaf.selection.append(r);
-                    used += 1;
-                }
+                // One gradient per record (it was computed twice: to count, then to
+                // learn; the selection was most of the refit's host time).
+                used += u64::from(leaf.selection.append(r));
             }
             (used, start[l + 1] - start[l])
         });
