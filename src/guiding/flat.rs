@@ -463,12 +463,10 @@ impl SdTree {
             .iter()
             .map(|l| l.training.node_count() as u64 + 1)
             .collect();
-        let nodes_of = |leaf: &Leaf, root: u32| {
-            &training[root as usize..root as usize + leaf.training.node_count()]
-        };
         let mismatched = super::parallel::map_mut_by_cost(&mut self.leaves, &cost, |i, leaf| {
             let root = roots[i];
-            let same = nodes_of(leaf, root)
+            let nodes = &training[root as usize..root as usize + leaf.training.node_count()];
+            let same = nodes
                 .iter()
                 .zip(leaf.training.nodes())
                 .all(|(g, c)| g.child == to_gpu_node(c, root).child);

@@ -216,8 +216,8 @@ impl super::SdTree {
             let mut used = 0u64;
             for &i in &order[start[l]..start[l + 1]] {
                 let r = &records[i as usize];
-                // One gradient per record (it was computed twice: to count, then to
-                // learn; the selection was most of the refit's host time).
+                // One gradient per record (it was computed twice, to count and to
+                // learn: the selection is the largest part of guided-ris's refit).
                 used += u64::from(leaf.selection.append(r));
             }
             (used, start[l + 1] - start[l])
