@@ -76,31 +76,6 @@ fn flatten_round_trip() {
     }
 }
 
-/// With hundreds of leaves the flattening runs in chunks on several threads (one
-/// thread per 64 leaves at most): it must give what one loop gives, which the round trip
-/// checks leaf by leaf.
-#[test]
-fn flatten_round_trip_in_parallel_chunks() {
-    let config = GuidingConfig {
-        spatial_threshold: 10.0,
-        ..GuidingConfig::default()
-    };
-    let mut tree =
-        SdTree::new(Vec3::from_array(BBOX.0), Vec3::from_array(BBOX.1), &config).unwrap();
-    let mut rng = Rng(3);
-    for k in 0..3 {
-        record_some(&mut tree, 8000 << k, &mut rng);
-        tree.refit(2 << k);
-    }
-    record_some(&mut tree, 3000, &mut rng);
-    assert!(tree.leaves().len() >= 256, "{} leaves", tree.leaves().len());
-    let arrays = tree.gpu_arrays();
-    assert_eq!(arrays.byte_size(), tree.gpu_bytes());
-    let back = SdTree::from_gpu_arrays(&arrays, tree.config()).unwrap();
-    assert_eq!(back.leaves(), tree.leaves());
-    assert_eq!(back.gpu_arrays(), arrays);
-}
-
 #[test]
 fn arrays_are_validated() {
     let tree = grown_tree();

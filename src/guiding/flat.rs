@@ -299,72 +299,34 @@ impl SdTree {
                 },
             })
             .collect();
-        // A leaf writes its sampling tree if it is the first to use it (split halves
-        // share their parent's until the next refit).
-        let mut next_free = 0usize;
-        let owns: Vec<bool> = self
-            .leaves
-            .iter()
-            .zip(&sampling_roots)
-            .map(|(leaf, &base)| {
-                let first = base as usize == next_free;
-                if first {
-                    next_free += leaf.sampling.node_count();
-                }
-                first
-            })
-            .collect();
-        // Flattened in chunks of leaves on the host's cores (a third of the upload's host
-        // time on the H200's host when it was one loop), then joined in leaf order.
-        let cost: Vec<u64> = self
-            .leaves
-            .iter()
-            .map(|l| (l.sampling.node_count() + l.training.node_count()) as u64 + 1)
-            .collect();
-        let chunks = super::parallel::map_chunks(&self.leaves, &cost, |first, chunk| {
-            let mut sampling = Vec::new();
-            let mut training = Vec::new();
-            let mut leaves = Vec::with_capacity(chunk.len());
-            for (j, leaf) in chunk.iter().enumerate() {
-                let i = first + j;
-                let base = sampling_roots[i];
-                if owns[i] {
-                    sampling.extend(leaf.sampling.nodes().iter().map(|n| to_gpu_node(n, base)));
-                }
-                training.push(GuideQuadNode {
-                    sum: [leaf.training_weight, 0.0, 0.0, 0.0],
-                    child: [0; 4],
-                });
-                let root = training_roots[i];
-                training.extend(leaf.training.nodes().iter().map(|n| to_gpu_node(n, root)));
-                leaves.push(GuideLeaf {
-                    sampling_root: base,
-                    training_root: root,
-                    box_min: leaf.box_min.to_array(),
-                    box_size: leaf.box_size.to_array(),
-                    sampling_weight: leaf.sampling_weight,
-                    bsdf_fraction: leaf.selection.fraction(),
-                    light_mix: match self.config.learn_lights && !leaf.lights.is_empty() {
-                        false => 0.0,
-                        true if self.config.learn_light_mix => leaf.light_mix,
-                        true => self.config.light_mix,
-                    },
-                });
-            }
-            (sampling, training, leaves)
-        });
         let mut sampling = Vec::with_capacity(sampling_len);
         let mut training = Vec::with_capacity(training_len);
         let mut leaves = Vec::with_capacity(self.leaves.len());
-        for (s, t, l) in chunks {
-            sampling.extend_from_slice(&s);
-            training.extend_from_slice(&t);
-            leaves.extend_from_slice(&l);
+        for (i, leaf) in self.leaves.iter().enumerate() {
+            let base = sampling_roots[i];
+            if base as usize == sampling.len() {
+                sampling.extend(leaf.sampling.nodes().iter().map(|n| to_gpu_node(n, base)));
+            }
+            training.push(GuideQuadNode {
+                sum: [leaf.training_weight, 0.0, 0.0, 0.0],
+                child: [0; 4],
+            });
+            let root = training_roots[i];
+            training.extend(leaf.training.nodes().iter().map(|n| to_gpu_node(n, root)));
+            leaves.push(GuideLeaf {
+                sampling_root: base,
+                training_root: root,
+                box_min: leaf.box_min.to_array(),
+                box_size: leaf.box_size.to_array(),
+                sampling_weight: leaf.sampling_weight,
+                bsdf_fraction: leaf.selection.fraction(),
+                light_mix: match self.config.learn_lights && !leaf.lights.is_empty() {
+                    false => 0.0,
+                    true if self.config.learn_light_mix => leaf.light_mix,
+                    true => self.config.light_mix,
+                },
+            });
         }
-        debug_assert_eq!(
-            (sampling.len(), training.len()),
-            (sampling_len, training_len)
-        );
         let mut lights = vec![EMPTY_SLOT; self.leaves.len() * SLOTS];
         for (leaf, table) in self.leaves.iter().zip(lights.chunks_exact_mut(SLOTS)) {
             for (slot, &(model, p)) in table.iter_mut().zip(leaf.lights.iter()) {

@@ -56,7 +56,17 @@ pub(crate) fn map_mut_by_cost<T: Send, R: Send>(
     if threads <= 1 {
         return items.iter_mut().enumerate().map(|(i, t)| f(i, t)).collect();
     }
-    let ends = chunk_ends(cost, threads);
+    // Chunk ends where the running cost passes each thread's equal share.
+    let total: u64 = cost.iter().sum::<u64>().max(1);
+    let mut ends = Vec::with_capacity(threads);
+    let mut running = 0u64;
+    for (i, &c) in cost.iter().enumerate() {
+        running += c;
+        if running * threads as u64 >= total * (ends.len() as u64 + 1) && ends.len() + 1 < threads {
+            ends.push(i + 1);
+        }
+    }
+    ends.push(items.len());
     let f = &f;
     std::thread::scope(|scope| {
         let mut rest = items;
@@ -77,55 +87,6 @@ pub(crate) fn map_mut_by_cost<T: Send, R: Send>(
         handles
             .into_iter()
             .flat_map(|h| h.join().expect("a refit thread panicked"))
-            .collect()
-    })
-}
-
-/// Where `threads` contiguous chunks of items with these costs end, each holding about
-/// an equal share of the total cost (the last one ends at the last item).
-fn chunk_ends(cost: &[u64], threads: usize) -> Vec<usize> {
-    let total: u64 = cost.iter().sum::<u64>().max(1);
-    let mut ends = Vec::with_capacity(threads);
-    let mut running = 0u64;
-    for (i, &c) in cost.iter().enumerate() {
-        running += c;
-        if running * threads as u64 >= total * (ends.len() as u64 + 1) && ends.len() + 1 < threads {
-            ends.push(i + 1);
-        }
-    }
-    ends.push(cost.len());
-    ends
-}
-
-/// `f(first, chunk)` for contiguous chunks of `items` split by `cost` (one per item), on
-/// scoped threads; returns the chunks' results in item order (`first`: the index of the
-/// chunk's first item). For work that builds a result per chunk, such as the flattened
-/// arrays of the leaves.
-pub(crate) fn map_chunks<T: Sync, R: Send>(
-    items: &[T],
-    cost: &[u64],
-    f: impl Fn(usize, &[T]) -> R + Sync,
-) -> Vec<R> {
-    assert_eq!(items.len(), cost.len(), "one cost per item");
-    let threads = threads_for(items.len());
-    if threads <= 1 {
-        return vec![f(0, items)];
-    }
-    let ends = chunk_ends(cost, threads);
-    let f = &f;
-    std::thread::scope(|scope| {
-        let mut start = 0usize;
-        let handles: Vec<_> = ends
-            .iter()
-            .map(|&end| {
-                let (first, part) = (start, &items[start..end]);
-                start = end;
-                scope.spawn(move || f(first, part))
-            })
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().expect("a refit thread panicked"))
             .collect()
     })
 }
@@ -165,15 +126,6 @@ mod tests {
                 });
                 assert_eq!(items, (1..=n as u64).collect::<Vec<_>>());
                 assert_eq!(out, (0..n as u64).map(|i| i * 10).collect::<Vec<_>>());
-                // The chunks cover the items once, in order, each knowing where it starts.
-                let chunks = map_chunks(&items, &cost, |first, part| (first, part.to_vec()));
-                let mut next = 0usize;
-                for (first, part) in &chunks {
-                    assert_eq!(*first, next);
-                    next += part.len();
-                }
-                let joined: Vec<u64> = chunks.into_iter().flat_map(|(_, p)| p).collect();
-                assert_eq!(joined, items);
             }
         }
     }
