@@ -420,11 +420,7 @@ impl SdTree {
         }
         // Per leaf on the host's cores: check every leaf's topology, then (only if all
         // agree, so a refused read-back changes nothing) take the sums.
-        let cost: Vec<u64> = self
-            .leaves
-            .iter()
-            .map(|l| l.training.node_count() as u64 + 1)
-            .collect();
+        let cost = self.training_costs();
         let mismatched = super::parallel::map_mut_by_cost(&mut self.leaves, &cost, |i, leaf| {
             let root = roots[i];
             let nodes = &training[root as usize..root as usize + leaf.training.node_count()];

@@ -64,12 +64,7 @@ impl SdTree {
             .iter()
             .map(|l| 1.0 / sharing[&std::sync::Arc::as_ptr(&l.sampling)] as f32)
             .collect();
-        // Work per leaf grows with its training tree.
-        let cost: Vec<u64> = self
-            .leaves
-            .iter()
-            .map(|l| l.training.node_count() as u64 + 1)
-            .collect();
+        let cost = self.training_costs();
         let per_leaf = super::parallel::map_mut_by_cost(&mut self.leaves, &cost, |i, leaf| {
             let mut built = std::mem::take(&mut leaf.training);
             let share = shares[i];

@@ -67,6 +67,15 @@ pub struct SdTree {
 }
 
 impl SdTree {
+    /// Each leaf's share of per-leaf work that grows with its training tree (for
+    /// splitting it among threads: `parallel::map_mut_by_cost`).
+    pub(crate) fn training_costs(&self) -> Vec<u64> {
+        self.leaves
+            .iter()
+            .map(|l| l.training.node_count() as u64 + 1)
+            .collect()
+    }
+
     /// A fresh tree over the scene's bounding box: one leaf, sampling uniformly, with
     /// the uniform initial training topology.
     pub fn new(
