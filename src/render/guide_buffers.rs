@@ -157,20 +157,11 @@ impl GuideBuffers {
                 "guide light training",
             ),
         ];
-        let mut bytes = Vec::with_capacity(parts.len());
+        let mut copies: Vec<(&Buffer, &[u8])> = Vec::with_capacity(parts.len() + 1);
         for (data, buffer, name) in parts {
             make_room(device, buffer, data.len(), storage, name)?;
-            bytes.push(data);
+            copies.push((buffer, data));
         }
-        let targets = [
-            &self.spatial,
-            &self.leaves,
-            &self.sampling,
-            &self.training,
-            &self.lights,
-            &self.light_training,
-        ];
-        let mut copies: Vec<(&Buffer, &[u8])> = targets.into_iter().zip(bytes).collect();
         copies.push((&self.selection, bytemuck::bytes_of(&NO_SELECTION)));
         self.uploads.upload(device, &copies)?;
         self.training_nodes = arrays.training.len();
