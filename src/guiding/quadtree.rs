@@ -29,6 +29,18 @@ pub struct Cell {
     pub prob: f64,
 }
 
+/// Room for a depth-first walk's stack: a walk that pushes a node's children when it
+/// pops the node holds at most 3 entries per level plus one, so the trees the kernel
+/// takes (`GUIDE_MAX_QUAD_DEPTH` levels) never grow it.
+const WALK_STACK: usize = 3 * crate::gpu::GUIDE_MAX_QUAD_DEPTH as usize + 1;
+
+/// A depth-first walk's stack, sized for the deepest tree, holding `root`.
+fn walk_stack<T>(root: T) -> Vec<T> {
+    let mut stack = Vec::with_capacity(WALK_STACK);
+    stack.push(root);
+    stack
+}
+
 /// A directional quadtree. Node 0 is the root.
 #[derive(Clone, Debug, PartialEq)]
 pub struct QuadTree {
@@ -167,6 +179,11 @@ impl QuadTree {
         &self.nodes
     }
 
+    /// The nodes, for reuse as another tree's storage.
+    pub(crate) fn into_nodes(self) -> Vec<QuadNode> {
+        self.nodes
+    }
+
     pub fn node_count(&self) -> usize {
         self.nodes.len()
     }
@@ -185,7 +202,7 @@ impl QuadTree {
     /// Number of node levels (a lone root is 1).
     pub fn depth(&self) -> u32 {
         let mut deepest = 1;
-        let mut stack = vec![(0usize, 1u32)];
+        let mut stack = walk_stack((0usize, 1u32));
         while let Some((n, level)) = stack.pop() {
             deepest = deepest.max(level);
             for &c in &self.nodes[n].child {
@@ -506,7 +523,7 @@ impl QuadTree {
             return;
         }
         let scale = f64::from(scale);
-        let mut stack = vec![(0usize, Source::Node(0))];
+        let mut stack = walk_stack((0usize, Source::Node(0)));
         while let Some((n, source)) = stack.pop() {
             for q in 0..4 {
                 let (energy, below) = match source {
@@ -533,16 +550,26 @@ impl QuadTree {
     /// energy were uniform; subtrees below the threshold collapse. An empty tree gives
     /// uniform shares (¼ per level), as the reference does.
     pub fn refined(&self, rho: f32, max_depth: u32) -> QuadTree {
+        self.refined_into(rho, max_depth, Vec::new())
+    }
+
+    /// [`QuadTree::refined`], built in `storage` (cleared first): the refit passes the
+    /// nodes of the sampling tree it retires, so that each pass reuses memory already
+    /// in use rather than asking the allocator (and the kernel: fresh pages are faulted
+    /// in and zeroed) for the next training trees.
+    pub fn refined_into(&self, rho: f32, max_depth: u32, mut storage: Vec<QuadNode>) -> QuadTree {
         #[derive(Clone, Copy)]
         enum Source {
             Node(usize),
             Uniform(f32),
         }
         let total = f64::from(self.total());
-        let mut out = QuadTree {
-            nodes: vec![QuadNode::default()],
-        };
-        let mut stack = vec![(0usize, Source::Node(0), 1u32)];
+        storage.clear();
+        // The next tree is about this one's size (it refines its energy).
+        storage.reserve(self.nodes.len());
+        storage.push(QuadNode::default());
+        let mut out = QuadTree { nodes: storage };
+        let mut stack = walk_stack((0usize, Source::Node(0), 1u32));
         while let Some((new, source, level)) = stack.pop() {
             let (sums, children) = match source {
                 Source::Node(o) => (self.nodes[o].sum, self.nodes[o].child),
@@ -801,6 +828,20 @@ mod tests {
         assert_eq!(next.cells().len(), 3 * 4 + 64 * 4);
         // A depth cap stops there.
         assert_eq!(tree.refined(0.01, 7).depth(), 7);
+    }
+
+    #[test]
+    fn refine_into_used_storage_is_refine() {
+        // The refit builds each next training tree in the nodes of the sampling tree it
+        // retires: whatever they held must not show through.
+        let tree = trained_tree(3);
+        let used = trained_tree(4).into_nodes();
+        assert!(used.len() > 1);
+        assert_eq!(tree.refined_into(0.01, 20, used), tree.refined(0.01, 20));
+        assert_eq!(
+            tree.refined_into(0.01, 20, Vec::new()),
+            tree.refined(0.01, 20)
+        );
     }
 
     #[test]

@@ -78,8 +78,14 @@ impl SdTree {
                 GuideDensity::VarianceAware => built.build_second_moment(),
             };
             let weight = leaf.training_weight;
-            leaf.training = built.refined(rho, max_depth);
-            leaf.sampling = std::sync::Arc::new(built);
+            let depth = built.depth();
+            let retired = std::mem::replace(&mut leaf.sampling, std::sync::Arc::new(built));
+            // The retired sampling tree's nodes hold the next training tree, unless
+            // another leaf (split from the same parent) still shares it.
+            let storage = std::sync::Arc::try_unwrap(retired)
+                .map(|t| t.into_nodes())
+                .unwrap_or_default();
+            leaf.training = leaf.sampling.refined_into(rho, max_depth, storage);
             leaf.sampling_weight = leaf.training_weight;
             leaf.training_weight = 0.0;
             // Light tables := this iteration's contributions (with the earlier ones'
@@ -112,12 +118,14 @@ impl SdTree {
             }
             leaf.lights = std::sync::Arc::new(table);
             leaf.light_second = 0.0;
-            (dropped, weight)
+            (dropped, weight, depth)
         });
         // Summed in leaf order, as one thread would.
-        for (dropped, weight) in per_leaf {
+        let mut max_depth_built = 1;
+        for (dropped, weight, depth) in per_leaf {
             stats.dropped_sums += dropped;
             stats.recorded_weight += f64::from(weight);
+            max_depth_built = max_depth_built.max(depth);
         }
 
         let threshold = self.config.split_threshold(next_spp);
@@ -129,12 +137,8 @@ impl SdTree {
         stats.spatial_nodes = self.nodes.len();
         stats.sampling_nodes = self.sampling_node_count();
         stats.training_nodes = self.training_node_count();
-        stats.max_quad_depth = self
-            .leaves
-            .iter()
-            .map(|l| l.sampling.depth())
-            .max()
-            .unwrap_or(1);
+        // Splits share the trees just built: their depth is the deepest of those.
+        stats.max_quad_depth = max_depth_built;
         stats.gpu_bytes = self.gpu_bytes();
         stats
     }
