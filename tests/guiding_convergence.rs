@@ -134,7 +134,7 @@ fn learned_distributions_approach_the_incident_radiance() {
     let probe_spp = 4096;
     for half in 0..2u64 {
         let mut probe = SdTree::probe(lo, hi, &probe_config, probe_depth, GRID_LEVEL).unwrap();
-        r.set_guide_buffers(GuideBuffers::upload(&r.device, &probe.gpu_arrays()).unwrap());
+        r.set_guide_buffers(GuideBuffers::upload(&r.device, &probe).unwrap());
         r.clear_film().unwrap();
         let first = 1 << 30;
         r.render_samples(

@@ -215,6 +215,65 @@ fn leaf_view_shows_the_leaf() {
     assert!(view.rgb.iter().all(|v| (0.0..=1.0).contains(v)));
 }
 
+/// The upload flattens the tree straight into staging memory kept between passes
+/// (`SdTree::write_gpu_buffers`): every byte must be written, whatever the memory held
+/// (the last pass's arrays), and the bytes must be those of `gpu_arrays`, which the
+/// saved file and the other tests use. The tree has light tables (a recorded pass of
+/// light sums, refit), so the packed, hash and alias parts are not all empty.
+#[test]
+fn gpu_buffers_written_in_place_are_the_arrays() {
+    use lanterna::gpu::{GuideLightTrainingSlot, GUIDE_LIGHT_EMPTY, GUIDE_LIGHT_SLOTS};
+    let mut tree = grown_tree();
+    let slots = GUIDE_LIGHT_SLOTS as usize;
+    let mut sums = vec![
+        GuideLightTrainingSlot {
+            model: GUIDE_LIGHT_EMPTY,
+            value: 0.0,
+            second: 0.0,
+        };
+        tree.leaves().len() * slots
+    ];
+    for (leaf, table) in sums.chunks_exact_mut(slots).enumerate() {
+        for (k, slot) in table.iter_mut().take(leaf % 4).enumerate() {
+            *slot = GuideLightTrainingSlot {
+                model: (leaf * 7 + k * 3) as u32 % 40,
+                value: 1.0 + k as f32,
+                second: 2.0,
+            };
+        }
+    }
+    tree.load_light_readback(&sums, &[1.0 / 40.0; 40]).unwrap();
+    tree.refit(64);
+    let arrays = tree.gpu_arrays();
+    assert!(arrays.lights.iter().any(|s| s.model != GUIDE_LIGHT_EMPTY));
+    let expected: [Vec<u8>; 6] = [
+        arrays.spatial_buffer(),
+        bytemuck::cast_slice(&arrays.leaves).to_vec(),
+        bytemuck::cast_slice(&arrays.sampling).to_vec(),
+        bytemuck::cast_slice(&arrays.training).to_vec(),
+        bytemuck::cast_slice(&arrays.light_buffer()).to_vec(),
+        bytemuck::cast_slice(&arrays.light_training).to_vec(),
+    ];
+    let lens = tree.gpu_buffer_lens();
+    for (e, &len) in expected.iter().zip(&lens) {
+        assert_eq!(e.len(), len);
+    }
+    for stale in [0x00u32, 0xabab_abab, u32::MAX] {
+        // 4-byte aligned, as the staging memory is.
+        let mut words: Vec<Vec<u32>> = lens.iter().map(|&l| vec![stale; l / 4]).collect();
+        let [a, b, c, d, e, f] = &mut words[..] else {
+            unreachable!()
+        };
+        tree.write_gpu_buffers([a, b, c, d, e, f].map(|w| bytemuck::cast_slice_mut(w)));
+        for (k, (w, e)) in words.iter().zip(&expected).enumerate() {
+            assert!(
+                bytemuck::cast_slice::<u32, u8>(w) == e.as_slice(),
+                "buffer {k} differs from gpu_arrays' over stale {stale:#x}"
+            );
+        }
+    }
+}
+
 /// The kernel looks a model's probability up in the hash copy of its leaf's table
 /// (`guide_light_pmf`) and draws models from its alias copy (`guide_light_sample`):
 /// every entry of every table must be found with its value, models a table lacks must

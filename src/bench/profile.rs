@@ -119,8 +119,7 @@ fn guided_passes(
     let tree = trained.tree.expect("guided runs return their tree");
     let device = session.renderer.device.clone();
     session.renderer.set_guide_buffers(
-        GuideBuffers::upload(&device, &tree.gpu_arrays())
-            .map_err(crate::render::RenderError::from)?,
+        GuideBuffers::upload(&device, &tree).map_err(crate::render::RenderError::from)?,
     );
     let cancel = AtomicBool::new(false);
     let pass = |session: &mut Session, training: bool| -> Result<RunSample> {

@@ -29,6 +29,8 @@ pub(crate) const LIGHT_SLOT_BYTES: u64 = std::mem::size_of::<GuideLightSlot>() a
 pub(crate) const LIGHT_TRAINING_SLOT_BYTES: u64 =
     std::mem::size_of::<GuideLightTrainingSlot>() as u64;
 const SLOTS: usize = GUIDE_LIGHT_SLOTS as usize;
+/// The guiding buffers a tree fills (`SdTree::write_gpu_buffers`).
+pub const GUIDE_BUFFERS: usize = 6;
 const HASH_SLOTS: usize = GUIDE_LIGHT_HASH_SLOTS as usize;
 /// GPU bytes one leaf adds besides its quadtrees: its record and its light tables (the
 /// packed one and its hash copy, and the training table).
@@ -97,43 +99,54 @@ impl GuideArrays {
     /// `guide_light_pmf` probes instead of scanning the packed table, then every leaf's
     /// alias table over its packed slots, which `guide_light_sample` draws from.
     pub fn light_buffer(&self) -> Vec<GuideLightSlot> {
-        let mut out = self.lights.clone();
-        out.reserve(self.lights.len() / SLOTS * (SLOTS + HASH_SLOTS));
-        for table in self.lights.chunks_exact(SLOTS) {
-            let start = out.len();
-            out.resize(start + HASH_SLOTS, EMPTY_SLOT);
-            let hash = &mut out[start..];
-            for entry in table.iter().take_while(|e| e.model != GUIDE_LIGHT_EMPTY) {
-                let mut i = light_hash_slot(entry.model);
-                while hash[i].model != GUIDE_LIGHT_EMPTY {
-                    i = (i + 1) % HASH_SLOTS;
-                }
-                hash[i] = *entry;
-            }
-        }
-        for table in self.lights.chunks_exact(SLOTS) {
-            let weights: Vec<f64> = table
-                .iter()
-                .map(|e| match e.model {
-                    GUIDE_LIGHT_EMPTY => 0.0,
-                    _ => f64::from(e.value.max(0.0)),
-                })
-                .collect();
-            match crate::lights::alias::build(&weights) {
-                Some(alias) => out.extend(alias.iter().map(|a| GuideLightSlot {
-                    model: a.alias,
-                    value: a.threshold,
-                })),
-                // An empty table: every slot leads to its first, empty, packed slot.
-                None => out.extend(
-                    [GuideLightSlot {
-                        model: 0,
-                        value: 0.0,
-                    }; SLOTS],
-                ),
-            }
+        let leaves = self.lights.len() / SLOTS;
+        let mut out = vec![EMPTY_SLOT; self.light_buffer_len()];
+        for (leaf, table) in self.lights.chunks_exact(SLOTS).enumerate() {
+            let table: &[GuideLightSlot; SLOTS] = table.try_into().expect("whole tables");
+            write_leaf_lights(table, leaf, leaves, &mut out);
         }
         out
+    }
+}
+
+/// Write leaf `leaf`'s light tables into the light-table buffer `out` of `leaf_count`
+/// leaves (`GuideArrays::light_buffer`): its packed table, its hash copy and its alias
+/// table, each slot written once and none read (`out` may be write-combined memory).
+fn write_leaf_lights(
+    table: &[GuideLightSlot; SLOTS],
+    leaf: usize,
+    leaf_count: usize,
+    out: &mut [GuideLightSlot],
+) {
+    out[leaf * SLOTS..][..SLOTS].copy_from_slice(table);
+    let mut hash = [EMPTY_SLOT; HASH_SLOTS];
+    for entry in table.iter().take_while(|e| e.model != GUIDE_LIGHT_EMPTY) {
+        let mut i = light_hash_slot(entry.model);
+        while hash[i].model != GUIDE_LIGHT_EMPTY {
+            i = (i + 1) % HASH_SLOTS;
+        }
+        hash[i] = *entry;
+    }
+    out[leaf_count * SLOTS + leaf * HASH_SLOTS..][..HASH_SLOTS].copy_from_slice(&hash);
+    let weights = table.map(|e| match e.model {
+        GUIDE_LIGHT_EMPTY => 0.0,
+        _ => f64::from(e.value.max(0.0)),
+    });
+    let alias = &mut out[leaf_count * (SLOTS + HASH_SLOTS) + leaf * SLOTS..][..SLOTS];
+    match crate::lights::alias::build(&weights) {
+        Some(entries) => {
+            for (slot, a) in alias.iter_mut().zip(entries) {
+                *slot = GuideLightSlot {
+                    model: a.alias,
+                    value: a.threshold,
+                };
+            }
+        }
+        // An empty table: every slot leads to its first, empty, packed slot.
+        None => alias.fill(GuideLightSlot {
+            model: 0,
+            value: 0.0,
+        }),
     }
 }
 
@@ -239,10 +252,25 @@ fn unflatten(
     Ok((QuadTree::from_nodes(local).map_err(bad)?, reached))
 }
 
+/// Where each leaf's trees go in the flat arrays: (sampling root per leaf, number of
+/// sampling nodes, training root per leaf, number of training nodes).
+type FlatLayout = (Vec<u32>, usize, Vec<u32>, usize);
+
+/// The arrays being written by `SdTree::write_flat`, the light tables whole (packed,
+/// hash, alias).
+struct FlatOut<'a> {
+    header: &'a mut GuideHeader,
+    spatial: &'a mut [GuideSpatialNode],
+    leaves: &'a mut [GuideLeaf],
+    sampling: &'a mut [GuideQuadNode],
+    training: &'a mut [GuideQuadNode],
+    lights: &'a mut [GuideLightSlot],
+    light_training: &'a mut [GuideLightTrainingSlot],
+}
+
 impl SdTree {
-    /// Where each leaf's trees go in the flat arrays: (sampling root per leaf, number of
-    /// sampling nodes, training root per leaf, number of training nodes).
-    fn layout(&self) -> (Vec<u32>, usize, Vec<u32>, usize) {
+    /// Where each leaf's trees go in the flat arrays.
+    fn layout(&self) -> FlatLayout {
         let mut bases: HashMap<*const QuadTree, u32> = HashMap::new();
         let mut sampling_roots = Vec::with_capacity(self.leaves.len());
         let mut sampling_len = 0usize;
@@ -280,40 +308,131 @@ impl SdTree {
 
     /// The GPU buffers' contents.
     pub fn gpu_arrays(&self) -> GuideArrays {
-        let (sampling_roots, sampling_len, training_roots, training_len) = self.layout();
-        let header = GuideHeader {
+        let layout = self.layout();
+        let (n, slots) = (self.leaves.len(), self.leaves.len() * SLOTS);
+        let mut header = GuideHeader::default();
+        let mut spatial = vec![GuideSpatialNode::default(); self.nodes.len()];
+        let mut leaves = vec![GuideLeaf::default(); n];
+        let mut sampling = vec![GuideQuadNode::default(); layout.1];
+        let mut training = vec![GuideQuadNode::default(); layout.3];
+        let mut lights = vec![EMPTY_SLOT; slots / SLOTS * (2 * SLOTS + HASH_SLOTS)];
+        let mut light_training = vec![EMPTY_TRAINING_SLOT; slots];
+        self.write_flat(
+            &layout,
+            FlatOut {
+                header: &mut header,
+                spatial: &mut spatial,
+                leaves: &mut leaves,
+                sampling: &mut sampling,
+                training: &mut training,
+                lights: &mut lights,
+                light_training: &mut light_training,
+            },
+        );
+        // The arrays keep the packed tables; `light_buffer` derives the rest.
+        lights.truncate(slots);
+        GuideArrays {
+            header,
+            spatial,
+            leaves,
+            sampling,
+            training,
+            lights,
+            light_training,
+        }
+    }
+
+    /// Byte lengths of the six GPU buffers, in the order `write_gpu_buffers` fills them:
+    /// spatial (header and nodes), leaves, sampling trees, training trees, light tables
+    /// (packed, hash, alias: `GuideArrays::light_buffer`), light training tables.
+    pub fn gpu_buffer_lens(&self) -> [usize; GUIDE_BUFFERS] {
+        let (_, sampling, _, training) = self.layout();
+        let slots = self.leaves.len() * SLOTS;
+        [
+            HEADER_BYTES as usize + SPATIAL_NODE_BYTES as usize * self.nodes.len(),
+            LEAF_BYTES as usize * self.leaves.len(),
+            QUAD_NODE_BYTES as usize * sampling,
+            QUAD_NODE_BYTES as usize * training,
+            LIGHT_SLOT_BYTES as usize * (slots / SLOTS * (2 * SLOTS + HASH_SLOTS)),
+            LIGHT_TRAINING_SLOT_BYTES as usize * slots,
+        ]
+    }
+
+    /// Write the six GPU buffers' contents (`gpu_buffer_lens`: each part exactly that
+    /// long, 4-byte aligned) straight into upload memory: every byte is written, front
+    /// to back, and none is read, so the parts may hold anything before (staging kept
+    /// between passes) and may be write-combined. The bytes are those of `gpu_arrays`.
+    pub fn write_gpu_buffers(&self, parts: [&mut [u8]; GUIDE_BUFFERS]) {
+        let lens = self.gpu_buffer_lens();
+        for (part, len) in parts.iter().zip(lens) {
+            assert_eq!(part.len(), len, "a GPU buffer part of the wrong length");
+        }
+        let [spatial, leaves, sampling, training, lights, light_training] = parts;
+        let (header, spatial) = spatial.split_at_mut(HEADER_BYTES as usize);
+        self.write_flat(
+            &self.layout(),
+            FlatOut {
+                header: bytemuck::from_bytes_mut(header),
+                spatial: bytemuck::cast_slice_mut(spatial),
+                leaves: bytemuck::cast_slice_mut(leaves),
+                sampling: bytemuck::cast_slice_mut(sampling),
+                training: bytemuck::cast_slice_mut(training),
+                lights: bytemuck::cast_slice_mut(lights),
+                light_training: bytemuck::cast_slice_mut(light_training),
+            },
+        );
+    }
+
+    /// Fill every element of `out` (sized by `layout`) from the tree.
+    fn write_flat(&self, layout: &FlatLayout, out: FlatOut<'_>) {
+        let (sampling_roots, _, training_roots, _) = layout;
+        *out.header = GuideHeader {
             origin: self.origin.to_array(),
             size: self.size,
             flags: self.config.flags(),
             leaf_count: self.leaves.len() as u32,
             bsdf_fraction: self.config.bsdf_fraction,
         };
-        let spatial = self
-            .nodes
-            .iter()
-            .map(|n| match *n {
+        for (slot, n) in out.spatial.iter_mut().zip(&self.nodes) {
+            *slot = match *n {
                 SpatialNode::Interior { axis, first } => GuideSpatialNode { axis, child: first },
                 SpatialNode::Leaf { leaf } => GuideSpatialNode {
                     axis: GUIDE_SPATIAL_LEAF,
                     child: leaf,
                 },
-            })
-            .collect();
-        let mut sampling = Vec::with_capacity(sampling_len);
-        let mut training = Vec::with_capacity(training_len);
-        let mut leaves = Vec::with_capacity(self.leaves.len());
+            };
+        }
+        let write_tree = |dst: &mut [GuideQuadNode], tree: &QuadTree, base: u32| {
+            for (slot, n) in dst.iter_mut().zip(tree.nodes()) {
+                *slot = to_gpu_node(n, base);
+            }
+        };
+        let mut sampling_end = 0usize;
+        let leaf_count = self.leaves.len();
         for (i, leaf) in self.leaves.iter().enumerate() {
             let base = sampling_roots[i];
-            if base as usize == sampling.len() {
-                sampling.extend(leaf.sampling.nodes().iter().map(|n| to_gpu_node(n, base)));
+            // A shared sampling tree is written where its first leaf put it.
+            if base as usize == sampling_end {
+                let nodes = leaf.sampling.node_count();
+                write_tree(
+                    &mut out.sampling[sampling_end..][..nodes],
+                    &leaf.sampling,
+                    base,
+                );
+                sampling_end += nodes;
             }
-            training.push(GuideQuadNode {
+            let root = training_roots[i];
+            out.training[root as usize - 1] = GuideQuadNode {
                 sum: [leaf.training_weight, 0.0, 0.0, 0.0],
                 child: [0; 4],
-            });
-            let root = training_roots[i];
-            training.extend(leaf.training.nodes().iter().map(|n| to_gpu_node(n, root)));
-            leaves.push(GuideLeaf {
+            };
+            let nodes = leaf.training.node_count();
+            write_tree(
+                &mut out.training[root as usize..][..nodes],
+                &leaf.training,
+                root,
+            );
+            out.leaves[i] = GuideLeaf {
                 sampling_root: base,
                 training_root: root,
                 box_min: leaf.box_min.to_array(),
@@ -325,23 +444,14 @@ impl SdTree {
                     true if self.config.learn_light_mix => leaf.light_mix,
                     true => self.config.light_mix,
                 },
-            });
-        }
-        let mut lights = vec![EMPTY_SLOT; self.leaves.len() * SLOTS];
-        for (leaf, table) in self.leaves.iter().zip(lights.chunks_exact_mut(SLOTS)) {
+            };
+            let mut table = [EMPTY_SLOT; SLOTS];
             for (slot, &(model, p)) in table.iter_mut().zip(leaf.lights.iter()) {
                 *slot = GuideLightSlot { model, value: p };
             }
+            write_leaf_lights(&table, i, leaf_count, out.lights);
         }
-        GuideArrays {
-            header,
-            spatial,
-            leaves,
-            sampling,
-            training,
-            light_training: vec![EMPTY_TRAINING_SLOT; lights.len()],
-            lights,
-        }
+        out.light_training.fill(EMPTY_TRAINING_SLOT);
     }
 
     /// Take in the light training buffer read back after a pass (learned light

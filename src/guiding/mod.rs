@@ -37,7 +37,7 @@ pub use config::{
     DirectionalFilter, GuideDensity, GuideTarget, GuidingConfig, SpatialFilter,
     DEFAULT_MEMORY_CAP_BYTES, MAX_LIGHT_MIX,
 };
-pub use flat::{light_alias_sample, light_hash_lookup, GuideArrays};
+pub use flat::{light_alias_sample, light_hash_lookup, GuideArrays, GUIDE_BUFFERS};
 pub use io::{scene_hash_number, SavedTreeInfo, SceneHasher, FORMAT_VERSION};
 pub use light_mix::{LightSums, MAX_LEARNED_MIX};
 pub use quadtree::{Cell, QuadNode, QuadTree};

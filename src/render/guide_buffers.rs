@@ -2,6 +2,7 @@
 //! each refit, and the training copies read back after each pass.
 
 use crate::gpu;
+use crate::guiding::{SdTree, GUIDE_BUFFERS};
 use crate::vk::{self, Buffer, Device, MemoryLocation, Staging};
 use ash::vk as raw;
 use std::sync::{Arc, Mutex};
@@ -32,13 +33,14 @@ pub struct GuideBuffers {
     readbacks: Mutex<Staging>,
 }
 
-/// What a training pass left in the guiding buffers.
-pub struct PassReadback {
-    pub training: Vec<gpu::GuideQuadNode>,
+/// What a training pass left in the guiding buffers, as it lies in the read-back
+/// staging memory (valid while `GuideBuffers::read_pass` runs its closure).
+pub struct PassReadback<'a> {
+    pub training: &'a [gpu::GuideQuadNode],
     /// Empty unless the pass recorded the selection.
-    pub selection: Vec<gpu::GuideSelectionRecord>,
+    pub selection: &'a [gpu::GuideSelectionRecord],
     /// Empty unless asked for.
-    pub lights: Vec<gpu::GuideLightTrainingSlot>,
+    pub lights: &'a [gpu::GuideLightTrainingSlot],
 }
 
 const HEAD_BYTES: usize = std::mem::size_of::<gpu::GuideSelectionHead>();
@@ -105,67 +107,43 @@ impl GuideBuffers {
     }
 
     /// Upload an SD-tree's arrays into new buffers.
-    pub fn upload(
-        device: &Arc<Device>,
-        arrays: &crate::guiding::GuideArrays,
-    ) -> vk::Result<GuideBuffers> {
+    pub fn upload(device: &Arc<Device>, tree: &SdTree) -> vk::Result<GuideBuffers> {
         let mut buffers = GuideBuffers::empty(device)?;
-        buffers.refill(device, arrays)?;
+        buffers.refill(device, tree)?;
         Ok(buffers)
     }
 
     /// Upload an SD-tree's arrays, into the buffers already made where they are large
-    /// enough, in one submission. The selection head is reset to record nothing (a pass
-    /// that learns the selection asks with `add_selection_records`).
-    pub fn refill(
-        &mut self,
-        device: &Arc<Device>,
-        arrays: &crate::guiding::GuideArrays,
-    ) -> vk::Result<()> {
+    /// enough, in one submission: the tree is flattened straight into the staging
+    /// memory (`SdTree::write_gpu_buffers`), kept between passes, so no array is made
+    /// on the host. The selection head is reset to record nothing (a pass that learns
+    /// the selection asks with `add_selection_records`).
+    pub fn refill(&mut self, device: &Arc<Device>, tree: &SdTree) -> vk::Result<()> {
         let storage = raw::BufferUsageFlags::STORAGE_BUFFER;
-        let spatial = arrays.spatial_buffer();
-        let lights = arrays.light_buffer();
-        let parts: [(&[u8], &mut Buffer, &str); 6] = [
-            (
-                bytemuck::cast_slice(&spatial),
-                &mut self.spatial,
-                "guide spatial tree",
-            ),
-            (
-                bytemuck::cast_slice(&arrays.leaves),
-                &mut self.leaves,
-                "guide leaves",
-            ),
-            (
-                bytemuck::cast_slice(&arrays.sampling),
-                &mut self.sampling,
-                "guide sampling quadtrees",
-            ),
-            (
-                bytemuck::cast_slice(&arrays.training),
-                &mut self.training,
-                "guide training quadtrees",
-            ),
-            (
-                bytemuck::cast_slice(&lights),
-                &mut self.lights,
-                "guide light tables",
-            ),
-            (
-                bytemuck::cast_slice(&arrays.light_training),
-                &mut self.light_training,
-                "guide light training",
-            ),
+        let lens = tree.gpu_buffer_lens();
+        let buffers: [(&mut Buffer, &str); GUIDE_BUFFERS] = [
+            (&mut self.spatial, "guide spatial tree"),
+            (&mut self.leaves, "guide leaves"),
+            (&mut self.sampling, "guide sampling quadtrees"),
+            (&mut self.training, "guide training quadtrees"),
+            (&mut self.lights, "guide light tables"),
+            (&mut self.light_training, "guide light training"),
         ];
-        let mut copies: Vec<(&Buffer, &[u8])> = Vec::with_capacity(parts.len() + 1);
-        for (data, buffer, name) in parts {
-            make_room(device, buffer, data.len(), storage, name)?;
-            copies.push((buffer, data));
+        let mut parts: Vec<(&Buffer, usize)> = Vec::with_capacity(GUIDE_BUFFERS + 1);
+        for ((buffer, name), len) in buffers.into_iter().zip(lens) {
+            make_room(device, buffer, len, storage, name)?;
+            parts.push((buffer, len));
         }
-        copies.push((&self.selection, bytemuck::bytes_of(&NO_SELECTION)));
-        self.uploads.upload(device, &copies)?;
-        self.training_nodes = arrays.training.len();
-        self.light_slots = arrays.light_training.len();
+        parts.push((&self.selection, HEAD_BYTES));
+        self.uploads.upload_with(device, &parts, |dst| {
+            let [spatial, leaves, sampling, training, lights, light_training, head] = dst else {
+                unreachable!("seven parts asked for")
+            };
+            tree.write_gpu_buffers([spatial, leaves, sampling, training, lights, light_training]);
+            head.copy_from_slice(bytemuck::bytes_of(&NO_SELECTION));
+        })?;
+        self.training_nodes = lens[3] / std::mem::size_of::<gpu::GuideQuadNode>();
+        self.light_slots = lens[5] / std::mem::size_of::<gpu::GuideLightTrainingSlot>();
         self.selection_capacity = 0;
         Ok(())
     }
@@ -204,10 +182,17 @@ impl GuideBuffers {
         Ok(())
     }
 
-    /// Read back what a training pass recorded: the training quadtrees, the selection
-    /// records if it made room for them, the light training tables if `lights`. Two
-    /// submissions: the selection head (how many records), then everything else.
-    pub fn read_pass(&self, device: &Arc<Device>, lights: bool) -> vk::Result<PassReadback> {
+    /// Read back what a training pass recorded and hand it to `take`: the training
+    /// quadtrees, the selection records if it made room for them, the light training
+    /// tables if `lights`. Two submissions: the selection head (how many records), then
+    /// everything else. `take` reads them where the copy put them, in the staging
+    /// memory kept between passes (host-cached), so no array is made for them.
+    pub fn read_pass<R>(
+        &self,
+        device: &Arc<Device>,
+        lights: bool,
+        take: impl FnOnce(PassReadback<'_>) -> R,
+    ) -> vk::Result<R> {
         let mut staging = self.readbacks.lock().unwrap();
         let records = if self.selection_capacity > 0 {
             let head: gpu::GuideSelectionHead =
@@ -231,19 +216,20 @@ impl GuideBuffers {
                 (lights as usize * self.light_slots * slot) as u64,
             ),
         ];
-        staging.read(device, &parts, |b| PassReadback {
-            training: bytemuck::pod_collect_to_vec(b[0]),
-            selection: if records > 0 {
-                bytemuck::pod_collect_to_vec(&b[1][HEAD_BYTES..])
-            } else {
-                Vec::new()
-            },
-            lights: bytemuck::pod_collect_to_vec(b[2]),
+        staging.read(device, &parts, |b| {
+            take(PassReadback {
+                training: bytemuck::cast_slice(b[0]),
+                selection: match records {
+                    0 => &[],
+                    _ => bytemuck::cast_slice(&b[1][HEAD_BYTES..]),
+                },
+                lights: bytemuck::cast_slice(b[2]),
+            })
         })
     }
 
     /// Read the training quadtrees back after a pass.
     pub fn read_training(&self, device: &Arc<Device>) -> vk::Result<Vec<gpu::GuideQuadNode>> {
-        Ok(self.read_pass(device, false)?.training)
+        self.read_pass(device, false, |pass| pass.training.to_vec())
     }
 }

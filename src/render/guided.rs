@@ -277,8 +277,7 @@ pub fn run_guided(
         });
     }
     let upload = Instant::now();
-    let arrays = tree.gpu_arrays();
-    renderer.update_guide_buffers(|b, device| b.refill(device, &arrays))?;
+    renderer.update_guide_buffers(|b, device| b.refill(device, &tree))?;
     log::debug!(
         "final SD-tree uploaded in {:.3} s",
         upload.elapsed().as_secs_f64()
@@ -400,8 +399,7 @@ fn train_iteration(
     // Pass k > 0 renders with what the previous pass uploaded after its refit (the same
     // arrays, training sums zero); only the first uploads here.
     if k == 0 {
-        let arrays = tree.gpu_arrays();
-        renderer.update_guide_buffers(|b, device| b.refill(device, &arrays))?;
+        renderer.update_guide_buffers(|b, device| b.refill(device, tree))?;
     }
     // As in the reference implementation, the selection probability only learns once
     // the leaves have sampling trees: against the first pass's uniform stand-in every
@@ -467,31 +465,41 @@ fn train_iteration(
     }
     let render_seconds = t.elapsed().as_secs_f64();
 
+    // The read-back's records are taken in where the copy left them (the staging
+    // memory): the selection learns from them (before the refit: they name the leaves
+    // of the tree that rendered the pass), then the training sums and light tables.
     let t = Instant::now();
     let learn_lights = renderer.settings.guiding.learn_lights;
-    let pass = renderer
+    let source_pmf = if learn_lights {
+        renderer.source_model_pmf()
+    } else {
+        Vec::new()
+    };
+    let mut readback_seconds = 0.0;
+    let mut selection_seconds = 0.0;
+    let taken = renderer
         .guide_buffers()
-        .read_pass(&renderer.device, learn_lights)?;
-    let readback_seconds = t.elapsed().as_secs_f64();
+        .read_pass(&renderer.device, learn_lights, |pass| {
+            readback_seconds = t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            let selection = tree.learn_selection(pass.selection);
+            selection_seconds = t.elapsed().as_secs_f64();
+            tree.load_training_readback(pass.training)?;
+            if learn_lights {
+                tree.load_light_readback(pass.lights, &source_pmf)?;
+            }
+            Ok(selection)
+        })?;
+    let selection = taken.map_err(guiding_error)?;
+    let load_seconds = t.elapsed().as_secs_f64() - readback_seconds - selection_seconds;
 
     let t = Instant::now();
-    // Before the refit: the records name the leaves of the tree that rendered the pass.
-    let selection = tree.learn_selection(&pass.selection);
-    let selection_seconds = t.elapsed().as_secs_f64();
-    tree.load_training_readback(&pass.training)
-        .map_err(guiding_error)?;
-    if learn_lights {
-        tree.load_light_readback(&pass.lights, &renderer.source_model_pmf())
-            .map_err(guiding_error)?;
-    }
-    let load_seconds = t.elapsed().as_secs_f64() - selection_seconds;
     let refit = tree.refit(next_spp);
-    let refit_seconds = t.elapsed().as_secs_f64();
+    let refit_seconds = t.elapsed().as_secs_f64() + selection_seconds + load_seconds;
 
+    // Flattened straight into the staging memory and copied to the GPU.
     let t = Instant::now();
-    let arrays = tree.gpu_arrays();
-    let flatten_seconds = t.elapsed().as_secs_f64();
-    renderer.update_guide_buffers(|b, device| b.refill(device, &arrays))?;
+    renderer.update_guide_buffers(|b, device| b.refill(device, tree))?;
     upload_seconds += t.elapsed().as_secs_f64();
     let it = IterationStats {
         iteration: k,
@@ -513,7 +521,7 @@ fn train_iteration(
         mean_light_mix: tree.mean_light_mix(),
     };
     log::debug!(
-        "guiding iteration {k}: {done} spp in {:.2} s (GPU {:.2} s), read-back {:.3} s, refit {:.3} s (selection {:.3}, training sums in {:.3}, refit {:.3}), upload {:.3} s (flatten {:.3}); {} leaves, {} + {} nodes, {:.1} KiB; selection: {} records, mean BSDF fraction {:.3}, mean light mix {:.3}",
+        "guiding iteration {k}: {done} spp in {:.2} s (GPU {:.2} s), read-back {:.3} s, refit {:.3} s (selection {:.3}, training sums in {:.3}, refit {:.3}), upload {:.3} s; {} leaves, {} + {} nodes, {:.1} KiB; selection: {} records, mean BSDF fraction {:.3}, mean light mix {:.3}",
         it.render_seconds,
         it.gpu_seconds,
         it.readback_seconds,
@@ -522,7 +530,6 @@ fn train_iteration(
         load_seconds,
         it.refit_seconds - selection_seconds - load_seconds,
         it.upload_seconds,
-        flatten_seconds,
         it.leaves,
         it.sampling_nodes,
         it.training_nodes,

@@ -123,11 +123,14 @@ impl Buffer {
 
     /// Write into the buffer's host mapping (buffers made in `CpuToGpu` memory).
     pub fn write_mapped(&mut self, offset: usize, bytes: &[u8]) {
+        self.write_mapping()[offset..offset + bytes.len()].copy_from_slice(bytes);
+    }
+
+    /// The buffer's host mapping to write into (buffers made in `CpuToGpu` memory).
+    pub fn write_mapping(&mut self) -> &mut [u8] {
         let name = self.name.clone();
-        let slice = self
-            .mapped()
-            .unwrap_or_else(|| panic!("buffer {name} is not host visible"));
-        slice[offset..offset + bytes.len()].copy_from_slice(bytes);
+        self.mapped()
+            .unwrap_or_else(|| panic!("buffer {name} is not host visible"))
     }
 
     /// Read from the buffer's host mapping (buffers made in `GpuToCpu` memory).

@@ -74,30 +74,60 @@ impl Staging {
 
     /// Copy each part's bytes to the start of its buffer, in one submission.
     pub fn upload(&mut self, device: &Arc<Device>, parts: &[(&Buffer, &[u8])]) -> Result<()> {
-        for (dst, bytes) in parts {
+        let lens: Vec<(&Buffer, usize)> =
+            parts.iter().map(|(b, bytes)| (*b, bytes.len())).collect();
+        self.upload_with(device, &lens, |dst| {
+            for (d, (_, bytes)) in dst.iter_mut().zip(parts) {
+                d.copy_from_slice(bytes);
+            }
+        })
+    }
+
+    /// Upload `len` bytes to the start of each buffer, in one submission, written by
+    /// `fill` straight into the staging memory: it gets one slice per part, exactly
+    /// `len` long, at offsets from the mapping's start that are multiples of 16, holding
+    /// whatever the last transfer left there
+    /// (every byte must be written; the memory may be write-combined, so reading it is
+    /// slow).
+    pub fn upload_with(
+        &mut self,
+        device: &Arc<Device>,
+        parts: &[(&Buffer, usize)],
+        fill: impl FnOnce(&mut [&mut [u8]]),
+    ) -> Result<()> {
+        for &(dst, len) in parts {
             assert!(
-                bytes.len() as u64 <= dst.size,
+                len as u64 <= dst.size,
                 "upload out of bounds of {}",
                 dst.name
             );
         }
-        let (offsets, total) = layout(parts.iter().map(|(_, b)| b.len() as u64));
+        let (offsets, total) = layout(parts.iter().map(|&(_, len)| len as u64));
         if total == 0 {
             return Ok(());
         }
         let staging = self.at_least(device, total)?;
-        for ((_, bytes), &offset) in parts.iter().zip(&offsets) {
-            staging.write_mapped(offset as usize, bytes);
+        let mapped = staging.write_mapping();
+        let mut slices: Vec<&mut [u8]> = Vec::with_capacity(parts.len());
+        let mut rest = &mut mapped[..total as usize];
+        let mut at = 0u64;
+        for (&(_, len), &offset) in parts.iter().zip(&offsets) {
+            let (_, tail) = std::mem::take(&mut rest).split_at_mut((offset - at) as usize);
+            let (part, tail) = tail.split_at_mut(len);
+            slices.push(part);
+            rest = tail;
+            at = offset + len as u64;
         }
+        fill(&mut slices);
         let src = staging.raw;
         device.submit(|cmd| {
-            for ((dst, bytes), &offset) in parts.iter().zip(&offsets) {
-                if bytes.is_empty() {
+            for (&(dst, len), &offset) in parts.iter().zip(&offsets) {
+                if len == 0 {
                     continue;
                 }
                 let region = [vk::BufferCopy::default()
                     .src_offset(offset)
-                    .size(bytes.len() as u64)];
+                    .size(len as u64)];
                 unsafe { device.raw.cmd_copy_buffer(cmd, src, dst.raw, &region) };
             }
         })
