@@ -47,8 +47,11 @@ fn logit(p: f32) -> f32 {
 
 /// θ's bounds: logit of the fraction bounds.
 pub fn theta_max() -> f32 {
-    logit(MAX_FRACTION)
+    *THETA_MAX
 }
+
+/// `theta_max`, computed once (every Adam step clamps to it).
+static THETA_MAX: std::sync::LazyLock<f32> = std::sync::LazyLock::new(|| logit(MAX_FRACTION));
 
 /// One leaf's optimiser: the logit and Adam's moments.
 #[derive(Clone, Copy, Debug)]
@@ -57,6 +60,10 @@ pub struct SelectionState {
     first_moment: f32,
     second_moment: f32,
     steps: u32,
+    /// β₁ and β₂ to the power `steps` (Adam's bias corrections), kept as running
+    /// products rather than taken by `powi` at every step.
+    beta1_power: f32,
+    beta2_power: f32,
     batch_gradient: f32,
     batch_weight: f32,
     /// The fraction read from a saved tree, used as it is until the next step: σ(logit(α))
@@ -88,6 +95,8 @@ impl SelectionState {
             first_moment: 0.0,
             second_moment: 0.0,
             steps: 0,
+            beta1_power: 1.0,
+            beta2_power: 1.0,
             batch_gradient: 0.0,
             batch_weight: 0.0,
             restored: None,
@@ -164,10 +173,11 @@ impl SelectionState {
     pub fn step(&mut self, g: f32) {
         self.restored = None;
         self.steps += 1;
-        let t = self.steps as i32;
+        self.beta1_power *= BETA1;
+        self.beta2_power *= BETA2;
         self.first_moment = BETA1 * self.first_moment + (1.0 - BETA1) * g;
         self.second_moment = BETA2 * self.second_moment + (1.0 - BETA2) * g * g;
-        let rate = LEARNING_RATE * (1.0 - BETA2.powi(t)).sqrt() / (1.0 - BETA1.powi(t));
+        let rate = LEARNING_RATE * (1.0 - self.beta2_power).sqrt() / (1.0 - self.beta1_power);
         self.theta -= rate * self.first_moment / (self.second_moment.sqrt() + EPSILON);
         let m = theta_max();
         self.theta = self.theta.clamp(-m, m);
