@@ -289,21 +289,9 @@ impl SdTree {
         (sampling_roots, sampling_len, training_roots, training_len)
     }
 
-    pub(crate) fn sampling_node_count(&self) -> usize {
-        self.layout().1
-    }
-
-    pub(crate) fn training_node_count(&self) -> usize {
-        self.layout().3
-    }
-
-    /// Bytes of the four GPU buffers `gpu_arrays` would fill.
+    /// Bytes of the GPU buffers `gpu_arrays` would fill.
     pub fn gpu_bytes(&self) -> u64 {
-        let (_, sampling, _, training) = self.layout();
-        HEADER_BYTES
-            + SPATIAL_NODE_BYTES * self.nodes.len() as u64
-            + LEAF_TOTAL_BYTES * self.leaves.len() as u64
-            + QUAD_NODE_BYTES * (sampling + training) as u64
+        self.gpu_buffer_lens().iter().sum::<usize>() as u64
     }
 
     /// The GPU buffers' contents.
@@ -346,7 +334,12 @@ impl SdTree {
     /// spatial (header and nodes), leaves, sampling trees, training trees, light tables
     /// (packed, hash, alias: `GuideArrays::light_buffer`), light training tables.
     pub fn gpu_buffer_lens(&self) -> [usize; GUIDE_BUFFERS] {
-        let (_, sampling, _, training) = self.layout();
+        self.buffer_lens(&self.layout())
+    }
+
+    /// `gpu_buffer_lens` for the tree's `layout`.
+    fn buffer_lens(&self, layout: &FlatLayout) -> [usize; GUIDE_BUFFERS] {
+        let (_, sampling, _, training) = *layout;
         let slots = self.leaves.len() * SLOTS;
         [
             HEADER_BYTES as usize + SPATIAL_NODE_BYTES as usize * self.nodes.len(),
@@ -363,14 +356,14 @@ impl SdTree {
     /// to back, and none is read, so the parts may hold anything before (staging kept
     /// between passes) and may be write-combined. The bytes are those of `gpu_arrays`.
     pub fn write_gpu_buffers(&self, parts: [&mut [u8]; GUIDE_BUFFERS]) {
-        let lens = self.gpu_buffer_lens();
-        for (part, len) in parts.iter().zip(lens) {
+        let layout = self.layout();
+        for (part, len) in parts.iter().zip(self.buffer_lens(&layout)) {
             assert_eq!(part.len(), len, "a GPU buffer part of the wrong length");
         }
         let [spatial, leaves, sampling, training, lights, light_training] = parts;
         let (header, spatial) = spatial.split_at_mut(HEADER_BYTES as usize);
         self.write_flat(
-            &self.layout(),
+            &layout,
             FlatOut {
                 header: bytemuck::from_bytes_mut(header),
                 spatial: bytemuck::cast_slice_mut(spatial),

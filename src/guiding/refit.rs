@@ -135,11 +135,14 @@ impl SdTree {
         self.iterations += 1;
         stats.leaves = self.leaves.len();
         stats.spatial_nodes = self.nodes.len();
-        stats.sampling_nodes = self.sampling_node_count();
-        stats.training_nodes = self.training_node_count();
+        // The GPU buffers' sizes (`gpu_buffer_lens`: the sampling and the training
+        // trees are the third and fourth).
+        let lens = self.gpu_buffer_lens();
+        stats.sampling_nodes = lens[2] / QUAD_NODE_BYTES as usize;
+        stats.training_nodes = lens[3] / QUAD_NODE_BYTES as usize;
         // Splits share the trees just built: their depth is the deepest of those.
         stats.max_quad_depth = max_depth_built;
-        stats.gpu_bytes = self.gpu_bytes();
+        stats.gpu_bytes = lens.iter().sum::<usize>() as u64;
         stats
     }
 
