@@ -33,6 +33,8 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from kernel_spills import KERNEL_MIN_INSTRUCTIONS, functions  # noqa: E402
 # gallivm's functions start 16-byte aligned.
 ALIGN = 16
+# gallivm's disassembler (lp_bld_debug.cpp) lists at most this many bytes of a function.
+LISTING_LIMIT = 96 * 1024
 
 
 def jit_samples(perf_data):
@@ -116,6 +118,20 @@ def main():
     if not placed:
         sys.exit("no kernel could be placed: was it compiled in this run (shader cache off)?")
     hits, k, ins, base = max(placed)
+    # gallivm's disassembler stops after 96 KiB of a function, so a larger kernel's
+    # listing ends there while its code goes on: samples past the listing's end, up to
+    # the next kernel, are the same kernel's (no other function there is that large).
+    end = base + ins[-1][0] + 16
+    if ins[-1][0] + 16 >= LISTING_LIMIT - 64:
+        others = [b for _, kk, _, b in placed if kk != k and b > base]
+        limit = min(others, default=end + (64 << 20))
+        beyond = [ip for ip in ips if end <= ip < limit]
+        if beyond:
+            print(f"kernel {k}'s listing stops at gallivm's {LISTING_LIMIT // 1024} KiB "
+                  f"disassembly limit; {len(beyond)} more samples "
+                  f"({100 * len(beyond) / len(ips):.1f} % of JIT samples) fall in its code "
+                  f"past that, up to {max(beyond) - base:#x} bytes from its start "
+                  f"(the windows below cover the listed part only)")
     counts = collections.Counter(ip - base for ip in ips)
     print(f"\nhottest windows of {a.window} instructions in kernel {k} "
           f"(index of the first instruction, its offset, share of the kernel's samples, opcodes):")
