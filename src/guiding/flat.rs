@@ -32,10 +32,12 @@ const SLOTS: usize = GUIDE_LIGHT_SLOTS as usize;
 /// The guiding buffers a tree fills (`SdTree::write_gpu_buffers`).
 pub const GUIDE_BUFFERS: usize = 6;
 const HASH_SLOTS: usize = GUIDE_LIGHT_HASH_SLOTS as usize;
+/// Slots of the light-table buffer per leaf: its packed table, hash copy and alias table.
+const LIGHT_BUFFER_SLOTS: usize = 2 * SLOTS + HASH_SLOTS;
 /// GPU bytes one leaf adds besides its quadtrees: its record and its light tables (the
 /// packed one and its hash copy, and the training table).
 pub(crate) const LEAF_TOTAL_BYTES: u64 = LEAF_BYTES
-    + LIGHT_SLOT_BYTES * (2 * SLOTS + HASH_SLOTS) as u64
+    + LIGHT_SLOT_BYTES * LIGHT_BUFFER_SLOTS as u64
     + LIGHT_TRAINING_SLOT_BYTES * SLOTS as u64;
 
 /// The contents of the four guiding buffers.
@@ -91,7 +93,7 @@ impl GuideArrays {
     /// Slots of the light-table buffer (BINDING_GUIDE_LIGHTS): the packed tables, their
     /// hash copies, their alias tables.
     pub fn light_buffer_len(&self) -> usize {
-        self.lights.len() / SLOTS * (2 * SLOTS + HASH_SLOTS)
+        self.lights.len() / SLOTS * LIGHT_BUFFER_SLOTS
     }
 
     /// Contents of the light-table buffer: every leaf's packed table (`lights`), then
@@ -303,7 +305,7 @@ impl SdTree {
         let mut leaves = vec![GuideLeaf::default(); n];
         let mut sampling = vec![GuideQuadNode::default(); layout.1];
         let mut training = vec![GuideQuadNode::default(); layout.3];
-        let mut lights = vec![EMPTY_SLOT; slots / SLOTS * (2 * SLOTS + HASH_SLOTS)];
+        let mut lights = vec![EMPTY_SLOT; n * LIGHT_BUFFER_SLOTS];
         let mut light_training = vec![EMPTY_TRAINING_SLOT; slots];
         self.write_flat(
             &layout,
@@ -346,7 +348,7 @@ impl SdTree {
             LEAF_BYTES as usize * self.leaves.len(),
             QUAD_NODE_BYTES as usize * sampling,
             QUAD_NODE_BYTES as usize * training,
-            LIGHT_SLOT_BYTES as usize * (slots / SLOTS * (2 * SLOTS + HASH_SLOTS)),
+            LIGHT_SLOT_BYTES as usize * self.leaves.len() * LIGHT_BUFFER_SLOTS,
             LIGHT_TRAINING_SLOT_BYTES as usize * slots,
         ]
     }

@@ -84,11 +84,10 @@ impl Staging {
     }
 
     /// Upload `len` bytes to the start of each buffer, in one submission, written by
-    /// `fill` straight into the staging memory: it gets one slice per part, exactly
-    /// `len` long, at offsets from the mapping's start that are multiples of 16, holding
-    /// whatever the last transfer left there
-    /// (every byte must be written; the memory may be write-combined, so reading it is
-    /// slow).
+    /// `fill` straight into the staging memory. `fill` gets one slice per part, exactly
+    /// `len` long, at offsets from the mapping's start that are multiples of 16. The
+    /// slices hold whatever the last transfer left there: every byte must be written
+    /// (and none should be read: the memory may be write-combined).
     pub fn upload_with(
         &mut self,
         device: &Arc<Device>,
