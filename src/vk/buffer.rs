@@ -189,6 +189,20 @@ impl Buffer {
 
     /// Read the first `len` bytes back (through a staging buffer).
     pub fn read_bytes(&self, len: u64) -> Result<Vec<u8>> {
+        self.read_with(len, <[u8]>::to_vec)
+    }
+
+    /// Read `count` elements of `T` back, copied once from the staging memory.
+    pub fn read<T: bytemuck::Pod>(&self, count: usize) -> Result<Vec<T>> {
+        self.read_with(
+            (count * std::mem::size_of::<T>()) as u64,
+            bytemuck::pod_collect_to_vec,
+        )
+    }
+
+    /// Copy the first `len` bytes (at most the buffer's size) into a staging buffer and
+    /// hand its mapping to `take`.
+    fn read_with<R>(&self, len: u64, take: impl FnOnce(&[u8]) -> R) -> Result<R> {
         let len = len.min(self.size);
         let mut staging = Buffer::new(
             &self.device,
@@ -203,13 +217,7 @@ impl Buffer {
                 .raw
                 .cmd_copy_buffer(cmd, self.raw, staging.raw, &region);
         })?;
-        Ok(staging.read_mapped()[..len as usize].to_vec())
-    }
-
-    /// Read `count` elements of `T` back.
-    pub fn read<T: bytemuck::Pod>(&self, count: usize) -> Result<Vec<T>> {
-        let bytes = self.read_bytes((count * std::mem::size_of::<T>()) as u64)?;
-        Ok(bytemuck::pod_collect_to_vec(&bytes))
+        Ok(take(&staging.read_mapped()[..len as usize]))
     }
 }
 
