@@ -55,7 +55,8 @@ pub struct GuidingOutcome {
     /// The trained (or loaded) tree, as the final render used it.
     pub tree: SdTree,
     /// The run was interrupted while training: there was no render phase, and the film
-    /// is the last training pass (rendered with one fixed tree, so still a consistent
+    /// is the training passes the output keeps, so far (the last pass alone for
+    /// `RenderPhase`; each pass rendered with one fixed tree, so still a consistent
     /// image of its sample range), the tree the one trained so far.
     pub interrupted_in_training: bool,
 }
@@ -251,13 +252,13 @@ pub fn run_guided(
     };
     let training_seconds = started.elapsed().as_secs_f64();
     if cancel.load(Ordering::SeqCst) {
-        // Keep what is consistent: the last training pass's film (still in the film
-        // buffer) and the tree so far, rather than nothing.
+        // Keep what is consistent: the film buffer's passes (the last, or with
+        // `AllPasses` every one so far) and the tree so far, rather than nothing.
         if iterations.is_empty() {
             renderer.clear_film()?;
         }
-        // With `AllPasses` or `LatePasses`, the passes kept so far (the film's own, the
-        // last, among them).
+        // With `LatePasses`, the passes kept so far (the film's own, the last, among
+        // them).
         let film = match kept.as_ref().and_then(|k| k.merged_so_far()) {
             Some(f) => f,
             None => renderer.film()?,
@@ -283,8 +284,12 @@ pub fn run_guided(
         upload.elapsed().as_secs_f64()
     );
 
-    // The render phase: the rest of the budget with the tree frozen.
-    renderer.clear_film()?;
+    // The render phase: the rest of the budget with the tree frozen, in a cleared film
+    // unless the film holds the training passes the output keeps.
+    if iterations.is_empty() || !kept.as_ref().is_some_and(|k| k.in_device_film()) {
+        renderer.clear_film()?;
+    }
+    let in_film_before = renderer.film_spp();
     let trained = sample - first;
     // With the combination, the render phase is rendered as two halves too.
     let mut half: Option<Film> = None;
@@ -341,7 +346,7 @@ pub fn run_guided(
                 &mut |d| progress(trained + a + d),
                 &mut stats,
             )?;
-            if renderer.film_spp() == 0 && !cancel.load(Ordering::SeqCst) {
+            if renderer.film_spp() == in_film_before && !cancel.load(Ordering::SeqCst) {
                 // Training used the whole budget: render at least one sample.
                 renderer.render_samples(
                     sample,
@@ -423,7 +428,13 @@ fn train_iteration(
     if cancel.load(Ordering::SeqCst) {
         return Ok(None);
     }
-    renderer.clear_film()?;
+    // Each pass renders into a cleared film, except with an output that keeps every
+    // pass in the device's film (`KeptPasses::in_device_film`): after the first pass
+    // it accumulates.
+    let in_film = kept.as_ref().is_some_and(|k| k.in_device_film());
+    if k == 0 || !in_film {
+        renderer.clear_film()?;
+    }
     let gpu_before = stats.gpu_seconds;
     let t = Instant::now();
     // For the inverse-variance combination, render two halves: their difference
@@ -460,9 +471,11 @@ fn train_iteration(
             stats,
         )?;
     }
-    if let Some(kept) = kept {
+    let keep = Instant::now();
+    if let Some(kept) = kept.filter(|_| !in_film) {
         kept.add(renderer.film()?, half.as_ref());
     }
+    let keep_seconds = keep.elapsed().as_secs_f64();
     let render_seconds = t.elapsed().as_secs_f64();
 
     // The read-back's records are taken in where the copy left them (the staging
@@ -521,9 +534,10 @@ fn train_iteration(
         mean_light_mix: tree.mean_light_mix(),
     };
     log::debug!(
-        "guiding iteration {k}: {done} spp in {:.2} s (GPU {:.2} s), read-back {:.3} s, refit {:.3} s (selection {:.3}, training sums in {:.3}, refit {:.3}), upload {:.3} s; {} leaves, {} + {} nodes, {:.1} KiB; selection: {} records, mean BSDF fraction {:.3}, mean light mix {:.3}",
+        "guiding iteration {k}: {done} spp in {:.2} s (GPU {:.2} s, film kept in {:.3} s), read-back {:.3} s, refit {:.3} s (selection {:.3}, training sums in {:.3}, refit {:.3}), upload {:.3} s; {} leaves, {} + {} nodes, {:.1} KiB; selection: {} records, mean BSDF fraction {:.3}, mean light mix {:.3}",
         it.render_seconds,
         it.gpu_seconds,
+        keep_seconds,
         it.readback_seconds,
         it.refit_seconds,
         selection_seconds,

@@ -35,8 +35,8 @@ pub const LATE_TRAINING_PASSES: usize = 4;
 #[derive(Debug)]
 pub struct KeptPasses {
     output: GuidedOutput,
-    /// `LatePasses`: the films of the last passes, oldest first; `AllPasses`: one film,
-    /// the sum of every pass so far.
+    /// `LatePasses`: the films of the last passes, oldest first (`AllPasses` keeps its
+    /// passes in the device's film: `in_device_film`).
     films: VecDeque<Film>,
     /// `InverseVariance`: each pass's mean image and estimated mean pixel variance.
     estimates: Vec<(Vec<f32>, f64)>,
@@ -50,6 +50,15 @@ impl KeptPasses {
             films: VecDeque::new(),
             estimates: Vec::new(),
         })
+    }
+
+    /// Whether the kept passes stay in the device's film rather than being read back
+    /// after each pass: `AllPasses` is the sum of every pass and the render phase, one
+    /// contiguous range of sample indices, which the film accumulates by itself when it
+    /// is not cleared between them (exact fixed-point sums: the same film as merging
+    /// the passes' read-backs on the host, without a read-back and merge per pass).
+    pub fn in_device_film(&self) -> bool {
+        self.output == GuidedOutput::AllPasses
     }
 
     /// Whether passes are to be rendered as two halves (for a variance estimate).
@@ -82,7 +91,9 @@ impl KeptPasses {
     }
 
     /// `AllPasses` and `LatePasses`: the kept training films merged with `last` (the
-    /// render phase), which follows them in sample order. Other outputs: `last`.
+    /// render phase), which follows them in sample order; `last` alone for the other
+    /// outputs, and for `AllPasses` kept in the device's film (`in_device_film`: none
+    /// were added).
     pub fn merged_film(&self, last: Film) -> Film {
         if !matches!(
             self.output,
