@@ -241,7 +241,7 @@ void nee_resolve(inout NeeResult r, bool visible) {
 }
 
 uint light_model_of(LightSample ls) {
-    return ls.tri != INVALID_INDEX ? light_triangles[ls.tri].model : INVALID_INDEX;
+    return ls.tri != INVALID_INDEX ? light_triangles(ls.tri).model : INVALID_INDEX;
 }
 
 // The shadow ray that decides whether the light point of `ls` is visible from the
@@ -419,7 +419,7 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
         extra.ls.dist = next_t;
         extra.ls.cos_y = abs(dot(next.ng, ds.wi));
         // The target's emission, as sample_light(…, false) gives it for this point.
-        extra.ls.Le_G = light_candidates[next.light_tri].emission * extra.ls.cos_y / max(next_t * next_t, 1e-20);
+        extra.ls.Le_G = light_candidates(next.light_tri).emission * extra.ls.cos_y / max(next_t * next_t, 1e-20);
         extra.ls.pdf = light_source_pdf(d.lights, next.light_tri);
         extra.ls.area = true;
         extra.ls.tri = next.light_tri;
@@ -440,7 +440,7 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
     TRACE4("  ris: %u candidates + %u direction candidate, kept=%u (direction candidate: %u)\n", params.ris_candidates,
            uint(has_extra), uint(res.found), uint(res.extra_chosen));
     if (!res.found) return r;
-    r.chosen_model = res.extra_chosen ? instances[next.instance].light_model : light_model_of(res.y.ls);
+    r.chosen_model = res.extra_chosen ? instances(next.instance).light_model : light_model_of(res.y.ls);
     r.ris_weight = res.W;
     // The extra candidate's visibility is known: its ray hit it.
     if (res.extra_chosen) r.connected = true;

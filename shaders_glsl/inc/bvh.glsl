@@ -58,7 +58,7 @@ Hit trace_ray(vec3 o, vec3 d, float tmax, bool any_hit) {
     while (true) {
         lane_stats_traversal_step();
         if ((ref & BVH_LEAF_BIT) == 0u) {
-            BvhNode n = bvh_nodes[ref];
+            BvhNode n = bvh_nodes(ref);
             float ta = bvh_box_entry(n.a_min, n.a_max, o, inv_d, best);
             float tb = bvh_box_entry(n.b_min, n.b_max, o, inv_d, best);
             bool ha = ta < FLT_MAX;
@@ -80,7 +80,7 @@ Hit trace_ray(vec3 o, vec3 d, float tmax, bool any_hit) {
             uint first = ref & BVH_LEAF_FIRST_MASK;
             uint end = first + ((ref >> BVH_LEAF_COUNT_SHIFT) & BVH_LEAF_COUNT_MASK) + 1u;
             for (uint i = first; i < end; ++i) {
-                BvhTriangle tri = bvh_triangles[i];
+                BvhTriangle tri = bvh_triangles(i);
                 // Möller–Trumbore.
                 vec3 pvec = cross(d, tri.e2);
                 float det = dot(tri.e1, pvec);

@@ -7,13 +7,13 @@
 
 uvec3 triangle_vertices(Instance inst, uint primitive) {
     uint base = inst.index_offset + 3u * primitive;
-    return uvec3(indices[base], indices[base + 1u], indices[base + 2u]) + inst.vertex_offset;
+    return uvec3(indices(base), indices(base + 1u), indices(base + 2u)) + inst.vertex_offset;
 }
 
 vec2 interpolate_uv(uvec3 v, vec3 w, uint set) {
     if (set == 1u)
-        return w.x * vertices[v.x].uv1 + w.y * vertices[v.y].uv1 + w.z * vertices[v.z].uv1;
-    return w.x * vertices[v.x].uv0 + w.y * vertices[v.y].uv0 + w.z * vertices[v.z].uv0;
+        return w.x * vertices(v.x).uv1 + w.y * vertices(v.y).uv1 + w.z * vertices(v.z).uv1;
+    return w.x * vertices(v.x).uv0 + w.y * vertices(v.y).uv0 + w.z * vertices(v.z).uv0;
 }
 
 // The interpolated COLOR_0 of an instance's triangle with global vertex indices v (white
@@ -21,7 +21,7 @@ vec2 interpolate_uv(uvec3 v, vec3 w, uint set) {
 vec4 interpolate_color(Instance inst, uvec3 v, vec3 w) {
     if (inst.color_offset == INVALID_INDEX) return vec4(1.0);
     uvec3 c = v - inst.vertex_offset + inst.color_offset;
-    return w.x * vertex_colors[c.x] + w.y * vertex_colors[c.y] + w.z * vertex_colors[c.z];
+    return w.x * vertex_colors(c.x) + w.y * vertex_colors(c.y) + w.z * vertex_colors(c.z);
 }
 
 // KHR_texture_transform: offset · rotation · scale applied to a UV.

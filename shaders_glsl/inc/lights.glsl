@@ -40,17 +40,17 @@ uint alias_sample(uint begin, uint count, float u, bool models) {
     float threshold;
     uint alias;
     if (models) {
-        threshold = model_alias[begin + i].threshold;
-        alias = model_alias[begin + i].alias;
+        threshold = model_alias(begin + i).threshold;
+        alias = model_alias(begin + i).alias;
     } else {
-        threshold = triangle_alias[begin + i].threshold;
-        alias = triangle_alias[begin + i].alias;
+        threshold = triangle_alias(begin + i).threshold;
+        alias = triangle_alias(begin + i).alias;
     }
     return frac < threshold ? i : alias;
 }
 
 float source_model_pmf(uint model) {
-    if (params.ris_source == RIS_SOURCE_POWER) return model_alias[model].pmf;
+    if (params.ris_source == RIS_SOURCE_POWER) return model_alias(model).pmf;
     return 1.0 / float(params.light_model_count);
 }
 
@@ -110,21 +110,21 @@ float model_pmf(LightContext ctx, uint model) {
 }
 
 float triangle_pmf(uint tri, LightModel m) {
-    if (params.ris_source == RIS_SOURCE_POWER) return triangle_alias[tri].pmf;
+    if (params.ris_source == RIS_SOURCE_POWER) return triangle_alias(tri).pmf;
     return 1.0 / float(m.triangle_count);
 }
 
 // Source density (per unit area) of a point on light triangle `tri`, seen from ctx.p.
 float light_source_pdf(LightContext ctx, uint tri) {
     if (tri == INVALID_INDEX) return 0.0;
-    uint model = light_triangles[tri].model;
-    return model_pmf(ctx, model) * triangle_pmf(tri, light_models[model]) * light_candidates[tri].inv_area;
+    uint model = light_triangles(tri).model;
+    return model_pmf(ctx, model) * triangle_pmf(tri, light_models(model)) * light_candidates(tri).inv_area;
 }
 
 // Radiance leaving light triangle `lt` at barycentrics (b1, b2) in direction `dir`.
 vec3 light_triangle_radiance(LightTriangle lt, vec2 b, vec3 dir) {
     if (lt.two_sided == 0u && dot(lt.normal, dir) <= 0.0) return vec3(0.0);
-    Material m = materials[lt.material];
+    Material m = materials(lt.material);
     vec3 e = m.emission;
     if (m.emissive_tex.index >= 0) {
         vec2 uv = (1.0 - b.x - b.y) * lt.uv0 + b.x * lt.uv1 + b.y * lt.uv2;
@@ -134,7 +134,7 @@ vec3 light_triangle_radiance(LightTriangle lt, vec2 b, vec3 dir) {
 }
 
 LightSample sample_punctual(uint index, vec3 x) {
-    PunctualLight l = punctual_lights[index];
+    PunctualLight l = punctual_lights(index);
     LightSample s;
     s.area = false;
     s.tri = INVALID_INDEX;
@@ -189,7 +189,7 @@ LightSample sample_light(LightContext ctx, vec4 u, const bool exact_emission) {
                                                        : min(floor_to_uint(um * float(count)), count - 1u);
         table_pmf = -1.0;
     }
-    LightModel m = light_models[model];
+    LightModel m = light_models(model);
     // A model the table chose needs no second walk of the table for its mixture pmf
     // (the same value model_pmf finds: a table holds each model once).
     float pm = GUIDING && table_pmf >= 0.0
@@ -203,7 +203,7 @@ LightSample sample_light(LightContext ctx, vec4 u, const bool exact_emission) {
     uint local = params.ris_source == RIS_SOURCE_POWER ? alias_sample(m.first_triangle, m.triangle_count, u.y, false)
                                                        : min(floor_to_uint(u.y * float(m.triangle_count)), m.triangle_count - 1u);
     uint tri = m.first_triangle + local;
-    LightCandidateTriangle lt = light_candidates[tri];
+    LightCandidateTriangle lt = light_candidates(tri);
     vec2 b = square_to_triangle(u.zw);
     vec3 p = lt.p0 + b.x * lt.e1 + b.y * lt.e2;
     // |e1 × e2| = 2·area.
@@ -226,7 +226,7 @@ LightSample sample_light(LightContext ctx, vec4 u, const bool exact_emission) {
     vec3 Le = emits ? lt.emission : vec3(0.0);
     s.textured = (lt.flags & LIGHT_CANDIDATE_TEXTURED) != 0u;
     if (exact_emission && s.textured && emits) {
-        Le = light_triangle_radiance(light_triangles[tri], b, -s.wi);
+        Le = light_triangle_radiance(light_triangles(tri), b, -s.wi);
         s.textured = false;
     }
     s.Le_G = d2 > 0.0 ? Le * s.cos_y / d2 : vec3(0.0);
@@ -240,7 +240,7 @@ void light_sample_complete(inout LightSample s) {
     if (!s.textured) return;
     s.textured = false;
     if (max3(s.Le_G) <= 0.0) return;
-    vec3 Le = light_triangle_radiance(light_triangles[s.tri], s.bary, -s.wi);
+    vec3 Le = light_triangle_radiance(light_triangles(s.tri), s.bary, -s.wi);
     s.Le_G = Le * s.cos_y / max(s.dist * s.dist, 1e-20);
 }
 

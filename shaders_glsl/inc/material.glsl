@@ -72,13 +72,13 @@ vec3 normal_mapped(TextureRef tex, float scale, vec3 n, vec4 tangent_sign, vec2 
 
 Surface make_surface(Hit h, vec3 ray_dir) {
     Surface s;
-    Instance inst = instances[h.instance];
+    Instance inst = instances(h.instance);
     mat4x3 object_to_world = transpose(mat3x4(inst.to_world_row0, inst.to_world_row1, inst.to_world_row2));
     uvec3 vi = triangle_vertices(inst, h.primitive);
     vec3 w = vec3(1.0 - h.bary.x - h.bary.y, h.bary.x, h.bary.y);
-    Vertex v0 = vertices[vi.x];
-    Vertex v1 = vertices[vi.y];
-    Vertex v2 = vertices[vi.z];
+    Vertex v0 = vertices(vi.x);
+    Vertex v1 = vertices(vi.y);
+    Vertex v2 = vertices(vi.z);
     vec3 p0 = object_to_world * vec4(v0.position, 1.0);
     vec3 p1 = object_to_world * vec4(v1.position, 1.0);
     vec3 p2 = object_to_world * vec4(v2.position, 1.0);
@@ -92,7 +92,7 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     s.material = inst.material;
     s.uv0 = w.x * v0.uv0 + w.y * v1.uv0 + w.z * v2.uv0;
     s.uv1 = w.x * v0.uv1 + w.y * v1.uv1 + w.z * v2.uv1;
-    Material m = materials[inst.material];
+    Material m = materials(inst.material);
 
     // Shading normal: interpolated vertex normals (zero = flat), then the normal map.
     mat3 normal_to_world = inverse_transpose3(mat3(object_to_world));
@@ -186,7 +186,7 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     bool emits = s.front || (m.flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;
     s.emission = emits ? material_emission(m, s.uv0, s.uv1) : vec3(0.0);
     s.light_tri = inst.light_index_offset == INVALID_INDEX ? INVALID_INDEX
-                                                           : triangle_light_index[inst.light_index_offset + h.primitive];
+                                                           : triangle_light_index(inst.light_index_offset + h.primitive);
     return s;
 }
 
@@ -206,7 +206,7 @@ bool surface_transmits(Surface s) { return s.bsdf.transmission > 0.0; }
 // do not nest).
 vec3 medium_toward(Surface s, vec3 w, vec3 here) {
     if (s.bsdf.eta <= 0.0 || dot(w, s.ng) > 0.0) return here;
-    return s.front ? materials[s.material].attenuation : vec3(0.0);
+    return s.front ? materials(s.material).attenuation : vec3(0.0);
 }
 
 // The geometric normal on the side of direction w (the side a ray toward w leaves from).

@@ -31,8 +31,8 @@ struct Hit {
 // cutoff; BLEND keeps the hit with probability alpha, decided by a hash of the ray and
 // the triangle so that the decision is deterministic.
 bool alpha_passes(uint instance, uint primitive, vec2 bary, uvec4 ray_key) {
-    Instance inst = instances[instance];
-    Material m = materials[inst.material];
+    Instance inst = instances(instance);
+    Material m = materials(inst.material);
     if (m.alpha_mode == ALPHA_MODE_OPAQUE) return true;
     float alpha = m.base_color.a;
     if (m.base_color_tex.index >= 0 || inst.color_offset != INVALID_INDEX) {

@@ -167,6 +167,23 @@ struct FrameParams {
     uint hide_emitters;        // 1: emission seen directly by the camera is not counted
     uint emission_rays;        // camera rays per sample (raygen.glsl; 1: the plain estimator)
     uint pixel_emitters;       // 1: small emitters seen directly are sampled in their pixels
+    // Device addresses (low, high) of the scene's read-only arrays, which the kernels
+    // read through buffer references (inc/scene_data.glsl); the software traversal's
+    // node and triangle buffers are 0 without that traversal.
+    uvec2 vertices_address;
+    uvec2 vertex_colors_address;
+    uvec2 indices_address;
+    uvec2 instances_address;
+    uvec2 materials_address;
+    uvec2 light_triangles_address;
+    uvec2 light_candidates_address;
+    uvec2 light_models_address;
+    uvec2 model_alias_address;
+    uvec2 triangle_alias_address;
+    uvec2 punctual_lights_address;
+    uvec2 triangle_light_index_address;
+    uvec2 bvh_nodes_address;
+    uvec2 bvh_triangles_address;
 };
 
 // The part of a small emissive triangle's image that lies in one pixel, or one triangle

@@ -64,7 +64,12 @@ pub struct BvhStats {
     pub depth: usize,
 }
 
-const STORAGE: raw::BufferUsageFlags = raw::BufferUsageFlags::STORAGE_BUFFER;
+/// The scene's arrays are bound as storage buffers and read through their device
+/// addresses (FrameParams, inc/scene_data.glsl).
+const STORAGE: raw::BufferUsageFlags = raw::BufferUsageFlags::from_raw(
+    raw::BufferUsageFlags::STORAGE_BUFFER.as_raw()
+        | raw::BufferUsageFlags::SHADER_DEVICE_ADDRESS.as_raw(),
+);
 
 impl GpuScene {
     pub fn upload(
@@ -76,9 +81,7 @@ impl GpuScene {
         let started = Instant::now();
         let ray_query = traversal == TraversalKind::RayQuery;
         let geometry_usage = if ray_query {
-            STORAGE
-                | raw::BufferUsageFlags::SHADER_DEVICE_ADDRESS
-                | raw::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
+            STORAGE | raw::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
         } else {
             STORAGE
         };

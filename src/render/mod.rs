@@ -291,6 +291,12 @@ impl Renderer {
             }
         };
 
+        let g = &self.gpu_scene;
+        let (bvh_nodes, bvh_triangles) = g
+            .bvh
+            .as_ref()
+            .map_or((0, 0), |(n, t)| (n.address, t.address));
+        let split = |a: u64| [a as u32, (a >> 32) as u32];
         gpu::FrameParams {
             camera_to_world: self.camera.rigid_to_world().to_cols_array_2d(),
             camera_type,
@@ -322,6 +328,20 @@ impl Renderer {
             hide_emitters: u32::from(s.hide_emitters),
             emission_rays: s.emission_rays,
             pixel_emitters: u32::from(s.pixel_emitters && self.has_pixel_emitters),
+            vertices_address: split(g.vertices.address),
+            vertex_colors_address: split(g.vertex_colors.address),
+            indices_address: split(g.indices.address),
+            instances_address: split(g.instances.address),
+            materials_address: split(g.materials.address),
+            light_triangles_address: split(g.light_triangles.address),
+            light_candidates_address: split(g.light_candidates.address),
+            light_models_address: split(g.light_models.address),
+            model_alias_address: split(g.model_alias.address),
+            triangle_alias_address: split(g.triangle_alias.address),
+            punctual_lights_address: split(g.punctual.address),
+            triangle_light_index_address: split(g.triangle_light_index.address),
+            bvh_nodes_address: split(bvh_nodes),
+            bvh_triangles_address: split(bvh_triangles),
         }
     }
 

@@ -241,6 +241,11 @@ pub struct RenderSettings {
     /// same image; see `RenderStats::lanes`).
     #[serde(skip)]
     pub lane_stats: bool,
+    /// Read the scene's arrays through their device addresses (true) or the bound
+    /// storage buffers (false); `None`: addresses on CPU devices, where they are faster
+    /// (`Renderer::scene_addresses`). Same image either way.
+    #[serde(skip)]
+    pub scene_addresses: Option<bool>,
     pub guiding: GuidingSettings,
 }
 
@@ -259,6 +264,7 @@ impl Default for RenderSettings {
             hide_emitters: false,
             emission_rays: 1,
             pixel_emitters: true,
+            scene_addresses: None,
             fov_degrees: None,
             exposure: 0.0,
             aovs: false,

@@ -47,7 +47,8 @@ impl Renderer {
                 &spirv,
                 &bindings,
                 std::mem::size_of::<gpu::PushConstants>() as u32,
-                &[],
+                // Only specialization constant 7 (SCENE_ADDRESSES) is in this kernel.
+                &[0, 0, 0, 0, 0, 0, 0, self.scene_addresses() as u32],
                 &format!("trace ({})", self.traversal.kind),
             )?;
             self.trace_pipeline = Some(p);
