@@ -31,16 +31,17 @@ layout(constant_id = 7) const bool SCENE_ADDRESSES = false;
 // other (the address is FrameParams.`address`). Structs are returned from two branches,
 // since the two blocks' structs are distinct SPIR-V types that only a return converts;
 // plain values (SCENE_VALUES) are selected with `?:`.
-#define SCENE_ARRAY(T, name, Block, bound, B, Ref, address) \
+#define SCENE_BUFFERS(T, Block, bound, B, Ref) \
     layout(set = 0, binding = B, scalar) readonly buffer Block { T bound[]; }; \
-    SCENE_REFERENCE(Ref, T); \
+    SCENE_REFERENCE(Ref, T);
+#define SCENE_ARRAY(T, name, Block, bound, B, Ref, address) \
+    SCENE_BUFFERS(T, Block, bound, B, Ref) \
     T name(uint i) { \
         if (SCENE_ADDRESSES) return Ref(params.address).v[i]; \
         return bound[i]; \
     }
 #define SCENE_VALUES(T, name, Block, bound, B, Ref, address) \
-    layout(set = 0, binding = B, scalar) readonly buffer Block { T bound[]; }; \
-    SCENE_REFERENCE(Ref, T); \
+    SCENE_BUFFERS(T, Block, bound, B, Ref) \
     T name(uint i) { return SCENE_ADDRESSES ? Ref(params.address).v[i] : bound[i]; }
 SCENE_ARRAY(Vertex, vertices, VertexBuffer, vertices_bound, BINDING_VERTICES, VertexRef, vertices_address)
 SCENE_VALUES(vec4, vertex_colors, VertexColorBuffer, vertex_colors_bound, BINDING_VERTEX_COLORS, VertexColorRef, vertex_colors_address)
