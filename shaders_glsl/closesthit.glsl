@@ -62,7 +62,7 @@ DirectionSampler direction_sampler(Surface s) {
             d.leaf = guide_find_leaf(s.p);
             // Learned per leaf (Müller et al. 2019), or the fixed --bsdf-fraction.
             d.bsdf_fraction = (guide_header.flags & GUIDE_FLAG_LEARN_SELECTION) != 0u
-                ? guide_leaves[d.leaf].bsdf_fraction
+                ? guide_leaves(d.leaf).bsdf_fraction
                 : guide_header.bsdf_fraction;
             // A nearly specular transmission lobe beside a diffuse one (a clear pane in a
             // partly diffuse material, or a solid's clear interface): the quadtree cannot

@@ -79,7 +79,7 @@ float guide_quadrant_factor(vec4 s, uint q) {
 }
 
 bool guide_tree_is_empty(uint root) {
-    return !(guide_node_total(guide_sampling[root].sum) > 0.0);
+    return !(guide_node_total(guide_sampling_sum(root)) > 0.0);
 }
 
 // ---- sampling and pdf -----------------------------------------------------------------
@@ -87,17 +87,16 @@ bool guide_tree_is_empty(uint root) {
 // Solid-angle pdf of `dir` under leaf `leaf`'s sampling quadtree (uniform 1/4π when the
 // tree has learned nothing yet).
 float guide_pdf(uint leaf, vec3 dir) {
-    uint n = guide_leaves[leaf].sampling_root;
+    uint n = guide_leaves(leaf).sampling_root;
     if (guide_tree_is_empty(n)) {
         return GUIDE_INV_4PI;
     }
     vec2 p = guide_dir_to_square(dir);
     precise float density = 1.0;
     [[dont_unroll]] for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
-        GuideQuadNode node = guide_sampling[n];
         uint q = guide_quadrant(p);
-        density = density * guide_quadrant_factor(node.sum, q);
-        n = node.child[q];
+        density = density * guide_quadrant_factor(guide_sampling_sum(n), q);
+        n = guide_sampling_child(n, q);
         if (n == 0u) {
             break;
         }
@@ -123,7 +122,7 @@ float guide_rescale(float u, float lo, float width) {
 // (hierarchical sample warping: each level reuses the rescaled numbers). `pdf` is the
 // solid-angle pdf of the returned direction, bitwise equal to guide_pdf(leaf, dir).
 vec3 guide_sample(uint leaf, vec2 u, out float pdf) {
-    uint n = guide_leaves[leaf].sampling_root;
+    uint n = guide_leaves(leaf).sampling_root;
     u = min(u, vec2(GUIDE_ONE_MINUS_EPS));
     if (guide_tree_is_empty(n)) {
         pdf = GUIDE_INV_4PI;
@@ -133,8 +132,7 @@ vec3 guide_sample(uint leaf, vec2 u, out float pdf) {
     float size = 1.0;
     precise float density = 1.0;
     [[dont_unroll]] for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
-        GuideQuadNode node = guide_sampling[n];
-        vec4 s = node.sum;
+        vec4 s = guide_sampling_sum(n);
         float total = guide_node_total(s);
         uint q;
         if (total > 0.0) {
@@ -165,7 +163,7 @@ vec3 guide_sample(uint leaf, vec2 u, out float pdf) {
         density = density * guide_quadrant_factor(s, q);
         size *= 0.5;
         origin += vec2(float(q & 1u), float(q >> 1u)) * size;
-        n = node.child[q];
+        n = guide_sampling_child(n, q);
         if (n == 0u) {
             break;
         }
@@ -199,7 +197,7 @@ uint guide_find_leaf(vec3 p) {
     vec3 x = clamp((p - guide_header.origin) / guide_header.size, vec3(0.0), vec3(1.0));
     uint n = 0u;
     [[dont_unroll]] for (int level = 0; level <= GUIDE_MAX_SPATIAL_DEPTH; ++level) {
-        GuideSpatialNode node = guide_spatial[n];
+        GuideSpatialNode node = guide_spatial(n);
         if (node.axis == GUIDE_SPATIAL_LEAF) {
             break;
         }
@@ -212,7 +210,7 @@ uint guide_find_leaf(vec3 p) {
             n = node.child + 1u;
         }
     }
-    return guide_spatial[n].child;
+    return guide_spatial(n).child;
 }
 
 // ---- recording ----------------------------------------------------------------------------
@@ -224,9 +222,9 @@ void guide_splat_to_depth(uint root, vec2 p, float v, uint levels) {
     uint n = root;
     [[dont_unroll]] for (uint level = 0u; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
         uint q = guide_quadrant(p);
-        uint c = guide_training[n].child[q];
+        uint c = guide_training_child(n, q);
         if (c == 0u || level + 1u >= levels) {
-            atomicAdd(guide_training[n].sum[q], v);
+            guide_training_add(n, q, v);
             return;
         }
         n = c;
@@ -245,7 +243,7 @@ uint guide_training_leaf(uint root, vec2 p, out uint node, out uint quadrant) {
     uint depth = 1u;
     [[dont_unroll]] for (int level = 0; level < GUIDE_MAX_QUAD_DEPTH; ++level) {
         uint q = guide_quadrant(p);
-        uint c = guide_training[n].child[q];
+        uint c = guide_training_child(n, q);
         if (c == 0u) {
             node = n;
             quadrant = q;
@@ -290,7 +288,7 @@ void guide_splat_box(uint root, vec2 p, float v) {
         vec2 cell = base + vec2(corner);
         cell.y = cell.y < 0.0 ? cell.y + cells : cell.y >= cells ? cell.y - cells : cell.y;
         if (cell == own) {
-            atomicAdd(guide_training[leaf_node].sum[leaf_quadrant], v * w);
+            guide_training_add(leaf_node, leaf_quadrant, v * w);
         } else {
             guide_splat_to_depth(root, (cell + 0.5) / cells, v * w, depth);
         }
@@ -300,8 +298,8 @@ void guide_splat_box(uint root, vec2 p, float v) {
 // Record `r` into the training tree of leaf `leaf`: its weight into the leaf's
 // statistical weight, its value into the cell(s) of its direction (see GuideRecord).
 void guide_record_into(uint leaf, GuideRecord r) {
-    uint root = guide_leaves[leaf].training_root;
-    if (r.weight > 0.0) atomicAdd(guide_training[root - 1u].sum.x, r.weight);
+    uint root = guide_leaves(leaf).training_root;
+    if (r.weight > 0.0) guide_training_add(root - 1u, 0u, r.weight);
     if (!(r.value > 0.0) || isinf(r.value)) {
         return;
     }
@@ -335,7 +333,7 @@ void guide_record(GuideRecord r, vec3 u, uint leaf) {
         if (pass > 0u || leaf == INVALID_INDEX) leaf = guide_find_leaf(q);
         if (!jitter || pass == 1u) break;
         // precise: no fused multiply-add, so the CPU mirror picks the same leaf.
-        precise vec3 j = r.pos + (u - 0.5) * guide_leaves[leaf].box_size;
+        precise vec3 j = r.pos + (u - 0.5) * guide_leaves(leaf).box_size;
         q = clamp(j, guide_header.origin, guide_header.origin + guide_header.size);
     }
     guide_record_into(leaf, r);
@@ -363,7 +361,7 @@ uint guide_light_filter_bit(uint model) {
 uvec4 guide_light_filter(uint leaf) {
     uvec4 f = uvec4(0u);
     [[dont_unroll]] for (uint i = 0u; i < GUIDE_LIGHT_SLOTS; ++i) {
-        uint model = guide_lights[leaf * GUIDE_LIGHT_SLOTS + i].model;
+        uint model = guide_lights(leaf * GUIDE_LIGHT_SLOTS + i).model;
         if (model == GUIDE_LIGHT_EMPTY) break;  // entries come first
         uint b = guide_light_filter_bit(model);
         f[b >> 5u] |= 1u << (b & 31u);
@@ -384,7 +382,7 @@ float guide_light_pmf(uint leaf, uint model) {
     uint h = guide_light_hash(model) >> (32u - GUIDE_LIGHT_HASH_BITS);
     // At most half the slots are full, so every probe sequence ends at an empty slot.
     [[dont_unroll]] for (uint i = 0u; i < GUIDE_LIGHT_HASH_SLOTS; ++i) {
-        GuideLightSlot s = guide_lights[base + ((h + i) & (GUIDE_LIGHT_HASH_SLOTS - 1u))];
+        GuideLightSlot s = guide_lights(base + ((h + i) & (GUIDE_LIGHT_HASH_SLOTS - 1u)));
         if (s.model == model) return s.value;
         if (s.model == GUIDE_LIGHT_EMPTY) break;
     }
@@ -399,9 +397,9 @@ uint guide_light_sample(uint leaf, float u, out float pmf) {
     uint alias_base = guide_header.leaf_count * (GUIDE_LIGHT_SLOTS + GUIDE_LIGHT_HASH_SLOTS) + leaf * GUIDE_LIGHT_SLOTS;
     float scaled = u * float(GUIDE_LIGHT_SLOTS);
     uint i = min(uint(scaled), GUIDE_LIGHT_SLOTS - 1u);
-    GuideLightSlot a = guide_lights[alias_base + i];  // model: alias slot, value: threshold
+    GuideLightSlot a = guide_lights(alias_base + i);  // model: alias slot, value: threshold
     uint k = scaled - float(i) < a.value ? i : a.model;
-    GuideLightSlot s = guide_lights[leaf * GUIDE_LIGHT_SLOTS + k];
+    GuideLightSlot s = guide_lights(leaf * GUIDE_LIGHT_SLOTS + k);
     pmf = s.value;
     return s.model;
 }
@@ -414,15 +412,14 @@ uint guide_light_sample(uint leaf, float u, out float pmf) {
 void guide_light_record(uint leaf, uint model, float value) {
     bool learn_mix = (guide_header.flags & GUIDE_FLAG_LEARN_LIGHT_MIX) != 0u;
     float second = value * value;
-    if (learn_mix) atomicAdd(guide_training[guide_leaves[leaf].training_root - 1u].sum.y, second);
+    if (learn_mix) guide_training_add(guide_leaves(leaf).training_root - 1u, 1u, second);
     uint base = leaf * GUIDE_LIGHT_SLOTS;
     uint h = (model * 2654435761u) >> 28u;  // top 4 bits: GUIDE_LIGHT_SLOTS = 16
     [[dont_unroll]] for (uint probe = 0u; probe < GUIDE_LIGHT_PROBES; ++probe) {
         uint i = base + ((h + probe) & (GUIDE_LIGHT_SLOTS - 1u));
-        uint prev = atomicCompSwap(guide_light_training[i].model, GUIDE_LIGHT_EMPTY, model);
+        uint prev = guide_light_training_claim(i, model);
         if (prev == GUIDE_LIGHT_EMPTY || prev == model) {
-            atomicAdd(guide_light_training[i].value, value);
-            if (learn_mix) atomicAdd(guide_light_training[i].second, second);
+            guide_light_training_add(i, value, second, learn_mix);
             return;
         }
     }

@@ -6,10 +6,9 @@
 #define INC_LIGHTS_GLSL
 
 #include "specialization.glsl"
-#include "guiding.glsl"
-
 #include "common.glsl"
 #include "scene_data.glsl"
+#include "guiding.glsl"
 #include "geometry.glsl"
 #include "sampling.glsl"
 #include "random.glsl"
@@ -84,7 +83,7 @@ LightContext light_context(vec3 p, uint leaf) {
     if (!GUIDING || (guide_header.flags & GUIDE_FLAG_LEARN_LIGHTS) == 0u) return c;
     if (leaf == INVALID_INDEX) leaf = guide_find_leaf(p);
     c.leaf = leaf;
-    c.mix = guide_leaves[leaf].light_mix;  // the CPU writes 0 for an empty table
+    c.mix = guide_leaves(leaf).light_mix;  // the CPU writes 0 for an empty table
     return c;
 }
 

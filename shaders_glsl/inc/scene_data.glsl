@@ -69,4 +69,12 @@ layout(set = 0, binding = BINDING_OUTLIERS, scalar) buffer OutlierBuffer { float
 
 layout(push_constant, scalar) uniform Push { PushConstants pc; };
 
+// The SD-tree's arrays follow the scene's: with SCENE_ADDRESSES, through the addresses
+// in the push constants (inc/guiding_buffers.glsl).
+#ifdef LANTERNA_GUIDING_BUFFERS_GLSL
+#error "inc/scene_data.glsl must be included before inc/guiding_buffers.glsl"
+#endif
+#define GUIDE_ADDRESSES SCENE_ADDRESSES
+#define GUIDE_ADDRESS(name) pc.name
+
 #endif

@@ -102,7 +102,7 @@ struct GuideSpatialNode {
 };
 
 // Per spatial leaf: its quadtrees and its box. The training header node (statistical
-// weight) is guide_training[training_root - 1].
+// weight) is the training node training_root - 1.
 struct GuideLeaf {
     uint sampling_root;   // node index in the sampling array
     uint training_root;   // node index in the training array

@@ -204,6 +204,15 @@ struct PushConstants {
     uvec2 tile_size;
     uint sample_begin;
     uint sample_count;
+    // Device addresses of the SD-tree's arrays, read where the scene's arrays are read
+    // through theirs (inc/guiding_buffers.glsl); 0 where a buffer has none. Here rather
+    // than in FrameParams: a refit that regrows a buffer moves its address.
+    uvec2 guide_spatial_address;
+    uvec2 guide_leaves_address;
+    uvec2 guide_sampling_address;
+    uvec2 guide_training_address;
+    uvec2 guide_lights_address;
+    uvec2 guide_light_training_address;
 };
 
 #endif

@@ -12,6 +12,31 @@ use std::time::Instant;
 const TARGET_SUBMIT_SECONDS: f64 = 0.5;
 
 impl Renderer {
+    /// Push constants of a dispatch over a tile of pixels and a range of sample indices,
+    /// with the SD-tree arrays' addresses (a refit may have moved them).
+    fn push_constants(
+        &self,
+        tile_origin: [u32; 2],
+        tile_size: [u32; 2],
+        sample_begin: u32,
+        sample_count: u32,
+    ) -> gpu::PushConstants {
+        let g = &self.guide;
+        let split = |a: u64| [a as u32, (a >> 32) as u32];
+        gpu::PushConstants {
+            tile_origin,
+            tile_size,
+            sample_begin,
+            sample_count,
+            guide_spatial_address: split(g.spatial.address),
+            guide_leaves_address: split(g.leaves.address),
+            guide_sampling_address: split(g.sampling.address),
+            guide_training_address: split(g.training.address),
+            guide_lights_address: split(g.lights.address),
+            guide_light_training_address: split(g.light_training.address),
+        }
+    }
+
     /// Render samples [begin, begin + count) of pixel (x, y) alone with the debug kernel,
     /// printing a trace of every path vertex of sample `traced` (all when None) through
     /// debug printf; returns the printed lines (the device must have been opened with
@@ -47,12 +72,7 @@ impl Renderer {
         let set = self.descriptor_set(v)?;
         crate::vk::take_debug_printf_messages();
         let pipeline = &self.pipelines[&v];
-        let push = gpu::PushConstants {
-            tile_origin: [x, y],
-            tile_size: [1, 1],
-            sample_begin: begin as u32,
-            sample_count: count as u32,
-        };
+        let push = self.push_constants([x, y], [1, 1], begin as u32, count as u32);
         self.device
             .submit(|cmd| pipeline.cmd_dispatch(cmd, set, bytemuck::bytes_of(&push), [1, 1, 1]))?;
         self.film_spp = count;
@@ -139,12 +159,8 @@ impl Renderer {
                     break;
                 }
                 let rows = band_rows.min(h - y0);
-                let push = gpu::PushConstants {
-                    tile_origin: [0, y0],
-                    tile_size: [w, rows],
-                    sample_begin: (begin + done) as u32,
-                    sample_count: spp as u32,
-                };
+                let push =
+                    self.push_constants([0, y0], [w, rows], (begin + done) as u32, spp as u32);
                 let (_, gpu_time) = self.device.submit_timed(
                     |cmd| {
                         pipeline.cmd_dispatch(

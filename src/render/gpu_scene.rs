@@ -64,9 +64,10 @@ pub struct BvhStats {
     pub depth: usize,
 }
 
-/// The scene's arrays are bound as storage buffers and read through their device
-/// addresses (FrameParams, inc/scene_data.glsl).
-const STORAGE: raw::BufferUsageFlags = raw::BufferUsageFlags::from_raw(
+/// The scene's and the SD-tree's arrays are bound as storage buffers and read through
+/// their device addresses where `Renderer::scene_addresses` says (FrameParams and the
+/// push constants, inc/scene_data.glsl and inc/guiding_buffers.glsl).
+pub(super) const STORAGE: raw::BufferUsageFlags = raw::BufferUsageFlags::from_raw(
     raw::BufferUsageFlags::STORAGE_BUFFER.as_raw()
         | raw::BufferUsageFlags::SHADER_DEVICE_ADDRESS.as_raw(),
 );

@@ -1,6 +1,7 @@
 //! The buffers bound at the guiding bindings: the SD-tree's flat arrays, uploaded after
 //! each refit, and the training copies read back after each pass.
 
+use super::gpu_scene::STORAGE;
 use crate::gpu;
 use crate::guiding::{SdTree, GUIDE_BUFFERS};
 use crate::vk::{self, Buffer, Device, MemoryLocation, Staging};
@@ -89,7 +90,7 @@ fn make_room(
 impl GuideBuffers {
     /// Placeholders for methods that do not guide (a zero header, nothing else).
     pub fn empty(device: &Arc<Device>) -> vk::Result<GuideBuffers> {
-        let usage = raw::BufferUsageFlags::STORAGE_BUFFER;
+        let usage = STORAGE;
         Ok(GuideBuffers {
             spatial: Buffer::zeroed(device, 64, usage, "guide spatial (unused)")?,
             leaves: Buffer::zeroed(device, 64, usage, "guide leaves (unused)")?,
@@ -119,7 +120,7 @@ impl GuideBuffers {
     /// on the host. The selection head is reset to record nothing (a pass that learns
     /// the selection asks with `add_selection_records`).
     pub fn refill(&mut self, device: &Arc<Device>, tree: &SdTree) -> vk::Result<()> {
-        let storage = raw::BufferUsageFlags::STORAGE_BUFFER;
+        let storage = STORAGE;
         let lens = tree.gpu_buffer_lens();
         let buffers: [(&mut Buffer, &str); GUIDE_BUFFERS] = [
             (&mut self.spatial, "guide spatial tree"),

@@ -248,8 +248,9 @@ impl Renderer {
         }
     }
 
-    /// Whether the kernels read the scene's arrays through their device addresses
-    /// (specialization constant 7, `SCENE_ADDRESSES` in inc/scene_data.glsl) rather than
+    /// Whether the kernels read the scene's and the SD-tree's arrays through their
+    /// device addresses (specialization constant 7, `SCENE_ADDRESSES` in
+    /// inc/scene_data.glsl and inc/guiding_buffers.glsl) rather than
     /// the bound storage buffers: by default on CPU devices, where lavapipe loads a
     /// storage buffer one lane at a time and a buffer reference with a gather (`pt`
     /// 1.1–1.7×, `ris` 1.5–2× as fast); GPUs keep the storage buffers, measured faster on
