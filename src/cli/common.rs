@@ -225,6 +225,20 @@ pub struct EstimatorArgs {
     /// faster) and on devices without ray queries, ray queries on GPUs.
     #[arg(long, value_enum, default_value = "auto")]
     pub traversal: lanterna::render::Traversal,
+    /// How the kernels read the scene's and the SD-tree's arrays: through their device
+    /// addresses or through the bound storage buffers. auto: addresses on CPU devices
+    /// (lavapipe loads a storage buffer one lane at a time, a buffer reference with one
+    /// gather), bound buffers on GPUs (measured faster on the H200). Same image.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub scene_arrays: SceneArraysArg,
+}
+
+/// `--scene-arrays`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum SceneArraysArg {
+    Auto,
+    Addresses,
+    Bound,
 }
 
 /// `--spatial-filter`.
@@ -286,6 +300,11 @@ impl EstimatorArgs {
                 ..GuidingSettings::default()
             },
             traversal: self.traversal,
+            scene_addresses: match self.scene_arrays {
+                SceneArraysArg::Auto => None,
+                SceneArraysArg::Addresses => Some(true),
+                SceneArraysArg::Bound => Some(false),
+            },
             ..RenderSettings::default()
         };
         settings.guiding.set_light_mix(self.light_mix);

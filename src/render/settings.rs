@@ -241,9 +241,10 @@ pub struct RenderSettings {
     /// same image; see `RenderStats::lanes`).
     #[serde(skip)]
     pub lane_stats: bool,
-    /// Read the scene's arrays through their device addresses (true) or the bound
-    /// storage buffers (false); `None`: addresses on CPU devices, where they are faster
-    /// (`Renderer::scene_addresses`). Same image either way.
+    /// Read the scene's and the SD-tree's arrays through their device addresses (true)
+    /// or the bound storage buffers (false); `None`: addresses on CPU devices, where
+    /// they are faster (`Renderer::scene_addresses`; `--scene-arrays`). Same image
+    /// either way.
     #[serde(skip)]
     pub scene_addresses: Option<bool>,
     pub guiding: GuidingSettings,
