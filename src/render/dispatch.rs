@@ -22,7 +22,7 @@ impl Renderer {
         sample_count: u32,
     ) -> gpu::PushConstants {
         let g = &self.guide;
-        let split = |a: u64| [a as u32, (a >> 32) as u32];
+        let split = super::address_words;
         gpu::PushConstants {
             tile_origin,
             tile_size,

@@ -181,6 +181,12 @@ pub struct Renderer {
     debug_sample: u32,
 }
 
+/// A device address as the kernels take it (`uvec2`, GL_EXT_buffer_reference_uvec2):
+/// low word first.
+fn address_words(address: u64) -> [u32; 2] {
+    [address as u32, (address >> 32) as u32]
+}
+
 impl Renderer {
     pub fn new(
         device: Arc<Device>,
@@ -296,7 +302,7 @@ impl Renderer {
             .bvh
             .as_ref()
             .map_or((0, 0), |(n, t)| (n.address, t.address));
-        let split = |a: u64| [a as u32, (a >> 32) as u32];
+        let split = address_words;
         gpu::FrameParams {
             camera_to_world: self.camera.rigid_to_world().to_cols_array_2d(),
             camera_type,
