@@ -244,3 +244,46 @@ fn shader_dir_compiles_at_run_time() {
         "no file:line in the error:\n{err}"
     );
 }
+
+/// `--scene-arrays` reaches the renderer, which says how its kernels read the scene's
+/// and the SD-tree's arrays (auto: through device addresses on lavapipe). That both ways
+/// render the same image is tested in the library (core_render.rs, guiding_render.rs).
+/// Seen to fail with `bound` mapped to the addresses.
+#[test]
+fn scene_arrays_flag_chooses_how_the_kernels_read_the_arrays() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = scene(dir.path(), Kind::CornellLights);
+    for (flag, said) in [
+        ("auto", "scene arrays: through device addresses (auto"),
+        (
+            "addresses",
+            "scene arrays: through device addresses (asked for)",
+        ),
+        (
+            "bound",
+            "scene arrays: from the bound storage buffers (asked for)",
+        ),
+    ] {
+        let out = dir.path().join(format!("{flag}.exr"));
+        let (ok, _, err) = lanterna(&[
+            "render",
+            &s,
+            "--spp",
+            "2",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--scene-arrays",
+            flag,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(ok, "--scene-arrays {flag}:\n{err}");
+        assert!(
+            err.contains(said),
+            "--scene-arrays {flag}: no '{said}' in\n{err}"
+        );
+        assert!(out.exists());
+    }
+}

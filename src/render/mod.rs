@@ -282,6 +282,18 @@ impl Renderer {
             debug_pixel: gpu::INVALID_INDEX,
             debug_sample: gpu::INVALID_INDEX,
         };
+        log::info!(
+            "scene arrays: {} ({})",
+            if r.scene_addresses() {
+                "through device addresses"
+            } else {
+                "from the bound storage buffers"
+            },
+            match r.settings.scene_addresses {
+                Some(_) => "asked for",
+                None => "auto: addresses on CPU devices",
+            }
+        );
         r.upload_params()?;
         Ok(r)
     }
