@@ -296,118 +296,102 @@ fn relative_l1(a: &[f64], b: &[f64]) -> f64 {
 /// read out of bounds and the test process crashed.
 #[test]
 fn sd_tree_arrays_through_addresses_and_bound_buffers_agree() {
-    use lanterna::lights::LightTable;
     use lanterna::render::run::{run_method, Budget};
-    use lanterna::render::{GuideBuffers, GuidedOutput, RenderStats, Renderer};
+    use lanterna::render::{GuideBuffers, GuidedOutput, RenderStats};
     use std::collections::HashMap;
     use std::sync::atomic::AtomicBool;
     let cancel = AtomicBool::new(false);
-    {
-        let kind = Kind::CornellLights;
-        let t = testing::generated(kind, &Options::default());
-        let lights = LightTable::build(&t.scene).unwrap();
-        for method in [Method::Guided, Method::GuidedRis] {
-            let mut s = testing::settings(method, 32, 32);
-            s.guiding.learn_lights = true;
-            s.guiding.output = GuidedOutput::RenderPhase;
-            let renderer = |addresses: bool| {
-                let mut s = s.clone();
-                s.scene_addresses = Some(addresses);
-                Renderer::new(
-                    testing::device(),
-                    &t.scene,
-                    &lights,
-                    t.camera.clone(),
-                    s,
-                    testing::shader_source(),
-                )
-                .unwrap()
-            };
-            // The tree is trained through the bound buffers, so that a defect of the
-            // addresses cannot spoil it.
-            let mut r = renderer(false);
-            let out = run_method(&mut r, Budget::Spp(128), 0, &cancel, &mut |_| {}).unwrap();
-            let g = out.guiding.expect("a guided run");
-            let trained: u64 = g.iterations.iter().map(|i| i.spp).sum();
-            let mut results = Vec::new();
-            for addresses in [true, false] {
-                let mut r = renderer(addresses);
-                r.preloaded_tree = Some(g.tree.clone());
-                let film = run_method(
-                    &mut r,
-                    Budget::Spp(out.film.spp),
-                    trained,
-                    &cancel,
-                    &mut |_| {},
-                )
-                .unwrap()
-                .film;
-                // One training pass from the trained tree.
-                r.set_guide_buffers(GuideBuffers::upload(&r.device, &g.tree).unwrap());
-                r.clear_film().unwrap();
-                r.render_samples(
-                    1 << 20,
-                    8,
-                    true,
-                    &cancel,
-                    &mut |_| {},
-                    &mut RenderStats::default(),
-                )
-                .unwrap();
-                let (children, sums, table) = r
-                    .guide_buffers()
-                    .read_pass(&r.device, true, |pass| {
-                        let children: Vec<[u32; 4]> =
-                            pass.training.iter().map(|n| n.child).collect();
-                        let sums: Vec<f64> = pass
-                            .training
-                            .iter()
-                            .flat_map(|n| n.sum.map(f64::from))
-                            .collect();
-                        let mut table: HashMap<(usize, u32), [f64; 2]> = HashMap::new();
-                        for (i, slot) in pass.lights.iter().enumerate() {
-                            if slot.model != lanterna::gpu::GUIDE_LIGHT_EMPTY {
-                                let e = table
-                                    .entry((
-                                        i / lanterna::gpu::GUIDE_LIGHT_SLOTS as usize,
-                                        slot.model,
-                                    ))
-                                    .or_default();
-                                e[0] += slot.value as f64;
-                                e[1] += slot.second as f64;
-                            }
+    let kind = Kind::CornellLights;
+    let t = testing::generated(kind, &Options::default());
+    for method in [Method::Guided, Method::GuidedRis] {
+        let mut s = testing::settings(method, 32, 32);
+        s.guiding.learn_lights = true;
+        s.guiding.output = GuidedOutput::RenderPhase;
+        let renderer = |addresses: bool| {
+            let mut s = s.clone();
+            s.scene_addresses = Some(addresses);
+            testing::test_renderer_on(testing::device(), &t.scene, &t.camera, &s)
+        };
+        // The tree is trained through the bound buffers, so that a defect of the
+        // addresses cannot spoil it.
+        let mut r = renderer(false);
+        let out = run_method(&mut r, Budget::Spp(128), 0, &cancel, &mut |_| {}).unwrap();
+        let g = out.guiding.expect("a guided run");
+        let trained: u64 = g.iterations.iter().map(|i| i.spp).sum();
+        let mut results = Vec::new();
+        for addresses in [true, false] {
+            let mut r = renderer(addresses);
+            r.preloaded_tree = Some(g.tree.clone());
+            let film = run_method(
+                &mut r,
+                Budget::Spp(out.film.spp),
+                trained,
+                &cancel,
+                &mut |_| {},
+            )
+            .unwrap()
+            .film;
+            // One training pass from the trained tree.
+            r.set_guide_buffers(GuideBuffers::upload(&r.device, &g.tree).unwrap());
+            r.clear_film().unwrap();
+            r.render_samples(
+                1 << 20,
+                8,
+                true,
+                &cancel,
+                &mut |_| {},
+                &mut RenderStats::default(),
+            )
+            .unwrap();
+            let (children, sums, table) = r
+                .guide_buffers()
+                .read_pass(&r.device, true, |pass| {
+                    let children: Vec<[u32; 4]> = pass.training.iter().map(|n| n.child).collect();
+                    let sums: Vec<f64> = pass
+                        .training
+                        .iter()
+                        .flat_map(|n| n.sum.map(f64::from))
+                        .collect();
+                    let mut table: HashMap<(usize, u32), [f64; 2]> = HashMap::new();
+                    for (i, slot) in pass.lights.iter().enumerate() {
+                        if slot.model != lanterna::gpu::GUIDE_LIGHT_EMPTY {
+                            let e = table
+                                .entry((i / lanterna::gpu::GUIDE_LIGHT_SLOTS as usize, slot.model))
+                                .or_default();
+                            e[0] += slot.value as f64;
+                            e[1] += slot.second as f64;
                         }
-                        (children, sums, table)
-                    })
-                    .unwrap();
-                results.push((film, children, sums, table));
-            }
-            let what = format!("{kind:?} {method}");
-            let (a, b) = (&results[0], &results[1]);
-            assert!(a.0.sums.iter().any(|&v| v > 0), "{what}: black film");
-            assert_eq!(a.0, b.0, "{what}: the render phase differs");
-            assert_eq!(a.1, b.1, "{what}: the training trees' children differ");
-            let sums = relative_l1(&a.2, &b.2);
-            let keys: Vec<(usize, u32)> = a.3.keys().chain(b.3.keys()).copied().collect();
-            let table = |t: &HashMap<(usize, u32), [f64; 2]>, k: usize| -> Vec<f64> {
-                keys.iter()
-                    .map(|key| t.get(key).map_or(0.0, |e| e[k]))
-                    .collect()
-            };
-            let values = relative_l1(&table(&a.3, 0), &table(&b.3, 0));
-            let seconds = relative_l1(&table(&a.3, 1), &table(&b.3, 1));
-            eprintln!(
-                "{what}: training sums {sums:.2e}, light values {values:.2e}, squares {seconds:.2e} (relative L1), {} table entries",
-                a.3.len()
-            );
-            assert!(a.2.iter().any(|&v| v > 0.0), "{what}: nothing recorded");
-            assert!(!a.3.is_empty(), "{what}: no light table entries");
-            assert!(sums < 1e-5, "{what}: training sums differ by {sums:.2e}");
-            assert!(
-                values < 1e-2 && seconds < 1e-2,
-                "{what}: light tables differ by {values:.2e} / {seconds:.2e}"
-            );
+                    }
+                    (children, sums, table)
+                })
+                .unwrap();
+            results.push((film, children, sums, table));
         }
+        let what = format!("{kind:?} {method}");
+        let (a, b) = (&results[0], &results[1]);
+        assert!(a.0.sums.iter().any(|&v| v > 0), "{what}: black film");
+        assert_eq!(a.0, b.0, "{what}: the render phase differs");
+        assert_eq!(a.1, b.1, "{what}: the training trees' children differ");
+        let sums = relative_l1(&a.2, &b.2);
+        let keys: Vec<(usize, u32)> = a.3.keys().chain(b.3.keys()).copied().collect();
+        let table = |t: &HashMap<(usize, u32), [f64; 2]>, k: usize| -> Vec<f64> {
+            keys.iter()
+                .map(|key| t.get(key).map_or(0.0, |e| e[k]))
+                .collect()
+        };
+        let values = relative_l1(&table(&a.3, 0), &table(&b.3, 0));
+        let seconds = relative_l1(&table(&a.3, 1), &table(&b.3, 1));
+        eprintln!(
+            "{what}: training sums {sums:.2e}, light values {values:.2e}, squares {seconds:.2e} (relative L1), {} table entries",
+            a.3.len()
+        );
+        assert!(a.2.iter().any(|&v| v > 0.0), "{what}: nothing recorded");
+        assert!(!a.3.is_empty(), "{what}: no light table entries");
+        assert!(sums < 1e-5, "{what}: training sums differ by {sums:.2e}");
+        assert!(
+            values < 1e-2 && seconds < 1e-2,
+            "{what}: light tables differ by {values:.2e} / {seconds:.2e}"
+        );
     }
     testing::assert_no_validation_errors();
 }
