@@ -64,6 +64,17 @@ fn lane_counts_match_the_rays_and_leave_the_image_unchanged() {
         Some(1.0),
         "furnace: no lane waits ({c:?})"
     );
+    if software {
+        // Every trace enters the root, and in the closed furnace every camera and bounce
+        // ray also reaches a leaf: what `render --lane-stats` divides by the rays.
+        let least = 2 * (stats.camera_rays + stats.bounce_rays) + stats.shadow_rays;
+        assert!(
+            c.traversal_steps >= least,
+            "furnace: {} traversal steps for {} rays, fewer than a root and a leaf per hit ({c:?})",
+            c.traversal_steps,
+            stats.rays()
+        );
+    }
 
     // In the Cornell box paths leave through the open front at different depths: lanes wait.
     let (_, stats, _) = render(Kind::CornellLights, true, spp);
