@@ -485,16 +485,21 @@ fn profile(md: &mut String, p: &super::profile::Profile, r: &BenchReport) {
              path loop, where a lane whose path ended waits for its subgroup's longest:\n",
             r.sizes.max_depth
         );
-        let _ = writeln!(md, "| method | traversal loop | path loop |");
-        let _ = writeln!(md, "|---|---|---|");
+        let _ = writeln!(
+            md,
+            "| method | traversal loop | path loop | traversal steps per ray |"
+        );
+        let _ = writeln!(md, "|---|---|---|---|");
         let share = |u: Option<f64>| u.map_or("–".to_string(), pct);
         for l in &p.lanes {
             let _ = writeln!(
                 md,
-                "| {} | {} | {} |",
+                "| {} | {} | {} | {} |",
                 l.method,
                 share(l.traversal),
-                share(l.path)
+                share(l.path),
+                l.steps_per_ray
+                    .map_or("–".to_string(), |s| format!("{s:.1}"))
             );
         }
         let _ = writeln!(md);

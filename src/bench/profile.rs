@@ -74,6 +74,9 @@ pub struct LaneEntry {
     pub traversal: Option<f64>,
     /// Path-loop steps that did work over the slots (lanes whose path ended wait).
     pub path: Option<f64>,
+    /// Software traversal loop steps (inner nodes and leaves visited) per ray.
+    #[serde(default)]
+    pub steps_per_ray: Option<f64>,
     /// The raw counts, all passes (training included) summed.
     pub counts: crate::render::LaneCounts,
 }
@@ -425,6 +428,7 @@ pub fn run(bench: &Bench) -> Result<Profile> {
             max_depth: depth,
             traversal: counts.traversal_utilisation(),
             path: counts.path_utilisation(),
+            steps_per_ray: counts.traversal_steps_per_ray(runs[0].stats.rays()),
             counts,
         });
     }

@@ -471,21 +471,19 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
                 format!("{:.1} %", u * 100.0)
             })
         };
-        let software = renderer.traversal.kind == lanterna::render::TraversalKind::Software;
         log::info!(
             "SIMD lanes doing work: traversal loop {} ({}), path loop {} (lanes whose path ended wait for their subgroup's longest)",
             pct(stats.lanes.traversal_utilisation()),
-            if software {
+            if renderer.traversal.kind == lanterna::render::TraversalKind::Software {
                 "software traversal, all rays"
             } else {
                 "only the software traversal is counted"
             },
             pct(stats.lanes.path_utilisation()),
         );
-        if software && stats.rays() > 0 {
+        if let Some(steps) = stats.lanes.traversal_steps_per_ray(stats.rays()) {
             log::info!(
-                "software traversal: {:.1} loop steps (nodes and leaves visited) per ray",
-                stats.lanes.traversal_steps as f64 / stats.rays() as f64
+                "software traversal: {steps:.1} loop steps (nodes and leaves visited) per ray"
             );
         }
     }

@@ -112,6 +112,12 @@ impl LaneCounts {
             .then(|| self.traversal_steps as f64 / self.traversal_slots as f64)
     }
 
+    /// Steps of the software traversal loop (inner nodes and leaves visited) per ray
+    /// traced (None: not measured, or no rays).
+    pub fn traversal_steps_per_ray(&self, rays: u64) -> Option<f64> {
+        (self.traversal_slots > 0 && rays > 0).then(|| self.traversal_steps as f64 / rays as f64)
+    }
+
     /// Share of the path loop's lane slots that did work: a lane whose path ended waits
     /// for the longest path of its subgroup.
     pub fn path_utilisation(&self) -> Option<f64> {
