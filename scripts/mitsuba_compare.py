@@ -16,6 +16,11 @@ times with different seeds, writes Mitsuba's EXR, and reports as JSON:
   timed here, excluding scene loading and the first, JIT-compiling run);
 * MAE at equal time (and equal spp) against an independent higher-spp Mitsuba reference.
 
+An export made with `--hide-emitters` stands for lanterna's `--hide-emitters` (emission
+seen directly left out, the light the emitters' surfaces reflect kept): each Mitsuba image
+is then max_depth D minus max_depth 1 with the same seed, and `--lanterna` renders with
+`--hide-emitters`. (Mitsuba's own `hide_emitters` makes emitters invisible to camera rays.)
+
 `agree` is true when none of the three families (image mean per channel, blocks, pixels)
 rejects at family-wise significance `--alpha`. The per-pixel test assumes batch means
 are roughly normal: with very skewed pixel estimates (e.g. direction sampling alone of
@@ -287,6 +292,8 @@ def render_lanterna_batches(args, manifest, out_dir):
         if manifest.get("camera_index") is not None:
             cmd += ["--camera", str(manifest["camera_index"])]
         cmd += args.lanterna_arg
+        if manifest.get("hide_emitters") and "--hide-emitters" not in cmd:
+            cmd.append("--hide-emitters")
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
             raise InputError(f"lanterna failed ({' '.join(cmd)}):\n{r.stderr.strip()}")
@@ -400,16 +407,29 @@ def main(argv=None):
         m_spp = args.mitsuba_spp or args.spp or lt_spp
 
         scene = mi.load_file(xml, max_depth=manifest["max_depth"])
+        # lanterna's --hide-emitters leaves out emission seen directly and keeps the light
+        # the emitters' surfaces reflect; Mitsuba's hide_emitters would make them
+        # invisible to camera rays instead. Max depth D minus max depth 1 with the same
+        # seed is lanterna's quantity: the camera rays of both renders are the same.
+        direct_view = (mi.load_file(xml, max_depth=1)
+                       if manifest.get("hide_emitters") else None)
+
+        def render(spp, seed):
+            img = np.array(mi.render(scene, spp=spp, seed=seed), dtype=np.float64)
+            if direct_view is not None:
+                img -= np.array(mi.render(direct_view, spp=spp, seed=seed), dtype=np.float64)
+            return img
+
         pixels = manifest["width"] * manifest["height"]
         # Warm-up (JIT compilation in the LLVM variant), then timed independent runs with
         # seeds far from those of the reference and the equal-time render.
         t0 = time.perf_counter()
-        np.array(mi.render(scene, spp=m_spp, seed=10_000_000))
+        render(m_spp, 10_000_000)
         warmup = time.perf_counter() - t0
         runs, times = [], []
         for k in range(args.runs):
             t0 = time.perf_counter()
-            img = np.array(mi.render(scene, spp=m_spp, seed=k), dtype=np.float64)
+            img = render(m_spp, k)
             times.append(time.perf_counter() - t0)
             runs.append(img)
         ms = np.stack(runs)
@@ -456,6 +476,7 @@ def main(argv=None):
             "width": manifest["width"],
             "height": manifest["height"],
             "max_depth": manifest["max_depth"],
+            "hide_emitters": bool(manifest.get("hide_emitters")),
             "lanterna": {
                 "method": infos[0]["method"],
                 "batches": len(infos),
@@ -482,11 +503,9 @@ def main(argv=None):
         }
 
         if args.reference_spp > 0:
-            ref = np.array(mi.render(scene, spp=args.reference_spp, seed=20_000_000),
-                           dtype=np.float64)
+            ref = render(args.reference_spp, 20_000_000)
             write_exr(mi, os.path.splitext(out_exr)[0] + "_reference.exr", ref)
-            same = ms[0] if m_spp == lt_spp else np.array(
-                mi.render(scene, spp=lt_spp, seed=40_000_000), dtype=np.float64)
+            same = ms[0] if m_spp == lt_spp else render(lt_spp, 40_000_000)
             eq = {"reference_spp": args.reference_spp,
                   "equal_spp": {"spp": lt_spp, "lanterna": mae(lt[0], ref),
                                 "mitsuba": mae(same, ref)}}
@@ -503,8 +522,7 @@ def main(argv=None):
                 best = None
                 for attempt in range(6):
                     t0 = time.perf_counter()
-                    img = np.array(mi.render(scene, spp=spp_eq, seed=30_000_000 + attempt),
-                                   dtype=np.float64)
+                    img = render(spp_eq, 30_000_000 + attempt)
                     t_m = time.perf_counter() - t0
                     off = abs(t_m / t_l - 1.0)
                     if best is None or off < best[0]:

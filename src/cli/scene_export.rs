@@ -33,7 +33,10 @@ pub struct ExportArgs {
     /// Default seed of the XML's sampler (`$seed`).
     #[arg(long, default_value_t = 0)]
     pub seed: u32,
-    /// Emitters seen directly by the camera contribute nothing (`hide_emitters`).
+    /// The reference leaves out emission seen directly by the camera, as lanterna's
+    /// --hide-emitters: recorded in the manifest for scripts/mitsuba_compare.py, which
+    /// renders max_depth D minus max_depth 1 with the same seed (Mitsuba's own
+    /// `hide_emitters`, which makes emitters invisible to camera rays, stays off).
     #[arg(long)]
     pub hide_emitters: bool,
     /// Follow buffer and image URIs that lead outside the scene's folder.

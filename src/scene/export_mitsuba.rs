@@ -44,7 +44,11 @@ pub struct ExportOptions {
     pub spp: u32,
     /// Default seed of the XML's sampler (`$seed`).
     pub seed: u32,
-    /// The path integrator's `hide_emitters` (lanterna's `--hide-emitters`).
+    /// Leave out emission seen directly by the camera, as lanterna's `--hide-emitters`:
+    /// recorded in the manifest (`hide_emitters`), for the renderer of the reference to
+    /// take max_depth D minus max_depth 1 with the same seed. The XML does not set
+    /// Mitsuba's own `hide_emitters`, which makes emitters invisible to camera rays
+    /// (lanterna keeps the light their surfaces reflect).
     pub hide_emitters: bool,
 }
 
@@ -203,6 +207,7 @@ pub fn export(
         "max_depth": options.max_depth,
         "spp": options.spp,
         "seed": options.seed,
+        "hide_emitters": options.hide_emitters,
         "shapes": body.shapes,
         "emitters": body.emitters,
         "triangles": body.triangles,

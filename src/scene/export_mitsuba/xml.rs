@@ -10,11 +10,20 @@ use std::fmt::Write as _;
 
 pub(super) fn integrator_xml(o: &ExportOptions) -> String {
     // Russian roulette only adds noise here (lanterna's is off by default): start it
-    // beyond the last segment.
+    // beyond the last segment. Mitsuba's `hide_emitters` is never set: it makes emitters
+    // invisible to camera rays (they see what is behind them), while lanterna's
+    // --hide-emitters drops only their emission and keeps the light their surfaces
+    // reflect. That quantity is max_depth D minus max_depth 1 with the same seed (the
+    // manifest's `hide_emitters`; scripts/mitsuba_compare.py renders it).
+    let note = if o.hide_emitters {
+        "  <!-- lanterna --hide-emitters: render max_depth D minus max_depth 1 with the same seed \
+         (Mitsuba's hide_emitters would make emitters invisible to camera rays) -->\n"
+    } else {
+        ""
+    };
     format!(
-        "  <integrator type=\"path\">\n    <integer name=\"max_depth\" value=\"$max_depth\"/>\n    <integer name=\"rr_depth\" value=\"{}\"/>\n    <boolean name=\"hide_emitters\" value=\"{}\"/>\n  </integrator>\n",
+        "{note}  <integrator type=\"path\">\n    <integer name=\"max_depth\" value=\"$max_depth\"/>\n    <integer name=\"rr_depth\" value=\"{}\"/>\n    <boolean name=\"hide_emitters\" value=\"false\"/>\n  </integrator>\n",
         o.max_depth.max(1) + 1000,
-        o.hide_emitters
     )
 }
 

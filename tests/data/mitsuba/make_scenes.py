@@ -33,6 +33,11 @@ agree up to noise.
                   against Mitsuba's roughdielectric and an interior homogeneous medium)
   glossy.gltf     rough metal and rough dielectric panels (not Lambertian: the export
                   approximates them with `principled`; measures the gap, no exact check)
+  lit_emitters.gltf  emitters with bright base colours seen by the camera and lit by
+                  lights in front of them (a one-sided panel 1 cm before the wall with a
+                  point light 25 cm away, a two-sided fin under a spot), so that the light
+                  their surfaces reflect is a large part of the image where emission seen
+                  directly is hidden
 
 Run from anywhere: python3 make_scenes.py (writes next to itself).
 """
@@ -586,6 +591,30 @@ def glossy_scene():
     b.write("glossy.gltf")
 
 
+def lit_emitters_scene():
+    b = Builder()
+    grey = b.lambert((0.6, 0.6, 0.6))
+    floor_and_wall(b, grey)
+    # The glTF default base colour is white: emitters usually reflect.
+    panel = b.lambert((0.9, 0.9, 0.9), emission=(1.0, 0.7, 0.4), strength=0.5)
+    b.node(mesh=b.quad((-0.9, 0.6, -1.99), (-0.1, 0.6, -1.99), (-0.1, 1.2, -1.99),
+                       (-0.9, 1.2, -1.99), panel))  # faces +Z, 1 cm before the wall
+    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
+        type="point", color=[0.7, 0.9, 1.0], intensity=0.4)}}, translation=[-0.5, 0.9, -1.74])
+    fin = b.lambert((0.3, 0.8, 0.5), emission=(0.4, 0.4, 1.0), strength=0.3, double_sided=True)
+    b.node(mesh=b.quad((0.3, 0.0, -1.2), (0.9, 0.0, -0.9), (0.9, 0.7, -0.9), (0.3, 0.7, -1.2),
+                       fin))
+    down = [-math.sqrt(0.5), 0, 0, math.sqrt(0.5)]  # −Z → −Y
+    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
+        type="spot", color=[1, 0.9, 0.8], intensity=3.0,
+        spot={"innerConeAngle": 0.3, "outerConeAngle": 0.6})}},
+        translation=[0.6, 1.6, -0.8], rotation=down)
+    eye = (0.0, 1.2, 2.2)
+    b.node(camera=b.camera(yfov=0.7), translation=list(eye),
+           rotation=look_at_rotation(eye, (0.0, 0.6, -1.5)))
+    b.write("lit_emitters.gltf")
+
+
 if __name__ == "__main__":
     tex_scene()
     twosided_scene()
@@ -594,6 +623,7 @@ if __name__ == "__main__":
     texxform_scene()
     smooth_scene()
     glossy_scene()
+    lit_emitters_scene()
     colors_scene()
     quantized_scene()
     glass_scene()
