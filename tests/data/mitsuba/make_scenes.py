@@ -38,6 +38,9 @@ agree up to noise.
                   point light 25 cm away, a two-sided fin under a spot), so that the light
                   their surfaces reflect is a large part of the image where emission seen
                   directly is hidden
+  closed_emitters.gltf  small closed emissive cubes (1, 2 and 3 cm, rotated) 1.5–2.5 m
+                  above a floor, one-sided, seen from 3 m: tests/core_render.rs makes them
+                  two-sided, which must not let out any of the light emitted inside
 
 Run from anywhere: python3 make_scenes.py (writes next to itself).
 """
@@ -615,6 +618,24 @@ def lit_emitters_scene():
     b.write("lit_emitters.gltf")
 
 
+def closed_emitters_scene():
+    b = Builder()
+    grey = b.lambert((0.6, 0.6, 0.6))
+    floor_and_wall(b, grey, size=3.0)
+    for i, (size, pos, axis, angle, rgb) in enumerate([
+            (0.01, (-0.8, 1.5, -1.0), (1, 1, 0), 0.7, (1.0, 0.6, 0.3)),
+            (0.02, (0.0, 2.5, -0.5), (0, 1, 1), 1.1, (0.4, 0.8, 1.0)),
+            (0.03, (0.9, 2.0, -1.5), (1, 0, 1), 2.0, (0.9, 0.9, 0.6))]):
+        n = math.sqrt(sum(a * a for a in axis))
+        q = [a / n * math.sin(angle / 2) for a in axis] + [math.cos(angle / 2)]
+        lamp = b.lambert((0.8, 0.8, 0.8), emission=rgb, strength=400.0 / (i + 1) ** 2)
+        b.node(mesh=b.box(lamp), translation=list(pos), rotation=q, scale=[size] * 3)
+    eye = (0.0, 1.6, 3.0)
+    b.node(camera=b.camera(yfov=0.9), translation=list(eye),
+           rotation=look_at_rotation(eye, (0.0, 1.0, -1.0)))
+    b.write("closed_emitters.gltf")
+
+
 if __name__ == "__main__":
     tex_scene()
     twosided_scene()
@@ -624,6 +645,7 @@ if __name__ == "__main__":
     smooth_scene()
     glossy_scene()
     lit_emitters_scene()
+    closed_emitters_scene()
     colors_scene()
     quantized_scene()
     glass_scene()
