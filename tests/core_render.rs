@@ -615,12 +615,11 @@ fn two_sided_closed_emitters_let_no_light_out_from_inside() {
         }
         mean
     });
-    for c in 0..3 {
-        let change = means[1][c] / means[0][c] - 1.0;
+    let [one, two] = means;
+    for (c, (a, b)) in one.iter().zip(two).enumerate() {
+        let change = b / a - 1.0;
         println!(
-            "channel {c}: one-sided {:.6e}, two-sided {:.6e}, change {:+.3} %",
-            means[0][c],
-            means[1][c],
+            "channel {c}: one-sided {a:.6e}, two-sided {b:.6e}, change {:+.3} %",
             100.0 * change
         );
         assert!(
