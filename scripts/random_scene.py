@@ -1,0 +1,132 @@
+#!/usr/bin/env python3
+"""Random Lambertian glTF scenes for checking lanterna against Mitsuba 3 on scenes that
+nobody designed.
+
+Each seed gives a room (floor, back wall, some of the ceiling and side walls), a group of
+boxes under a rotated, non-uniformly scaled parent node (some mirrored by a negative
+scale), emissive quads in the air and flush on the back wall (1 mm in front of it) and
+small emissive boxes, of sizes from 2 cm to 1 m, one- or two-sided, with the glTF
+default white base colour, a random one or a dark one, emissive strengths from 1 to
+100, up to three point and spot lights, and a camera looking into the room. Every
+material is Lambertian (metallic 0, KHR_materials_specular 0), so
+`lanterna scene export-mitsuba` is exact and Mitsuba's `path` must agree with every
+method up to noise:
+
+    python3 scripts/random_scene.py 7 -o r7.gltf
+    lanterna scene export-mitsuba r7.gltf -o r7_mitsuba --width 64 --height 48
+    python3 scripts/mitsuba_compare.py r7_mitsuba --lanterna target/release/lanterna \\
+        --method ris --batches 8 --spp 512 --runs 16 --json r7_ris.json
+
+Emissive boxes are closed and one-sided unless `--two-sided-boxes`: Mitsuba 3 stops
+shadow rays 8.9e-4 of their length short of the light, which lets light emitted inside
+a small two-sided box out near its edges (a 2 cm box 2-3 m away: +9 %), so its
+references of such scenes are too bright (README, "Shadow rays").
+
+Exit status 0, or 2 on bad arguments.
+"""
+
+import argparse
+import math
+import os
+import random
+import sys
+
+# The glTF writer of the Mitsuba peer scenes (tests/data/mitsuba/make_scenes.py).
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests",
+                                "data", "mitsuba"))
+from make_scenes import Builder, look_at_rotation  # noqa: E402
+
+UNIT_QUAD = ((-0.5, -0.5, 0.0), (0.5, -0.5, 0.0), (0.5, 0.5, 0.0), (-0.5, 0.5, 0.0))  # faces +z
+
+
+def quat(axis, angle):
+    n = math.sqrt(sum(a * a for a in axis)) or 1.0
+    s = math.sin(angle / 2) / n
+    return [axis[0] * s, axis[1] * s, axis[2] * s, math.cos(angle / 2)]
+
+
+def material(b, base, emission=None, strength=None, two_sided=False):
+    """A Lambertian material; `base` None leaves out the base colour (glTF's default white)."""
+    m = b.lambert(base or (1.0, 1.0, 1.0), emission, strength, two_sided)
+    if base is None:
+        del b.materials[m]["pbrMetallicRoughness"]["baseColorFactor"]
+    return m
+
+
+def generate(seed, two_sided_boxes):
+    r = random.Random(seed)
+    s = Builder()
+    rgb = lambda lo, hi: [r.uniform(lo, hi) for _ in range(3)]  # noqa: E731
+    room = r.uniform(3.0, 6.0)
+    walls = [s.quad(*UNIT_QUAD, material(s, rgb(0.2, 0.9)), uv=False) for _ in range(3)]
+    for k, (t, q) in enumerate([
+            ([0, 0, 0], quat([1, 0, 0], -math.pi / 2)),  # floor, facing +y
+            ([0, room, 0], quat([1, 0, 0], math.pi / 2)),  # ceiling, facing −y
+            ([0, room / 2, -room / 2], [0, 0, 0, 1]),  # back wall, facing +z
+            ([-room / 2, room / 2, 0], quat([0, 1, 0], math.pi / 2)),
+            ([room / 2, room / 2, 0], quat([0, 1, 0], -math.pi / 2))]):
+        if k in (0, 2) or r.random() >= 0.25:
+            s.node(mesh=walls[k % 3], translation=t, rotation=q, scale=[room, room, 1])
+    boxes = []
+    for _ in range(r.randint(2, 5)):
+        scale = [r.uniform(0.2, 1.0) for _ in range(3)]
+        if r.random() < 0.3:
+            scale[r.randrange(3)] *= -1  # mirrored: the winding flips
+        boxes.append(s.node(root=False, mesh=s.box(material(s, rgb(0.1, 0.9))),
+                            translation=[r.uniform(-1.5, 1.5), r.uniform(0.2, 1.2), r.uniform(-1.5, 1.0)],
+                            rotation=quat(rgb(-1, 1), r.uniform(0, 2 * math.pi)), scale=scale))
+    s.node(children=boxes, rotation=quat([0, 1, 0], r.uniform(0, 2 * math.pi)),
+           scale=[r.uniform(0.7, 1.3) for _ in range(3)])
+    kinds = []
+    for _ in range(r.randint(3, 9)):
+        kind = r.choice(["quad", "quad", "wall", "box"])
+        two = r.random() < 0.4 and (kind != "box" or two_sided_boxes)
+        base = r.choice([None, None, rgb(0.0, 1.0), [0.1, 0.1, 0.1]])
+        m = material(s, base, rgb(0.2, 1.0), 10 ** r.uniform(0, 2), two)
+        size = 10 ** r.uniform(-1.7, 0)
+        at = [r.uniform(-1.5, 1.5), r.uniform(0.3, room - 0.3), r.uniform(-1.5, 1.5)]
+        if kind == "box":
+            s.node(mesh=s.box(m), translation=at,
+                   rotation=quat(rgb(-1, 1), r.uniform(0, 2 * math.pi)),
+                   scale=[size, size * r.uniform(0.3, 1), size])
+        elif kind == "wall":
+            at[2] = -room / 2 + 0.001
+            s.node(mesh=s.quad(*UNIT_QUAD, m, uv=False), translation=at,
+                   scale=[size, size * r.uniform(0.2, 1), 1])
+        else:
+            s.node(mesh=s.quad(*UNIT_QUAD, m, uv=False), translation=at,
+                   rotation=quat(rgb(-1, 1), r.uniform(0, 2 * math.pi)),
+                   scale=[size, size * r.uniform(0.2, 1), 1])
+        kinds.append(kind + (" two-sided" if two else ""))
+    for _ in range(r.randint(0, 3)):
+        light = {"type": r.choice(["point", "spot"]), "color": rgb(0.3, 1.0),
+                 "intensity": 10 ** r.uniform(-0.5, 1)}
+        if light["type"] == "spot":
+            outer = r.uniform(0.3, 1.2)
+            light["spot"] = {"innerConeAngle": outer * r.uniform(0, 0.9), "outerConeAngle": outer}
+        kinds.append(light["type"])
+        s.node(extensions={"KHR_lights_punctual": {"light": s.light(**light)}},
+               translation=[r.uniform(-1.5, 1.5), r.uniform(0.3, room - 0.3), r.uniform(-1.5, 1.5)],
+               rotation=quat([1, 0, 0], -r.uniform(0.3, 1.5)))
+    eye = [r.uniform(-1, 1), r.uniform(0.8, 2.0), room / 2 - 0.2]
+    target = [r.uniform(-0.5, 0.5), r.uniform(0.3, 1.0), -0.5]
+    s.node(camera=s.camera(yfov=r.uniform(0.6, 1.3), aspect=4 / 3), translation=eye,
+           rotation=look_at_rotation(eye, target))
+    return s, kinds
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("seed", type=int)
+    ap.add_argument("-o", "--output", required=True, help="the .gltf to write")
+    ap.add_argument("--two-sided-boxes", action="store_true",
+                    help="let emissive boxes be two-sided too (Mitsuba's references leak there)")
+    a = ap.parse_args()
+    scene, kinds = generate(a.seed, a.two_sided_boxes)
+    scene.write(os.path.abspath(a.output))  # an absolute name: not next to make_scenes.py
+    print(f"{a.output}: {', '.join(kinds)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
