@@ -270,6 +270,22 @@ impl Batches {
         out
     }
 
+    /// The image mean of each batch, per channel.
+    pub fn channel_means(&self) -> Vec<[f64; 3]> {
+        self.images
+            .iter()
+            .map(|img| {
+                let mut s = [0.0; 3];
+                for px in img.chunks(3) {
+                    for c in 0..3 {
+                        s[c] += px[c] as f64;
+                    }
+                }
+                s.map(|x| x / (img.len() / 3) as f64)
+            })
+            .collect()
+    }
+
     /// Mean over all batches.
     pub fn mean(&self) -> Vec<f64> {
         let n = self.images.len() as f64;

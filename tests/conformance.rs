@@ -351,7 +351,7 @@ fn check(name: &str, c: Config, b: &Batches, r: &Reference, tests: usize) -> Str
         }
         hi
     };
-    let means = image_means(b);
+    let means = b.channel_means();
     let mut line = format!("{name}, {}: block p_min {p:.2e}, mean rel. diff", c.name);
     for ch in 0..3 {
         let (m, v) = lanterna::stats::mean_var(&means.iter().map(|x| x[ch]).collect::<Vec<_>>());
@@ -372,22 +372,6 @@ fn check(name: &str, c: Config, b: &Batches, r: &Reference, tests: usize) -> Str
     line
 }
 
-/// The image mean of each batch, per channel.
-fn image_means(b: &Batches) -> Vec<[f64; 3]> {
-    b.images
-        .iter()
-        .map(|img| {
-            let mut s = [0.0; 3];
-            for px in img.chunks(3) {
-                for c in 0..3 {
-                    s[c] += px[c] as f64;
-                }
-            }
-            s.map(|x| x / (img.len() / 3) as f64)
-        })
-        .collect()
-}
-
 /// A reference made of lanterna's own batches (for scenes Mitsuba cannot express).
 fn reference_from_batches(b: &Batches) -> Reference {
     let n = b.images.len() as f64;
@@ -401,7 +385,7 @@ fn reference_from_batches(b: &Batches) -> Reference {
         block_mean[blk / bx][blk % bx][ch] = m;
         block_se[blk / bx][blk % bx][ch] = (v / n).sqrt();
     }
-    let means = image_means(b);
+    let means = b.channel_means();
     let (mut mean, mut mean_se) = ([0.0; 3], [0.0; 3]);
     for ch in 0..3 {
         let (m, v) = lanterna::stats::mean_var(&means.iter().map(|x| x[ch]).collect::<Vec<_>>());

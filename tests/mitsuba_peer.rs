@@ -54,8 +54,6 @@ fn export_at_depth(
     max_depth: u32,
     dir: &Path,
 ) -> ExportOptions {
-    let lights = LightTable::build(scene).expect("light table");
-    let cam = session::choose_camera(scene, camera, &CameraOverride::default()).unwrap();
     let options = ExportOptions {
         width: w,
         height: h,
@@ -64,8 +62,21 @@ fn export_at_depth(
         seed: 0,
         hide_emitters: false,
     };
-    export_mitsuba::export(scene, &lights, &cam, &options, dir).expect("export");
+    export_with(scene, camera, &options, dir);
     options
+}
+
+/// Exports `scene` seen from `camera` (default: the first) with `options` into `dir`.
+fn export_with(scene: &Scene, camera: Option<&str>, options: &ExportOptions, dir: &Path) {
+    let lights = LightTable::build(scene).expect("light table");
+    let cam = session::choose_camera(scene, camera, &CameraOverride::default()).unwrap();
+    export_mitsuba::export(scene, &lights, &cam, options, dir).expect("export");
+}
+
+/// The manifest an export wrote into `dir`.
+fn read_manifest(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join(export_mitsuba::MANIFEST)).unwrap())
+        .unwrap()
 }
 
 /// Faces of a binary PLY written by the exporter, as world-space corner positions.
@@ -309,8 +320,6 @@ fn hidden_emitters_keep_the_light_their_surfaces_reflect() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("export");
     let loaded = session::load_scene(&data("lit_emitters.gltf")).unwrap();
-    let lights = LightTable::build(&loaded.scene).expect("light table");
-    let cam = session::choose_camera(&loaded.scene, None, &CameraOverride::default()).unwrap();
     let options = ExportOptions {
         width: 48,
         height: 36,
@@ -319,11 +328,8 @@ fn hidden_emitters_keep_the_light_their_surfaces_reflect() {
         seed: 0,
         hide_emitters: true,
     };
-    export_mitsuba::export(&loaded.scene, &lights, &cam, &options, &dir).expect("export");
-    let manifest: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join(export_mitsuba::MANIFEST)).unwrap())
-            .unwrap();
-    assert_eq!(manifest["hide_emitters"], true);
+    export_with(&loaded.scene, None, &options, &dir);
+    assert_eq!(read_manifest(&dir)["hide_emitters"], true);
     let xml = std::fs::read_to_string(dir.join("scene.xml")).unwrap();
     assert!(
         xml.contains("name=\"hide_emitters\" value=\"false\""),
@@ -384,8 +390,6 @@ fn export_street_matte(
     let loaded = session::load_scene(&path).unwrap();
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("export");
-    let lights = LightTable::build(&loaded.scene).expect("light table");
-    let cam = session::choose_camera(&loaded.scene, None, &CameraOverride::default()).unwrap();
     let options = ExportOptions {
         width: 48,
         height: 27,
@@ -394,10 +398,8 @@ fn export_street_matte(
         seed: 0,
         hide_emitters,
     };
-    export_mitsuba::export(&loaded.scene, &lights, &cam, &options, &dir).expect("export");
-    let manifest: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join(export_mitsuba::MANIFEST)).unwrap())
-            .unwrap();
+    export_with(&loaded.scene, None, &options, &dir);
+    let manifest = read_manifest(&dir);
     assert_eq!(manifest["exact"], true, "{}", manifest["approximations"]);
     (loaded, tmp, dir, options)
 }
