@@ -1,20 +1,21 @@
 #!/bin/bash
-# GPU session 2026-11-27 (third session of the day): the SD-tree's arrays read through
-# device addresses (push constants) where the scene's are, and `--scene-arrays`. Checks
-# that GPUs' default (bound buffers) did not move with the larger push constants and the
-# accessors (.gpu/ga/head.xz: ced2456, before; .gpu/ga/ga.xz: after), and measures the
+# GPU session 2026-11-27 (run in the fourth session of the day): the SD-tree's arrays read
+# through device addresses (push constants) where the scene's are, and `--scene-arrays`.
+# Checks that GPUs' default (bound buffers) did not move with the larger push constants and
+# the accessors (.gpu/ga/before.xz: ced2456; .gpu/ga/now.xz: 82fb504, which also has the
+# shadow-ray stop of b4e6465), and measures the
 # addresses forced on (`--scene-arrays addresses`, now the SD-tree's arrays too): the
 # driver's register statistics, then M samples/s on bistro-night and the street at
 # 1024x576, 256 spp, two alternated rounds. Lines go to $OUT/guide_addresses.txt.
 set -u
-for f in .gl/*.deb; do dpkg -x $f / 2>/dev/null; done; ldconfig >/dev/null 2>&1
+[ -n "${NOGL:-}" ] || { for f in .gl/*.deb; do dpkg -x $f / 2>/dev/null; done; ldconfig >/dev/null 2>&1; }
 [ -f /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ] && export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 mkdir -p /tmp/lga; for x in .gpu/ga/*.xz; do n=$(basename $x .xz); xz -dc $x > /tmp/lga/$n 2>/dev/null || python3 -c "import lzma,sys;sys.stdout.buffer.write(lzma.open('$x').read())" > /tmp/lga/$n; chmod +x /tmp/lga/$n; done
-/tmp/lga/head --version >/dev/null 2>&1 || export LD_LIBRARY_PATH=$PWD/.gpu/lib
+/tmp/lga/now --version >/dev/null 2>&1 || export LD_LIBRARY_PATH=$PWD/.gpu/lib
 O=$OUT/guide_addresses.txt; W=${W:-"--width 1024 --height 576"}; SPP=${SPP:-256}; t0=$SECONDS
 log() { echo "$*" | tee -a $O; }
 # configuration: binary and extra flags
-configs=("head|" "ga|" "ga|--scene-arrays addresses")
+configs=("before|" "now|" "now|--scene-arrays addresses")
 log "== kernel statistics $((SECONDS-t0))"
 for c in "${configs[@]}"; do
   b=${c%%|*}; f=${c#*|}
