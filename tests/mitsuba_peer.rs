@@ -675,8 +675,8 @@ print(json.dumps({{"p_same": float(p_same), "p_diff": float(p_diff), "json": tex
     assert!(inner["t"].is_null() && inner["v"][0].is_null(), "{inner}");
 }
 
-/// KHR_materials_transmission against Mitsuba's `thindielectric` (exact for smooth glass
-/// without Fresnel reflection, `glass.gltf`): a lamp whose light reaches the floor only
+/// KHR_materials_transmission against Mitsuba's index-matched `dielectric` (exact for
+/// smooth glass without Fresnel reflection, `glass.gltf`): a lamp whose light reaches the floor only
 /// through an amber pane, and a half-transmitting blue partition (a blend with diffuse)
 /// in front of a wall lamp. `pt`, `ris` and `guided-ris` (the guided directions are not
 /// folded above a transmitting surface), 8 × 64 spp, Mitsuba at 4×. Seen to fail with
@@ -701,7 +701,7 @@ fn thin_glass_agrees_with_mitsuba() {
     assert!(transmissions.contains(&1.0) && transmissions.contains(&0.5));
     let options = export_loaded(&loaded.scene, None, 40, 30, &dir);
     let xml = std::fs::read_to_string(dir.join("scene.xml")).unwrap();
-    assert_eq!(xml.matches("\"thindielectric\"").count(), 2, "{xml}");
+    assert_eq!(xml.matches("value=\"1.00001\"").count(), 2, "{xml}");
     let spp = 64;
     assert_methods_agree_exactly(
         &loaded.scene,
@@ -752,4 +752,148 @@ fn solid_glass_agrees_with_mitsuba() {
         128,
         tmp.path(),
     );
+}
+
+/// Thin glass without Fresnel reflection goes out as a `dielectric` of index 1.00001, not
+/// as `thindielectric`, which Mitsuba treats as a null event: its `volpath` (the
+/// integrator of scenes with absorbing solids) does not count a pass through it as a
+/// bounce, where its `path` and lanterna count one. So `solid_pane.gltf` (an absorbing box
+/// under a thin amber pane) exports exact, and where Mitsuba runs, on `glass.gltf`'s
+/// export at max depth 2 `volpath` and `path` agree, while with `thindielectric` put back
+/// `volpath` is much brighter (the floor under the pane gets its direct light through the
+/// pane only there). Point and spot lights seen through smooth thin glass make the export
+/// approximate (lanterna's smooth glass is a GGX lobe of α = 0.0016, Mitsuba's a delta).
+/// Found by random scenes with absorbing glass and thin panes (lanterna 2–3 % darker than
+/// `volpath`, agreeing once the panes were removed) and with a point light behind a pane.
+/// Seen to fail with the export writing `thindielectric` again, and without the flag.
+#[test]
+fn thin_glass_exports_as_an_index_matched_dielectric() {
+    let tmp = tempfile::tempdir().unwrap();
+    for scene in ["solid_pane.gltf", "glass.gltf"] {
+        let dir = tmp.path().join(scene);
+        export(scene, None, 16, 12, &dir);
+        let manifest = read_manifest(&dir);
+        assert_eq!(manifest["exact"], true, "{scene}: {manifest}");
+        let xml = std::fs::read_to_string(dir.join("scene.xml")).unwrap();
+        assert!(!xml.contains("thindielectric"), "{xml}");
+        assert!(
+            xml.contains("<float name=\"int_ior\" value=\"1.00001\"/>"),
+            "{xml}"
+        );
+    }
+    // glass.gltf with a point light: the lamp under the ceiling is seen through the pane.
+    let mut gltf: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(data("glass.gltf")).unwrap()).unwrap();
+    gltf["extensionsUsed"]
+        .as_array_mut()
+        .unwrap()
+        .push("KHR_lights_punctual".into());
+    gltf["extensions"] = serde_json::json!({"KHR_lights_punctual": {"lights": [
+        {"type": "point", "color": [1.0, 1.0, 1.0], "intensity": 2.0}]}});
+    let nodes = gltf["nodes"].as_array_mut().unwrap();
+    nodes.push(serde_json::json!({"translation": [0.3, 1.9, 0.2],
+        "extensions": {"KHR_lights_punctual": {"light": 0}}}));
+    let light_node = nodes.len() - 1;
+    gltf["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(light_node.into());
+    let lit = tmp.path().join("glass_point.gltf");
+    std::fs::write(&lit, gltf.to_string()).unwrap();
+    let loaded = session::load_scene(&lit).unwrap();
+    assert_eq!(loaded.scene.punctual.len(), 1);
+    let dir = tmp.path().join("glass_point");
+    export_loaded(&loaded.scene, None, 16, 12, &dir);
+    let manifest = read_manifest(&dir);
+    assert_eq!(manifest["exact"], false, "{manifest}");
+    assert!(
+        manifest["approximations"]
+            .to_string()
+            .contains("MIN_GGX_ALPHA"),
+        "{manifest}"
+    );
+
+    if !mitsuba_available() {
+        println!(
+            "skipped the Mitsuba part: no Python here imports mitsuba (scripts/setup --mitsuba)"
+        );
+        return;
+    }
+    let xml = tmp.path().join("glass.gltf/scene.xml");
+    let code = format!(
+        r#"
+import json, re
+import mitsuba as mi, numpy as np
+mi.set_variant("scalar_rgb")
+text = open({xml:?}).read()
+thin = re.sub(r'<bsdf type="dielectric">\s*<float name="int_ior" value="1.00001"/>',
+              '<bsdf type="thindielectric"><float name="int_ior" value="1"/>', text)
+assert thin != text
+out = {{}}
+for kind, xml in (("dielectric", text), ("thindielectric", thin)):
+    for name in ("path", "volpath"):
+        s = mi.load_string(xml.replace('<integrator type="path">', '<integrator type="' + name + '">'),
+                           max_depth=2, spp=64)
+        means = [float(np.array(mi.render(s, seed=k)).mean()) for k in range(8)]
+        out[kind + " " + name] = [float(np.mean(means)), float(np.std(means, ddof=1) / np.sqrt(len(means)))]
+print(json.dumps(out))
+"#,
+        xml = xml.display().to_string()
+    );
+    let python = lanterna::testing::mitsuba_python().expect("a Python that imports mitsuba");
+    let out = Command::new(python)
+        .current_dir(tmp.path().join("glass.gltf"))
+        .args(["-c", &code])
+        .output()
+        .expect("run Python");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(String::from_utf8_lossy(&out.stdout).trim()).unwrap();
+    println!("glass.gltf at max depth 2: {v}");
+    let gap = |kind: &str| {
+        let (p, q) = (&v[format!("{kind} path")], &v[format!("{kind} volpath")]);
+        let diff = q[0].as_f64().unwrap() - p[0].as_f64().unwrap();
+        let se = q[1].as_f64().unwrap().hypot(p[1].as_f64().unwrap());
+        diff / se
+    };
+    assert!(
+        gap("dielectric").abs() < 4.0,
+        "volpath and path should agree: {v}"
+    );
+    assert!(
+        gap("thindielectric") > 6.0,
+        "volpath brighter through thindielectric: {v}"
+    );
+}
+
+/// An absorbing glass box under a thin amber pane (`solid_pane.gltf`) against Mitsuba's
+/// `volpath`: the export's index-matched `dielectric` pane is a bounce there as in
+/// lanterna. `pt` and `ris`, 8 × 128 spp, Mitsuba at 4×; image mean and 8×8 blocks (the
+/// pixels seen through the box and the pane are lit by chains of two smooth interfaces,
+/// whose batch means at 128 spp are too skewed for Welch's per-pixel test: 51 pixel-
+/// channels below p = 0.01 against 28 expected, the image mean within 0.25 % ± 0.28 %).
+/// Seen to fail with the pane exported as `thindielectric` (Mitsuba brighter: paths
+/// through the pane reach one bounce further).
+#[test]
+fn absorbing_solid_under_a_pane_agrees_with_mitsuba() {
+    if !mitsuba_available() {
+        println!("skipped: no Python here imports mitsuba (scripts/setup --mitsuba)");
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("export");
+    let loaded = session::load_scene(&data("solid_pane.gltf")).unwrap();
+    let options = export_loaded(&loaded.scene, None, 40, 30, &dir);
+    let xml = std::fs::read_to_string(dir.join("scene.xml")).unwrap();
+    assert!(xml.contains("<integrator type=\"volpath\">"), "{xml}");
+    for method in [Method::Pt, Method::Ris] {
+        let exrs = lanterna_batches(&loaded.scene, method, &options, 8, 128, tmp.path());
+        let report = compare(&dir, &exrs, 4 * 128, &tmp.path().join("report.json"));
+        assert_eq!(report["exact"], true, "{}", report["approximations"]);
+        assert_mean_and_blocks_agree(&report, method.name());
+    }
 }

@@ -149,6 +149,8 @@ pub fn export(
         approximations: Vec::new(),
         warnings: Vec::new(),
         sampled_emitters: 0,
+        thin_walls: false,
+        smooth_thin_walls: false,
         // Far above float resolution at the scene's coordinates (so Mitsuba always
         // orders the sheets), far below a pixel (so silhouettes do not move).
         epsilon: 4e-6

@@ -233,12 +233,18 @@ impl Writer<'_> {
         s
     }
 
-    /// The transmitting part of a KHR_materials_transmission material as Mitsuba's
-    /// `thindielectric`, its transmittance the base colour (`colour`, the reflectance
-    /// XML). glTF's thin wall passes (1 − F)·base colour straight through (roughness 0)
-    /// and reflects F by Schlick's approximation; `thindielectric` also follows the light
-    /// bouncing inside the wall, so only glass without Fresnel reflection (specularFactor
-    /// 0: matched indices, nothing reflected) is exact; other glass is approximated.
+    /// The transmitting part of a KHR_materials_transmission material, its transmittance
+    /// the base colour (`colour`, the reflectance XML). glTF's thin wall passes
+    /// (1 − F)·base colour straight through (roughness 0) and reflects F by Schlick's
+    /// approximation. Glass without Fresnel reflection (specularFactor 0: matched indices,
+    /// nothing reflected) goes out as a `dielectric` of index 1.00001: straight through,
+    /// reflecting ~10⁻¹¹, radiance scaled by 1/1.00001² — exact to 2·10⁻⁵. Not as
+    /// `thindielectric`, which Mitsuba flags as a null event: `volpath` does not count a
+    /// pass through it as a bounce, and `path` inside a `blendbsdf` with it gave half the
+    /// direct light the diffuse part reflects on the lit side (3.9.1; a `dielectric` or a
+    /// black `diffuse` in its place give the opaque equivalent, as lanterna does). Glass
+    /// that reflects goes out as `thindielectric`, which also follows the light bouncing
+    /// inside the wall: approximate.
     fn thin_glass_xml(&mut self, m: u32, mat: &gpu::Material, colour: &str) -> String {
         let name = self.material_name(m).to_string();
         let smooth = mat.roughness * mat.roughness <= gpu::MIN_GGX_ALPHA;
@@ -254,9 +260,21 @@ impl Writer<'_> {
                 "material `{name}`: transmission texture not exported (factor used)"
             ));
         }
-        let mut s = String::from("    <bsdf type=\"thindielectric\">\n");
-        let ior = if reflects { mat.ior.max(1.0) } else { 1.0 };
-        let _ = writeln!(s, "      <float name=\"int_ior\" value=\"{ior}\"/>");
+        self.smooth_thin_walls |= smooth;
+        let mut s = if reflects {
+            self.thin_walls = true;
+            let mut s = String::from("    <bsdf type=\"thindielectric\">\n");
+            let _ = writeln!(
+                s,
+                "      <float name=\"int_ior\" value=\"{}\"/>",
+                mat.ior.max(1.0)
+            );
+            s
+        } else {
+            String::from(
+                "    <bsdf type=\"dielectric\">\n      <float name=\"int_ior\" value=\"1.00001\"/>\n",
+            )
+        };
         s.push_str("      <float name=\"ext_ior\" value=\"1\"/>\n");
         s.push_str(&colour.replace("\"reflectance\"", "\"specular_transmittance\""));
         s.push_str("    </bsdf>\n");

@@ -32,6 +32,10 @@ pub(super) struct Writer<'a> {
     pub(super) sampled_emitters: usize,
     /// Gap between the two sheets of a double-sided emitter.
     pub(super) epsilon: f32,
+    /// Whether some BSDF went out as `thindielectric` (thin glass that reflects).
+    pub(super) thin_walls: bool,
+    /// Whether some thin glass is smooth (lanterna: GGX at MIN_GGX_ALPHA; Mitsuba: delta).
+    pub(super) smooth_thin_walls: bool,
 }
 
 impl Writer<'_> {
@@ -157,12 +161,20 @@ impl Writer<'_> {
             }
         }
         if !media.is_empty() {
-            // Mitsuba's `path` ignores media; `volpath` is `path` plus them.
+            // Mitsuba's `path` ignores media; `volpath` is `path` plus them, except that
+            // it takes a straight pass through `thindielectric` (a null event) without
+            // counting a bounce, where `path` and lanterna count one (thin glass that
+            // does not reflect goes out as a `dielectric`, which it counts).
             xml = xml.replacen(
                 "<integrator type=\"path\">",
                 "<integrator type=\"volpath\">",
                 1,
             );
+            if self.thin_walls {
+                self.approximations.push(
+                    "absorbing solids need Mitsuba's `volpath`, which does not count a pass through thin transmitting glass (`thindielectric`) as a bounce, as lanterna does: paths through thin glass reach one bounce further there".into(),
+                );
+            }
         }
 
         let mut shapes = 0;
@@ -235,6 +247,16 @@ impl Writer<'_> {
             xml.push_str(&self.punctual_xml(i, l)?);
             emitters += 1;
             self.sampled_emitters += 1;
+        }
+        if self.smooth_thin_walls
+            && scene
+                .punctual
+                .iter()
+                .any(|l| l.intensity.iter().any(|&c| c > 0.0))
+        {
+            self.approximations.push(
+                "point and spot lights with smooth thin glass: lanterna's smooth glass is a GGX lobe of α = MIN_GGX_ALPHA, through which a point light shows as a small highlight; Mitsuba's is a delta, through which it shows nothing".into(),
+            );
         }
         if emitters > 0 && self.sampled_emitters == 0 {
             xml.push_str(

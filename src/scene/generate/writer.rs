@@ -235,7 +235,7 @@ impl Gltf {
             let m = &mut self.material_defs[handle];
             m.metallic = 0.0;
             // Thin glass stays: smooth and without Fresnel reflection, which the Mitsuba
-            // export writes exactly (`thindielectric` with matched indices).
+            // export writes exactly (an index-matched `dielectric`).
             m.roughness = if m.transmission > 0.0 { 0.0 } else { 1.0 };
             m.lambertian = true;
             m.alpha_cutoff = None;

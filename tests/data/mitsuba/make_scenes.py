@@ -24,13 +24,16 @@ agree up to noise.
                   unnormalised unsigned bytes scaled by their nodes, their texture
                   coordinates as normalised unsigned bytes; must load as smooth.gltf does
   glass.gltf      KHR_materials_transmission with specularFactor 0 and roughness 0 (exact
-                  against Mitsuba's thindielectric with matched indices): a ceiling lamp
+                  against Mitsuba's dielectric of index 1.00001): a ceiling lamp
                   whose light reaches the floor only through an amber pane below it, and
                   a half-transmitting blue partition (diffuse + thin glass) in front of
                   a wall lamp, casting a tinted shadow
   solid.gltf      KHR_materials_volume: a smooth clear glass box (index 1.5) and a rough
                   absorbing ball (index 1.33, attenuation) around a small lamp (exact
                   against Mitsuba's roughdielectric and an interior homogeneous medium)
+  solid_pane.gltf  an absorbing glass box and a thin amber pane under a ceiling lamp: the
+                  export needs `volpath` for the box, which would not count passes through
+                  a `thindielectric` pane as bounces, so the pane must go out as a dielectric
   glossy.gltf     rough metal and rough dielectric panels (not Lambertian: the export
                   approximates them with `principled`; measures the gap, no exact check)
   lit_emitters.gltf  emitters with bright base colours seen by the camera and lit by
@@ -581,6 +584,24 @@ def solid_scene():
     b.write("solid.gltf")
 
 
+def solid_pane_scene():
+    b = Builder()
+    grey = b.lambert((0.6, 0.6, 0.6))
+    floor_and_wall(b, grey)
+    lamp = b.lambert((0, 0, 0), emission=(1, 1, 1), strength=6)
+    b.node(mesh=b.quad((-0.4, 2.0, -0.4), (0.4, 2.0, -0.4), (0.4, 2.0, 0.4), (-0.4, 2.0, 0.4),
+                       lamp, uv=False))
+    amber = b.glass((0.9, 0.6, 0.3), 1.0)
+    b.node(mesh=b.quad((-0.7, 1.7, -0.7), (0.7, 1.7, -0.7), (0.7, 1.7, 0.7), (-0.7, 1.7, 0.7),
+                       amber, uv=False))
+    murky = b.solid_glass((1, 1, 1), 0.0, 1.5, attenuation=((0.7, 0.7, 0.95), 0.9))
+    b.node(mesh=b.box(murky), translation=[0.0, 0.8, 0.0], scale=[0.6, 0.6, 0.6])
+    eye = (0.3, 1.3, 3.4)
+    b.node(camera=b.camera(yfov=0.8, aspect=4 / 3), translation=list(eye),
+           rotation=look_at_rotation(eye, (0.0, 0.8, -0.2)))
+    b.write("solid_pane.gltf")
+
+
 def glossy_scene():
     b = Builder()
     grey = b.lambert((0.6, 0.6, 0.6))
@@ -650,3 +671,4 @@ if __name__ == "__main__":
     quantized_scene()
     glass_scene()
     solid_scene()
+    solid_pane_scene()
