@@ -17,6 +17,15 @@ method up to noise:
     python3 scripts/mitsuba_compare.py r7_mitsuba --lanterna target/release/lanterna \\
         --method ris --batches 8 --spp 512 --runs 16 --json r7_ris.json
 
+`--materials` widens the material mix where the export stays exact: sRGB base colour
+textures (nearest and bilinear, on the walls, the floor and some boxes), emissive
+textures, vertex colours, solid glass boxes (KHR_materials_volume: smooth and rough,
+indices 1.1-2.0, tinted, some absorbing, some mirrored), and thin panes without
+Fresnel reflection (specularFactor 0) that pass part of the light straight through. A
+scene with panes gets no point or spot lights: seen through smooth thin glass they
+differ by design (lanterna's smooth glass is a GGX lobe of α = 0.0016, Mitsuba's a
+delta), and the export would say it is approximate.
+
 Emissive boxes are closed and one-sided unless `--two-sided-boxes`: Mitsuba 3 stops
 shadow rays 8.9e-4 of their length short of the light, which lets light emitted inside
 a small two-sided box out near its edges (a 2 cm box 2-3 m away: +9 %), so its
@@ -29,12 +38,13 @@ import argparse
 import math
 import os
 import random
+import struct
 import sys
 
 # The glTF writer of the Mitsuba peer scenes (tests/data/mitsuba/make_scenes.py).
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests",
                                 "data", "mitsuba"))
-from make_scenes import Builder, look_at_rotation  # noqa: E402
+from make_scenes import Builder, look_at_rotation, png_rgb  # noqa: E402
 
 UNIT_QUAD = ((-0.5, -0.5, 0.0), (0.5, -0.5, 0.0), (0.5, 0.5, 0.0), (-0.5, 0.5, 0.0))  # faces +z
 
@@ -53,12 +63,39 @@ def material(b, base, emission=None, strength=None, two_sided=False):
     return m
 
 
-def generate(seed, two_sided_boxes):
+def random_texture(r, s):
+    """A random sRGB texture of 2-8 texels a side, nearest or bilinear."""
+    w, h = r.randint(2, 8), r.randint(2, 8)
+    pixels = [[tuple(r.randrange(256) for _ in range(3)) for _ in range(w)] for _ in range(h)]
+    return s.texture(png_rgb(w, h, pixels), nearest=r.random() < 0.5)
+
+
+def textured(r, s, lo, hi):
+    """A Lambertian material whose base colour is a random texture times a factor."""
+    m = s.lambert(rgb_of(r, lo, hi), base_tex=random_texture(r, s))
+    return m
+
+
+def rgb_of(r, lo, hi):
+    return [r.uniform(lo, hi) for _ in range(3)]
+
+
+def solid_glass(r, s, absorbing):
+    """A glass solid's boundary: smooth or rough, tinted, some absorbing if `absorbing`."""
+    rough = r.choice([0.0, 0.0, r.uniform(0.1, 0.6)])
+    att = ((rgb_of(r, 0.3, 1.0), r.uniform(0.3, 2.0)) if absorbing and r.random() < 0.5 else None)
+    return s.solid_glass(rgb_of(r, 0.6, 1.0), rough, r.uniform(1.1, 2.0), attenuation=att)
+
+
+def generate(seed, two_sided_boxes, materials=False):
     r = random.Random(seed)
     s = Builder()
     rgb = lambda lo, hi: [r.uniform(lo, hi) for _ in range(3)]  # noqa: E731
     room = r.uniform(3.0, 6.0)
-    walls = [s.quad(*UNIT_QUAD, material(s, rgb(0.2, 0.9)), uv=False) for _ in range(3)]
+    absorbing = materials and r.random() < 0.5
+    wall_material = (lambda: textured(r, s, 0.4, 1.0) if materials and r.random() < 0.5
+                     else material(s, rgb(0.2, 0.9)))
+    walls = [s.quad(*UNIT_QUAD, wall_material(), uv=materials) for _ in range(3)]
     for k, (t, q) in enumerate([
             ([0, 0, 0], quat([1, 0, 0], -math.pi / 2)),  # floor, facing +y
             ([0, room, 0], quat([1, 0, 0], math.pi / 2)),  # ceiling, facing −y
@@ -72,17 +109,44 @@ def generate(seed, two_sided_boxes):
         scale = [r.uniform(0.2, 1.0) for _ in range(3)]
         if r.random() < 0.3:
             scale[r.randrange(3)] *= -1  # mirrored: the winding flips
-        boxes.append(s.node(root=False, mesh=s.box(material(s, rgb(0.1, 0.9))),
+        m = material(s, rgb(0.1, 0.9))
+        if materials:
+            m = r.choice([m, solid_glass(r, s, absorbing), solid_glass(r, s, absorbing),
+                          textured(r, s, 0.3, 1.0)])
+        boxes.append(s.node(root=False, mesh=box(s, m, textured=materials),
                             translation=[r.uniform(-1.5, 1.5), r.uniform(0.2, 1.2), r.uniform(-1.5, 1.0)],
                             rotation=quat(rgb(-1, 1), r.uniform(0, 2 * math.pi)), scale=scale))
     s.node(children=boxes, rotation=quat([0, 1, 0], r.uniform(0, 2 * math.pi)),
            scale=[r.uniform(0.7, 1.3) for _ in range(3)])
     kinds = []
+    panes = 0
+    if materials:
+        for _ in range(r.randint(0, 3)):
+            # A thin pane (no Fresnel reflection): part passes straight through, tinted.
+            pane = s.glass(rgb(0.3, 1.0), r.uniform(0.3, 1.0))
+            s.node(mesh=s.quad(*UNIT_QUAD, pane, uv=False),
+                   translation=[r.uniform(-1.5, 1.5), r.uniform(0.3, room - 0.3), r.uniform(-1.5, 1.0)],
+                   rotation=quat(rgb(-1, 1), r.uniform(0, 2 * math.pi)),
+                   scale=[r.uniform(0.3, 1.5), r.uniform(0.3, 1.5), 1])
+            kinds.append("pane")
+        panes = kinds.count("pane")
+        # A quad with vertex colours (base colour factor × COLOR_0).
+        cols = [rgb(0.0, 1.0) for _ in range(4)]
+        q = s.mesh([list(p) for p in UNIT_QUAD], [0, 1, 2, 0, 2, 3], material(s, rgb(0.5, 1.0)),
+                   [[0, 0, 1]] * 4, None, cols)
+        s.node(mesh=q, translation=[r.uniform(-1.5, 1.5), r.uniform(0.3, 1.5), r.uniform(-1.5, 1.0)],
+               rotation=quat(rgb(-1, 1), r.uniform(0, 2 * math.pi)), scale=[1.0, 1.0, 1])
+        kinds.append("vertex colours")
     for _ in range(r.randint(3, 9)):
         kind = r.choice(["quad", "quad", "wall", "box"])
         two = r.random() < 0.4 and (kind != "box" or two_sided_boxes)
         base = r.choice([None, None, rgb(0.0, 1.0), [0.1, 0.1, 0.1]])
         m = material(s, base, rgb(0.2, 1.0), 10 ** r.uniform(0, 2), two)
+        glow = materials and kind != "box" and r.random() < 0.4
+        if glow:
+            # An emissive texture (emissive factor × texture), the base colour a texture too.
+            m = s.lambert(rgb(0.0, 1.0), rgb(0.2, 1.0), 10 ** r.uniform(0, 2), two,
+                          base_tex=random_texture(r, s), emissive_tex=random_texture(r, s))
         size = 10 ** r.uniform(-1.7, 0)
         at = [r.uniform(-1.5, 1.5), r.uniform(0.3, room - 0.3), r.uniform(-1.5, 1.5)]
         if kind == "box":
@@ -91,14 +155,16 @@ def generate(seed, two_sided_boxes):
                    scale=[size, size * r.uniform(0.3, 1), size])
         elif kind == "wall":
             at[2] = -room / 2 + 0.001
-            s.node(mesh=s.quad(*UNIT_QUAD, m, uv=False), translation=at,
+            s.node(mesh=s.quad(*UNIT_QUAD, m, uv=glow), translation=at,
                    scale=[size, size * r.uniform(0.2, 1), 1])
         else:
-            s.node(mesh=s.quad(*UNIT_QUAD, m, uv=False), translation=at,
+            s.node(mesh=s.quad(*UNIT_QUAD, m, uv=glow), translation=at,
                    rotation=quat(rgb(-1, 1), r.uniform(0, 2 * math.pi)),
                    scale=[size, size * r.uniform(0.2, 1), 1])
-        kinds.append(kind + (" two-sided" if two else ""))
-    for _ in range(r.randint(0, 3)):
+        kinds.append(kind + (" two-sided" if two else "") + (" textured" if glow else ""))
+    # No point or spot lights with thin panes: seen through smooth thin glass they differ
+    # by design (lanterna's smooth glass is a GGX lobe of α = 0.0016; the export says so).
+    for _ in range(0 if panes else r.randint(0, 3)):
         light = {"type": r.choice(["point", "spot"]), "color": rgb(0.3, 1.0),
                  "intensity": 10 ** r.uniform(-0.5, 1)}
         if light["type"] == "spot":
@@ -115,14 +181,29 @@ def generate(seed, two_sided_boxes):
     return s, kinds
 
 
+def box(s, m, textured):
+    """The unit cube; with `textured`, each face carries uv (0,0)-(1,1) for its texture."""
+    mesh = s.box(m)
+    if textured:
+        # Texture coordinates for the 24 vertices of Builder.box (four per face, in the
+        # order of its corners).
+        uvs = [(0, 0), (1, 0), (1, 1), (0, 1)] * 6
+        prim = s.meshes[mesh]["primitives"][0]
+        prim["attributes"]["TEXCOORD_0"] = s._acc(
+            b"".join(struct.pack("<2f", *t) for t in uvs), 5126, len(uvs), "VEC2")
+    return mesh
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("seed", type=int)
     ap.add_argument("-o", "--output", required=True, help="the .gltf to write")
+    ap.add_argument("--materials", action="store_true",
+                    help="textures, vertex colours, solid glass boxes and thin panes too")
     ap.add_argument("--two-sided-boxes", action="store_true",
                     help="let emissive boxes be two-sided too (Mitsuba's references leak there)")
     a = ap.parse_args()
-    scene, kinds = generate(a.seed, a.two_sided_boxes)
+    scene, kinds = generate(a.seed, a.two_sided_boxes, a.materials)
     scene.write(os.path.abspath(a.output))  # an absolute name: not next to make_scenes.py
     print(f"{a.output}: {', '.join(kinds)}")
     return 0
