@@ -251,6 +251,23 @@ fn compare(
     serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap()
 }
 
+/// Runs `code` with the Python that imports mitsuba, in `cwd`, and parses the JSON it
+/// prints last.
+fn python_json(code: &str, cwd: &Path) -> serde_json::Value {
+    let python = lanterna::testing::mitsuba_python().expect("a Python that imports mitsuba");
+    let out = Command::new(python)
+        .current_dir(cwd)
+        .args(["-c", code])
+        .output()
+        .expect("run Python");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_str(String::from_utf8_lossy(&out.stdout).trim()).unwrap()
+}
+
 #[test]
 fn lanterna_agrees_with_mitsuba_on_a_lambertian_scene() {
     if !mitsuba_available() {
@@ -654,18 +671,7 @@ print(json.dumps({{"p_same": float(p_same), "p_diff": float(p_diff), "json": tex
 "#,
         dir = script.display().to_string()
     );
-    let python = lanterna::testing::mitsuba_python().expect("a Python that imports mitsuba");
-    let out = Command::new(python)
-        .args(["-c", &code])
-        .output()
-        .expect("run Python");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value =
-        serde_json::from_str(String::from_utf8_lossy(&out.stdout).trim()).unwrap();
+    let v = python_json(&code, Path::new(env!("CARGO_MANIFEST_DIR")));
     assert_eq!(
         v["p_same"], 1.0,
         "constant pixels equal to float32 rounding: {v}"
@@ -840,19 +846,7 @@ print(json.dumps(out))
 "#,
         xml = xml.display().to_string()
     );
-    let python = lanterna::testing::mitsuba_python().expect("a Python that imports mitsuba");
-    let out = Command::new(python)
-        .current_dir(tmp.path().join("glass.gltf"))
-        .args(["-c", &code])
-        .output()
-        .expect("run Python");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value =
-        serde_json::from_str(String::from_utf8_lossy(&out.stdout).trim()).unwrap();
+    let v = python_json(&code, &tmp.path().join("glass.gltf"));
     println!("glass.gltf at max depth 2: {v}");
     let gap = |kind: &str| {
         let (p, q) = (&v[format!("{kind} path")], &v[format!("{kind} volpath")]);
