@@ -532,6 +532,13 @@ def quantized_scene():
     b.write("quantized.gltf")
 
 
+def ceiling_lamp(b):
+    """A 0.8 m square lamp 2 m above the floor, facing down (strength 6)."""
+    lamp = b.lambert((0, 0, 0), emission=(1, 1, 1), strength=6)
+    b.node(mesh=b.quad((-0.4, 2.0, -0.4), (0.4, 2.0, -0.4), (0.4, 2.0, 0.4), (-0.4, 2.0, 0.4),
+                       lamp, uv=False))
+
+
 def glass_scene():
     b = Builder()
     grey = b.lambert((0.6, 0.6, 0.6))
@@ -540,9 +547,7 @@ def glass_scene():
            scale=[0.5, 0.5, 0.5])
     # Ceiling lamp facing down, an amber pane below it: the floor under the pane sees the
     # lamp only through the glass.
-    lamp = b.lambert((0, 0, 0), emission=(1, 1, 1), strength=6)
-    b.node(mesh=b.quad((-0.4, 2.0, -0.4), (0.4, 2.0, -0.4), (0.4, 2.0, 0.4), (-0.4, 2.0, 0.4),
-                       lamp, uv=False))
+    ceiling_lamp(b)
     amber = b.glass((0.9, 0.6, 0.3), 1.0)
     b.node(mesh=b.quad((-0.7, 1.7, -0.7), (0.7, 1.7, -0.7), (0.7, 1.7, 0.7), (-0.7, 1.7, 0.7),
                        amber, uv=False))
@@ -567,9 +572,7 @@ def solid_scene():
     b = Builder()
     grey = b.lambert((0.6, 0.6, 0.6))
     floor_and_wall(b, grey)
-    lamp = b.lambert((0, 0, 0), emission=(1, 1, 1), strength=6)
-    b.node(mesh=b.quad((-0.4, 2.0, -0.4), (0.4, 2.0, -0.4), (0.4, 2.0, 0.4), (-0.4, 2.0, 0.4),
-                       lamp, uv=False))
+    ceiling_lamp(b)
     clear = b.solid_glass((0.92, 1.0, 0.92), 0.0, 1.5)
     b.node(mesh=b.box(clear), translation=[-0.6, 0.36, -0.2], scale=[0.7, 0.7, 0.7],
            rotation=[0, 0.258819, 0, 0.9659258])
@@ -588,9 +591,7 @@ def solid_pane_scene():
     b = Builder()
     grey = b.lambert((0.6, 0.6, 0.6))
     floor_and_wall(b, grey)
-    lamp = b.lambert((0, 0, 0), emission=(1, 1, 1), strength=6)
-    b.node(mesh=b.quad((-0.4, 2.0, -0.4), (0.4, 2.0, -0.4), (0.4, 2.0, 0.4), (-0.4, 2.0, 0.4),
-                       lamp, uv=False))
+    ceiling_lamp(b)
     amber = b.glass((0.9, 0.6, 0.3), 1.0)
     b.node(mesh=b.quad((-0.7, 1.7, -0.7), (0.7, 1.7, -0.7), (0.7, 1.7, 0.7), (-0.7, 1.7, 0.7),
                        amber, uv=False))
