@@ -193,12 +193,12 @@ pub fn train(
             let mut k = 0;
             while let Some(spp) = next {
                 let t = Instant::now();
-                // The refit prepares the tree for twice the samples, as the schedule
-                // predicts; the final pass may render fewer.
-                if cancel.load(Ordering::SeqCst) || !pass(k, spp as u64, spp * 2)? {
+                // The refit prepares the tree for twice the samples, as a doubling
+                // schedule renders next (the last pass's count is known only then).
+                if cancel.load(Ordering::SeqCst) || !pass(k, spp as u64, spp.saturating_mul(2))? {
                     break;
                 }
-                next = schedule.next(t.elapsed().as_secs_f64());
+                next = schedule.next(t.elapsed().as_secs_f64(), spp);
                 k += 1;
             }
         }
