@@ -65,7 +65,7 @@ impl SppSchedule {
 /// time that is left, at the speed the finished iteration measured (the reference
 /// implementation's rule for sample budgets, "the last iteration uses at least half of
 /// what is left", carried over to seconds). Stopping before a doubled iteration that does
-/// not fit, as this schedule did until 2026-11-28, used between half and all of the
+/// not fit, as this schedule did until 2026-11-27, used between half and all of the
 /// training time, 16–18 % of the total instead of 30 % in most runs on the H200.
 #[derive(Clone, Debug)]
 pub struct TimeSchedule {
@@ -105,21 +105,19 @@ impl TimeSchedule {
         let per_spp = seconds.max(0.0) / f64::from(spp.max(1));
         let left = self.train_budget_s - self.elapsed_s;
         let t = f64::from(doubled) * per_spp;
-        if !(t <= left) {
-            return None; // not even a doubled iteration fits
-        }
         if t + 2.0 * t <= left {
             return Some(doubled);
         }
         // The iteration after the next would not fit: the next one is the last and
-        // takes what is left (at least the doubled count, which fits).
+        // takes what is left, if that is at least this iteration's count (a tree learned
+        // from fewer samples than the current one would be no better; passes slower than
+        // predicted get here with less than a doubled iteration left).
         self.last = true;
-        let fill = if per_spp > 0.0 {
-            (left / per_spp).floor().min(f64::from(u32::MAX))
-        } else {
-            f64::from(doubled)
-        };
-        Some((fill as u32).max(doubled))
+        if !(per_spp > 0.0) {
+            return Some(doubled);
+        }
+        let fill = (left / per_spp).floor().min(f64::from(u32::MAX)).max(0.0) as u32;
+        (fill >= spp.max(1)).then_some(fill.max(if t <= left { doubled } else { 0 }))
     }
 
     /// Training seconds spent so far.
@@ -180,11 +178,22 @@ mod tests {
         assert_eq!(s.next(4.0, 8), Some(16)); // 8 + 16 ≤ 42.5
         assert_eq!(s.next(8.0, 16), Some(69)); // 16 + 32 > 34.5: floor(34.5 / 0.5)
         assert_eq!(s.next(34.5, 69), None);
-        // A doubled iteration that does not fit at all ends training (a slow first pass:
-        // a kernel compile).
+        // Less time left than this iteration's count takes ends training (a slow first
+        // pass: a kernel compile).
         let mut s = TimeSchedule::new(10.0, 0.3);
-        assert_eq!(s.next(2.5, 1), None); // 5 s for 2 spp > 0.5 s left
-                                          // The fill is never below the doubled count.
+        assert_eq!(s.next(2.5, 1), None); // 0.5 s left: not even 1 spp at 2.5 s each
+                                          // A pass slower than predicted leaves less than a doubled iteration: the last
+                                          // one takes what is left when that is at least the slow pass's count.
+        let mut s = TimeSchedule::new(100.0, 0.3);
+        assert_eq!(s.next(1.0, 1), Some(2));
+        assert_eq!(s.next(2.0, 2), Some(4));
+        assert_eq!(s.next(12.0, 4), Some(5)); // 15 s left at 3 s per spp: 8 do not fit
+        assert_eq!(s.next(15.0, 5), None);
+        let mut s = TimeSchedule::new(100.0, 0.3);
+        assert_eq!(s.next(1.0, 1), Some(2));
+        assert_eq!(s.next(2.0, 2), Some(4));
+        assert_eq!(s.next(16.0, 4), None); // 11 s left at 4 s per spp: 2 < 4
+                                           // The fill is never below the doubled count.
         let mut s = TimeSchedule::new(10.0, 1.0);
         assert_eq!(s.next(1.0, 1), Some(2));
         assert_eq!(s.next(2.0, 2), Some(7)); // 4 + 8 > 7 left: floor(7 / 1)
