@@ -181,12 +181,23 @@ def blocks(img, size):
     return out
 
 
+# Block and pixel means below this share of the image's mean radiance, on both sides, are
+# not tested: no film or display resolves them. The index-matched `dielectric` (index
+# 1.00001) that stands for glass without Fresnel reflection reflects 1e-10-1e-8 of the
+# light in Mitsuba, where lanterna's pane reflects nothing; pixels lit only that way
+# (random_scene.py --materials, seed 11: 1e-8 against an image mean of 0.08, with no
+# variance on lanterna's side) failed the pixel test with p = 3e-15.
+NEGLIGIBLE_SHARE = 1e-6
+
+
 def agreement(lt, mi_, size, alpha):
     """Per-block (size > 1) or per-pixel (size = 1) Welch tests between the stacks."""
     a = blocks(lt, size) if size > 1 else lt
     b = blocks(mi_, size) if size > 1 else mi_
     mx, my, se, t, p = welch(a.astype(np.float64), b.astype(np.float64))
-    informative = ~((a == 0).all(0) & (b == 0).all(0))
+    floor = NEGLIGIBLE_SHARE * max(abs(float(lt.mean())), abs(float(mi_.mean())))
+    negligible = (np.abs(mx) <= floor) & (np.abs(my) <= floor)
+    informative = ~(((a == 0).all(0) & (b == 0).all(0)) | negligible)
     n = int(informative.sum())
     res = {"size": size, "tests": n, "alpha": alpha}
     if n == 0:
