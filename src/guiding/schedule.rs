@@ -113,11 +113,11 @@ impl TimeSchedule {
         // from fewer samples than the current one would be no better; passes slower than
         // predicted get here with less than a doubled iteration left).
         self.last = true;
-        if !(per_spp > 0.0) {
+        if per_spp <= 0.0 {
             return Some(doubled);
         }
         let fill = (left / per_spp).floor().min(f64::from(u32::MAX)).max(0.0) as u32;
-        (fill >= spp.max(1)).then_some(fill.max(if t <= left { doubled } else { 0 }))
+        (fill >= spp.max(1)).then_some(fill)
     }
 
     /// Training seconds spent so far.
@@ -170,6 +170,7 @@ mod tests {
         assert_eq!(s.next(23.0, 23), None);
         assert_eq!(s.elapsed(), 30.0);
         assert_eq!(TimeSchedule::new(100.0, 0.0).first(), None);
+
         // The time per sample comes from the finished iteration, whatever its count.
         let mut s = TimeSchedule::new(100.0, 0.5);
         assert_eq!(s.next(0.5, 1), Some(2)); // 0.5 s per spp: 1 + 2 s ≤ 49.5
@@ -178,12 +179,14 @@ mod tests {
         assert_eq!(s.next(4.0, 8), Some(16)); // 8 + 16 ≤ 42.5
         assert_eq!(s.next(8.0, 16), Some(69)); // 16 + 32 > 34.5: floor(34.5 / 0.5)
         assert_eq!(s.next(34.5, 69), None);
+
         // Less time left than this iteration's count takes ends training (a slow first
         // pass: a kernel compile).
         let mut s = TimeSchedule::new(10.0, 0.3);
         assert_eq!(s.next(2.5, 1), None); // 0.5 s left: not even 1 spp at 2.5 s each
-                                          // A pass slower than predicted leaves less than a doubled iteration: the last
-                                          // one takes what is left when that is at least the slow pass's count.
+
+        // A pass slower than predicted leaves less than a doubled iteration: the last
+        // one takes what is left when that is at least the slow pass's count.
         let mut s = TimeSchedule::new(100.0, 0.3);
         assert_eq!(s.next(1.0, 1), Some(2));
         assert_eq!(s.next(2.0, 2), Some(4));
@@ -193,7 +196,8 @@ mod tests {
         assert_eq!(s.next(1.0, 1), Some(2));
         assert_eq!(s.next(2.0, 2), Some(4));
         assert_eq!(s.next(16.0, 4), None); // 11 s left at 4 s per spp: 2 < 4
-                                           // The fill is never below the doubled count.
+
+        // A doubled iteration fits but the one after it does not: the last takes it all.
         let mut s = TimeSchedule::new(10.0, 1.0);
         assert_eq!(s.next(1.0, 1), Some(2));
         assert_eq!(s.next(2.0, 2), Some(7)); // 4 + 8 > 7 left: floor(7 / 1)
