@@ -35,8 +35,14 @@
 //! samplable (m ≤ `MAX_LEARNED_MIX` < 1), and the kernels use the mixture's pdf, so
 //! rendering stays unbiased.
 
-/// Largest mix a leaf learns: the source keeps at least this much of the selection.
-pub const MAX_LEARNED_MIX: f32 = 0.9;
+/// Largest mix a leaf learns: the source keeps at least half of every light's
+/// probability, so no light's NEE weight exceeds twice its weight under the source. With
+/// 0.9 (until 2026-11-27) random scenes of a few point, spot and box lights
+/// (scripts/random_scene.py seeds 16, 19, 20) rendered `guided` at 1.7-3.5x the MAE of
+/// `pt`: the leaf-level prediction chose 0.9 where the table misled points in the leaf,
+/// whose lights then carried ten times their weight. At 0.5: 0.89x, 0.90x and 1.46x,
+/// for 0.53x instead of 0.45x on `cornell-lights` (README, "Learned light mix").
+pub const MAX_LEARNED_MIX: f32 = 0.5;
 /// Candidate mixes are 0, 1/STEPS·MAX_LEARNED_MIX, …, MAX_LEARNED_MIX.
 const STEPS: u32 = 18;
 
@@ -131,20 +137,22 @@ mod tests {
 
     #[test]
     fn the_optimum_of_a_split_between_table_and_source_is_interior() {
-        // Half of the second moment through a model the table holds with r = 100, half
-        // through models outside it: the predicted cost S/2·(a/(1−m'+100m')) + S/2·(1−m)/(1−m')
-        // has its minimum where the derivative vanishes; brute force on a fine grid.
+        // A tenth of the second moment through a model the table holds with r = 100, the
+        // rest through models outside it: the predicted cost
+        // S/10·(a/(1−m'+100m')) + 9S/10·(1−m)/(1−m') has its minimum (m' ≈ 0.24) where
+        // the derivative vanishes; brute force on a fine grid.
         let table = [(1, 1.0)];
-        let rec = [sums(1, 5.0)];
+        let rec = [sums(1, 1.0)];
         let m = choose_mix(&table, 0.5, &rec, 10.0, |_| 0.01).unwrap();
-        let cost = |mp: f64| 5.0 * 50.5 / (1.0 - mp + 100.0 * mp) + 5.0 * 0.5 / (1.0 - mp);
-        let fine = (0..=9000)
-            .map(|k| k as f64 / 10000.0)
+        let cost = |mp: f64| 1.0 * 50.5 / (1.0 - mp + 100.0 * mp) + 9.0 * 0.5 / (1.0 - mp);
+        let top = f64::from(MAX_LEARNED_MIX);
+        let fine = (0..=10000)
+            .map(|k| top * k as f64 / 10000.0)
             .min_by(|a, b| cost(*a).total_cmp(&cost(*b)))
             .unwrap();
         assert!(m > 0.0 && m < MAX_LEARNED_MIX, "{m}");
         assert!(
-            (f64::from(m) - fine).abs() <= 0.05 / 2.0 + 1e-6,
+            (f64::from(m) - fine).abs() <= top / f64::from(STEPS) / 2.0 + 1e-6,
             "{m} vs {fine}"
         );
     }
