@@ -240,10 +240,6 @@ void nee_resolve(inout NeeResult r, bool visible) {
     r.record_pdf = 0.0;
 }
 
-uint light_model_of(LightSample ls) {
-    return ls.tri != INVALID_INDEX ? light_triangles(ls.tri).model : INVALID_INDEX;
-}
-
 // The shadow ray that decides whether the light point of `ls` is visible from the
 // surface point; the result counts as connected until nee_resolve hears otherwise. The
 // origin moves off the surface on the side of the light (the side of wo unless the
@@ -267,7 +263,7 @@ bool nee_single_choose(Surface s, DirectionSampler d, inout Rng rng, out NeeResu
     if (params.strategy == STRATEGY_BSDF_ONLY) return false;
     vec4 u = vec4(rng_stratified2(rng, RNG_PAIR_LIGHT), rng_stratified2(rng, RNG_PAIR_LIGHT_POINT));
     ls = sample_light(d.lights, u, true);
-    r.chosen_model = light_model_of(ls);
+    r.chosen_model = ls.model;
     return ls.pdf > 0.0 && max3(ls.Le_G) > 0.0;
 }
 
@@ -423,6 +419,7 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
         extra.ls.pdf = light_source_pdf(d.lights, next.light_tri);
         extra.ls.area = true;
         extra.ls.tri = next.light_tri;
+        extra.ls.model = light_triangles(next.light_tri).model;
         extra.ls.p = next.p;
         extra.ls.n = next.ng;  // on the side of this vertex, as sample_light's
         extra.ls.bary = vec2(0.0);
@@ -440,7 +437,7 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
     TRACE4("  ris: %u candidates + %u direction candidate, kept=%u (direction candidate: %u)\n", params.ris_candidates,
            uint(has_extra), uint(res.found), uint(res.extra_chosen));
     if (!res.found) return r;
-    r.chosen_model = res.extra_chosen ? instances(next.instance).light_model : light_model_of(res.y.ls);
+    r.chosen_model = res.y.ls.model;
     r.ris_weight = res.W;
     // The extra candidate's visibility is known: its ray hit it.
     if (res.extra_chosen) r.connected = true;

@@ -23,6 +23,7 @@ struct LightSample {
     float cos_y;    // |cosθ| at the light (area lights), 1 otherwise
     bool area;      // area light (MIS applies); false for delta lights
     uint tri;       // light triangle, INVALID_INDEX for punctual
+    uint model;     // the light model it belongs to (area and punctual lights alike)
     vec3 p;         // the light point (area and positional lights)
     vec3 n;         // geometric normal at the light point, on the side facing x (area
                     // lights; shadow rays start their far end off the light along it)
@@ -137,6 +138,7 @@ LightSample sample_punctual(uint index, vec3 x) {
     LightSample s;
     s.area = false;
     s.tri = INVALID_INDEX;
+    s.model = INVALID_INDEX;  // sample_light sets it
     s.cos_y = 1.0;
     s.n = vec3(0.0);
     s.bary = vec2(0.0);
@@ -197,6 +199,7 @@ LightSample sample_light(LightContext ctx, vec4 u, const bool exact_emission) {
     if (m.punctual != INVALID_INDEX) {
         LightSample s = sample_punctual(m.punctual, x);
         s.pdf = pm;
+        s.model = model;
         return s;
     }
     uint local = params.ris_source == RIS_SOURCE_POWER ? alias_sample(m.first_triangle, m.triangle_count, u.y, false)
@@ -211,6 +214,7 @@ LightSample sample_light(LightContext ctx, vec4 u, const bool exact_emission) {
     LightSample s;
     s.area = true;
     s.tri = tri;
+    s.model = model;
     s.p = p;
     s.bary = b;
     vec3 d = p - x;
