@@ -193,6 +193,27 @@ pub fn render_once(
     (r, stats)
 }
 
+/// The SD-tree a guided method trains with `settings` over a budget of `spp` samples per
+/// pixel, training passes included, as `lanterna render` trains it.
+pub fn trained_tree(
+    scene: &Scene,
+    camera: &Camera,
+    settings: &RenderSettings,
+    spp: u64,
+) -> crate::guiding::SdTree {
+    use crate::render::run::{run_method, Budget};
+    let mut r = test_renderer(scene, camera, settings);
+    let out = run_method(
+        &mut r,
+        Budget::Spp(spp),
+        0,
+        &AtomicBool::new(false),
+        &mut |_| {},
+    )
+    .expect("render");
+    out.guiding.expect("a guided method").tree
+}
+
 /// The kernels tests render with: built in, or, when `LANTERNA_TEST_SHADER_DIR` names a
 /// copy of `shaders_glsl/`, compiled from it — the way to inject a defect into the
 /// estimators and see which tests fail, without rebuilding.

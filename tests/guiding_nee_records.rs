@@ -12,12 +12,9 @@
 //! both leave the leaf as uniform as `--no-record-nee` does.
 
 use glam::Vec3;
-use lanterna::lights::LightTable;
-use lanterna::render::run::{run_method, Budget};
-use lanterna::render::{Method, RenderSettings, Renderer};
+use lanterna::render::{Method, RenderSettings};
 use lanterna::scene::generate::{Kind, Options};
 use lanterna::testing;
-use std::sync::atomic::AtomicBool;
 
 /// Fraction of directions sampled from the leaf's quadtree within `degrees` of +Y.
 fn fraction_toward_lamp(record_nee: bool) -> f64 {
@@ -40,25 +37,7 @@ fn fraction_toward_lamp(record_nee: bool) -> f64 {
         },
         ..base
     };
-    let lights = LightTable::build(&ts.scene).unwrap();
-    let mut r = Renderer::new(
-        testing::device(),
-        &ts.scene,
-        &lights,
-        ts.camera.clone(),
-        settings,
-        testing::shader_source(),
-    )
-    .unwrap();
-    let out = run_method(
-        &mut r,
-        Budget::Spp(128),
-        0,
-        &AtomicBool::new(false),
-        &mut |_| {},
-    )
-    .unwrap();
-    let tree = out.guiding.expect("a guided run returns its tree").tree;
+    let tree = testing::trained_tree(&ts.scene, &ts.camera, &settings, 128);
     let leaf = tree.leaf(tree.find_leaf(Vec3::new(0.0, 0.0, 0.0)));
     let cos_cone = 30f32.to_radians().cos();
     let n = 20_000;

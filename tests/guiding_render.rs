@@ -409,8 +409,6 @@ fn sd_tree_arrays_through_addresses_and_bound_buffers_agree() {
 #[test]
 fn learned_light_tables_hold_punctual_lights() {
     use lanterna::lights::LightTable;
-    use lanterna::render::run::{run_method, Budget};
-    use std::sync::atomic::AtomicBool;
     let t = testing::generated(Kind::PunctualNear, &Options::default());
     let table = LightTable::build(&t.scene).unwrap();
     let model_of = |punctual: u32| {
@@ -422,16 +420,7 @@ fn learned_light_tables_hold_punctual_lights() {
     };
     let mut s = testing::settings(Method::Guided, 32, 24);
     s.guiding.learn_lights = true;
-    let mut r = testing::test_renderer_on(testing::device(), &t.scene, &t.camera, &s);
-    let out = run_method(
-        &mut r,
-        Budget::Spp(128),
-        0,
-        &AtomicBool::new(false),
-        &mut |_| {},
-    )
-    .unwrap();
-    let tree = out.guiding.expect("a guided run").tree;
+    let tree = testing::trained_tree(&t.scene, &t.camera, &s, 128);
     let mut seen = std::collections::BTreeSet::new();
     for leaf in tree.leaves() {
         for &(model, _) in leaf.lights.iter() {
