@@ -128,7 +128,8 @@ class Renderer:
         load_guiding: a saved SD-tree (``save_guiding``) for guided renders to use.
         **options: the command line's other estimator flags with ``_`` for ``-``:
             ``rr_depth``, ``source`` ("uniform"/"power"), ``ris_candidates``,
-            ``bsdf_fraction``, ``train_fraction``, ``record_nee`` (bool),
+            ``bsdf_fraction``, ``selection_learner`` ("variance", the default, or
+            "kl-adam"), ``train_fraction``, ``record_nee`` (bool),
             ``guide_target`` ("all"/"indirect"/"contribution"), ``guide_density``
             ("radiance"/"variance-aware"), ``guide_history`` (0–1, weight of the earlier
             training iterations in each refit; default 0),

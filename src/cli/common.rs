@@ -138,6 +138,12 @@ pub struct EstimatorArgs {
     /// al. 2019).
     #[arg(long)]
     pub bsdf_fraction: Option<f32>,
+    /// Guiding: how each SD-tree leaf learns its BSDF selection probability: the
+    /// minimiser of each training pass's second-moment estimate, weighted by the
+    /// records behind it (variance), or Adam on the KL divergence (kl-adam, Müller et
+    /// al. 2019's reference implementation).
+    #[arg(long, value_enum, default_value = "variance")]
+    pub selection_learner: lanterna::guiding::SelectionLearner,
     /// Guiding: what radiance the SD-tree learns: all incident light (with NEE's light
     /// samples, the paper's; the default), indirect light only, or what the direction
     /// estimator carries (MIS-weighted emission plus indirect).
@@ -279,6 +285,7 @@ impl EstimatorArgs {
             guiding: GuidingSettings {
                 bsdf_fraction: self.bsdf_fraction.unwrap_or(0.5),
                 learn_selection: self.bsdf_fraction.is_none(),
+                selection_learner: self.selection_learner,
                 target: self.guide_target,
                 density: self.guide_density,
                 history: self.guide_history,

@@ -85,6 +85,31 @@ pub enum GuideDensity {
     VarianceAware,
 }
 
+/// How each leaf learns its BSDF selection probability (`--selection-learner`;
+/// src/guiding/selection.rs).
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum SelectionLearner {
+    /// After each pass, the α minimising the pass's estimate of the direction
+    /// estimator's second moment, averaged with the leaf's α by the effective number of
+    /// records behind each.
+    #[default]
+    Variance,
+    /// Adam on the KL divergence between the mixture and f·cos·L, one step per two
+    /// records (Müller et al. 2019; the reference implementation's).
+    KlAdam,
+}
+
 /// SD-tree options.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GuidingConfig {
@@ -115,6 +140,7 @@ pub struct GuidingConfig {
     /// Learn the BSDF selection probability per leaf (`bsdf_fraction` is then each
     /// leaf's starting value).
     pub learn_selection: bool,
+    pub selection_learner: SelectionLearner,
     /// What the training records measure.
     pub target: GuideTarget,
     /// Which statistic of it the quadtrees follow.
@@ -148,6 +174,7 @@ impl Default for GuidingConfig {
             light_mix: 0.5,
             learn_light_mix: false,
             learn_selection: false,
+            selection_learner: SelectionLearner::Variance,
             target: GuideTarget::All,
             density: GuideDensity::Radiance,
             history: 0.0,

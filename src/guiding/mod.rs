@@ -34,7 +34,7 @@ pub use chi2::{
     chi2_survival, chi2_test, square_histogram, Chi2, GuideSample, SampleCheck, CHI2_SIGNIFICANCE,
 };
 pub use config::{
-    DirectionalFilter, GuideDensity, GuideTarget, GuidingConfig, SpatialFilter,
+    DirectionalFilter, GuideDensity, GuideTarget, GuidingConfig, SelectionLearner, SpatialFilter,
     DEFAULT_MEMORY_CAP_BYTES, MAX_LIGHT_MIX,
 };
 pub use flat::{light_alias_sample, light_hash_lookup, GuideArrays, GUIDE_BUFFERS};

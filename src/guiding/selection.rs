@@ -1,23 +1,33 @@
 //! Learned probability of sampling the BSDF rather than the leaf's quadtree (Müller et
 //! al. 2019, "Path guiding in production", §10; the reference implementation's
-//! `bsdfSamplingFraction` optimisation). Each spatial leaf holds a logit θ, α = σ(θ) is
-//! its BSDF selection probability, and Adam minimises the KL divergence between the
-//! mixture p_α = α·p_bsdf + (1 − α)·p_guide and the integrand f·cos·L_in, estimated from
-//! the training pass's direction samples (drawn from the mixture p_wo of that pass):
-//!
-//!   D_KL(α) = const − E_wo[ (f·cos·L / p_wo) · log p_α ] (normalised integrand),
-//!   ∂D/∂α   = −E_wo[ f·cos·L / (p_wo · p_α) · (p_bsdf − p_guide) ],
-//!   ∂D/∂θ   = ∂D/∂α · α(1 − α)  (+ 0.01·θ, the reference's L2 regularisation).
+//! `bsdfSamplingFraction` optimisation). Each spatial leaf holds a logit θ, and α = σ(θ)
+//! is its BSDF selection probability for the mixture p_α = α·p_bsdf + (1 − α)·p_guide.
 //!
 //! The GPU appends one `GuideSelectionRecord` per guided direction sample that carried
-//! light (shaders_glsl/inc/guiding_selection.glsl); between passes `SdTree::
-//! learn_selection` runs the records through each leaf's optimiser in order, two
-//! records per step, as the reference does with its per-sample updates. The GPU samples
-//! with the learned α from the next pass on. θ is confined to [−θ_max, θ_max] so that
-//! both techniques keep some probability: the BSDF must cover directions where the
-//! quadtree's density is zero (unbiasedness), and the quadtree must keep being sampled
-//! for its pdf to be learned against.
+//! light (shaders_glsl/inc/guiding_selection.glsl): the two pdfs, the pdf p_wo of the
+//! mixture that drew it, and F = f·cos·L_in. Between passes `SdTree::learn_selection`
+//! takes each leaf's records and learns in one of two ways (`SelectionLearner`):
+//!
+//! - `Variance` (the default): the α that minimises the pass's estimate of the
+//!   direction estimator's second moment,
+//!   V(α) = Σ F² / (p_wo · p_α), with V′(α) = −Σ F² (p_bsdf − p_guide) / (p_wo · p_α²),
+//!   convex in α (1/p_α is), so its minimiser over [α_min, α_max] is found by bisection
+//!   on V′. That α is averaged with the leaf's current one, weighted by the effective
+//!   number of records behind each (Kish's (Σw)²/Σw² of the weights F/p_wo; the start
+//!   value counts as `PRIOR_RECORDS`), so that a leaf with a few noisy records moves
+//!   little.
+//! - `KlAdam` (the reference's): Adam minimises the KL divergence between p_α and the
+//!   normalised integrand, one step per two records in the order the GPU appended them,
+//!   on D_KL(α) = const − E_wo[ (F / p_wo) · log p_α ], whose derivatives are
+//!   ∂D/∂α = −E_wo[ F / (p_wo · p_α) · (p_bsdf − p_guide) ] and
+//!   ∂D/∂θ = ∂D/∂α · α(1 − α) (+ 0.01·θ, the reference's L2 regularisation).
+//!
+//! The GPU samples with the learned α from the next pass on. α is confined to
+//! [0.05, 0.95] so that both techniques keep some probability: the BSDF must cover
+//! directions where the quadtree's density is zero (unbiasedness), and the quadtree must
+//! keep being sampled for its pdf to be learned against.
 
+use super::SelectionLearner;
 use crate::gpu::GuideSelectionRecord;
 
 /// Adam's step size (the reference's 0.01).
@@ -32,6 +42,9 @@ pub const MAX_FRACTION: f32 = 0.95;
 /// Records a training pass may append (20 bytes each); passes that would make more
 /// record a uniformly thinned share of them.
 pub const RECORD_CAPACITY: u32 = 1 << 20;
+
+/// Weight of a leaf's starting α in the variance learner, in effective records.
+pub const PRIOR_RECORDS: f32 = 64.0;
 
 const BETA1: f32 = 0.9;
 const BETA2: f32 = 0.999;
@@ -69,6 +82,9 @@ pub struct SelectionState {
     /// The fraction read from a saved tree, used as it is until the next step: σ(logit(α))
     /// is not α to the last bit in f32, and a loaded tree must render what it rendered.
     restored: Option<f32>,
+    /// Effective records behind θ (the variance learner's running weight; the start
+    /// value counts as `PRIOR_RECORDS`).
+    confidence: f32,
 }
 
 /// Equal when they sample alike and learn alike: the fraction they sample with (restored
@@ -82,6 +98,7 @@ impl PartialEq for SelectionState {
             && self.steps == o.steps
             && self.batch_gradient == o.batch_gradient
             && self.batch_weight == o.batch_weight
+            && self.confidence == o.confidence
     }
 }
 
@@ -100,6 +117,7 @@ impl SelectionState {
             batch_gradient: 0.0,
             batch_weight: 0.0,
             restored: None,
+            confidence: PRIOR_RECORDS,
         }
     }
 
@@ -128,14 +146,7 @@ impl SelectionState {
     /// ∂D_KL/∂θ of one record at the current θ, regularisation included; None for a
     /// record that carries no usable gradient.
     pub fn gradient(&self, r: &GuideSelectionRecord) -> Option<f32> {
-        let ok = |x: f32| x.is_finite() && x >= 0.0;
-        let usable = ok(r.bsdf_pdf)
-            && ok(r.guide_pdf)
-            && ok(r.product)
-            && r.product > 0.0
-            && r.wo_pdf.is_finite()
-            && r.wo_pdf > 0.0;
-        if !usable {
+        if !usable(r) {
             return None;
         }
         let alpha = sigmoid(self.theta);
@@ -182,6 +193,89 @@ impl SelectionState {
         let m = theta_max();
         self.theta = self.theta.clamp(-m, m);
     }
+
+    /// The variance learner: move α to the pass's second-moment minimiser, weighted by
+    /// the records' effective number against the weight already behind α. Returns the
+    /// records used (the others carry no usable value).
+    pub fn learn_variance<'a>(
+        &mut self,
+        records: impl IntoIterator<Item = &'a GuideSelectionRecord>,
+    ) -> u64 {
+        let mut used = Vec::new();
+        for r in records {
+            if usable(r) {
+                let (wo, f) = (f64::from(r.wo_pdf), f64::from(r.product));
+                // (F/p_wo, F²/p_wo, p_bsdf − p_guide, p_guide)
+                let b = f64::from(r.bsdf_pdf);
+                let g = f64::from(r.guide_pdf);
+                used.push((f / wo, f * f / wo, b - g, g));
+            }
+        }
+        if used.is_empty() {
+            return 0;
+        }
+        let sum: f64 = used.iter().map(|u| u.0).sum();
+        let sum_sq: f64 = used.iter().map(|u| u.0 * u.0).sum();
+        let effective = (sum * sum / sum_sq) as f32;
+        let best = second_moment_minimiser(&used);
+        if !(effective.is_finite() && effective > 0.0) {
+            return 0;
+        }
+        let alpha =
+            (self.confidence * self.fraction() + effective * best) / (self.confidence + effective);
+        self.theta = logit(alpha.clamp(MIN_FRACTION, MAX_FRACTION));
+        self.confidence += effective;
+        self.restored = None;
+        self.steps += 1;
+        used.len() as u64
+    }
+}
+
+/// Whether a record carries a usable value (finite, non-negative pdfs, light, a
+/// positive pdf of the technique that drew it).
+fn usable(r: &GuideSelectionRecord) -> bool {
+    let ok = |x: f32| x.is_finite() && x >= 0.0;
+    ok(r.bsdf_pdf)
+        && ok(r.guide_pdf)
+        && ok(r.product)
+        && r.product > 0.0
+        && r.wo_pdf.is_finite()
+        && r.wo_pdf > 0.0
+}
+
+/// argmin over α in [MIN_FRACTION, MAX_FRACTION] of V(α) = Σ F²/(p_wo·p_α), from the
+/// records' (_, F²/p_wo, p_bsdf − p_guide, p_guide): V is convex, so bisection on V′.
+fn second_moment_minimiser(records: &[(f64, f64, f64, f64)]) -> f32 {
+    let slope = |a: f64| -> f64 {
+        records
+            .iter()
+            .map(|&(_, f2, d, g)| {
+                let p = g + a * d;
+                if p > 0.0 {
+                    -f2 * d / (p * p)
+                } else {
+                    0.0
+                }
+            })
+            .sum()
+    };
+    let (mut lo, mut hi) = (f64::from(MIN_FRACTION), f64::from(MAX_FRACTION));
+    if slope(lo) >= 0.0 {
+        return MIN_FRACTION;
+    }
+    if slope(hi) <= 0.0 {
+        return MAX_FRACTION;
+    }
+    // 2⁻²⁴ of the interval: below f32's resolution of α.
+    for _ in 0..24 {
+        let mid = 0.5 * (lo + hi);
+        if slope(mid) < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    (0.5 * (lo + hi)) as f32
 }
 
 /// What one round of learning did.
@@ -222,9 +316,17 @@ impl super::SdTree {
             }
         }
         let cost: Vec<u64> = start.windows(2).map(|w| (w[1] - w[0]) as u64 + 1).collect();
+        let learner = self.config.selection_learner;
         let learned = super::parallel::map_mut_by_cost(&mut self.leaves, &cost, |l, leaf| {
+            let mine = &order[start[l]..start[l + 1]];
+            if learner == SelectionLearner::Variance {
+                let used = leaf
+                    .selection
+                    .learn_variance(mine.iter().map(|&i| &records[i as usize]));
+                return (used, mine.len());
+            }
             let mut used = 0u64;
-            for &i in &order[start[l]..start[l + 1]] {
+            for &i in mine {
                 let r = &records[i as usize];
                 // One gradient per record (it was computed twice, to count and to
                 // learn: the selection is the largest part of guided-ris's refit).
@@ -345,5 +447,128 @@ mod tests {
             let f = s.fraction();
             assert!((f - w).abs() < 0.05, "w {w}: learned {f}");
         }
+    }
+
+    /// A stationary problem on [0, 1) where the second moment and the KL divergence
+    /// have different minimisers: BSDF pdf 1 everywhere, quadtree pdf 2 on [0, ½);
+    /// integrand 4 on [0, ¼), 0 on [¼, ½), 1 on [½, 1). Then
+    ///   V(α) = ∫F²/p_α = 4/(2 − α) + ½/α,  minimised at α = √2/(2 + 1/√2) ≈ 0.5224,
+    ///   KL:  −∫F log p_α = −log(2 − α) − ½ log α, minimised at α = ⅔.
+    /// Records are drawn from the current mixture in passes of doubling size, as the
+    /// kernel makes them.
+    fn stationary_records(alpha: f32, n: usize, seed: &mut u64) -> Vec<GuideSelectionRecord> {
+        let mut out = Vec::new();
+        let mut uniform = || {
+            *seed = super::super::sdtree::hash64(*seed);
+            (*seed >> 40) as f32 / (1u64 << 24) as f32
+        };
+        for _ in 0..n {
+            let x = if uniform() < alpha {
+                uniform()
+            } else {
+                0.5 * uniform()
+            };
+            let g = if x < 0.5 { 2.0 } else { 0.0 };
+            let f = if x < 0.25 {
+                4.0
+            } else if x < 0.5 {
+                0.0
+            } else {
+                1.0
+            };
+            if f > 0.0 {
+                out.push(rec(1.0, g, alpha + (1.0 - alpha) * g, f));
+            }
+        }
+        out
+    }
+
+    const SECOND_MOMENT_OPTIMUM: f32 = 0.522_407;
+
+    #[test]
+    fn the_optimum_is_what_the_docs_say() {
+        let v = |a: f64| 4.0 / (2.0 - a) + 0.5 / a;
+        let best = (1..10_000)
+            .map(|i| f64::from(i) / 10_000.0)
+            .min_by(|a, b| v(*a).total_cmp(&v(*b)))
+            .unwrap();
+        assert!((best as f32 - SECOND_MOMENT_OPTIMUM).abs() < 2e-4, "{best}");
+    }
+
+    /// The bisection returns the minimiser of the records' own second-moment estimate
+    /// Σ F²/(p_wo·p_α), found again by brute force over α, for record sets drawn from
+    /// mixtures with different α (so p_wo varies between records).
+    #[test]
+    fn minimiser_of_the_estimate() {
+        let mut seed = 7u64;
+        for drawn_with in [0.2f32, 0.5, 0.9] {
+            let records = stationary_records(drawn_with, 300, &mut seed);
+            let estimate = |a: f64| -> f64 {
+                records
+                    .iter()
+                    .map(|r| {
+                        let p = a * f64::from(r.bsdf_pdf) + (1.0 - a) * f64::from(r.guide_pdf);
+                        f64::from(r.product).powi(2) / (f64::from(r.wo_pdf) * p)
+                    })
+                    .sum()
+            };
+            let brute = (0..=9000)
+                .map(|i| 0.05 + 0.9 * f64::from(i) / 9000.0)
+                .min_by(|a, b| estimate(*a).total_cmp(&estimate(*b)))
+                .unwrap() as f32;
+            let packed: Vec<_> = records
+                .iter()
+                .filter(|r| usable(r))
+                .map(|r| {
+                    let (wo, f) = (f64::from(r.wo_pdf), f64::from(r.product));
+                    let (b, g) = (f64::from(r.bsdf_pdf), f64::from(r.guide_pdf));
+                    (f / wo, f * f / wo, b - g, g)
+                })
+                .collect();
+            let found = second_moment_minimiser(&packed);
+            assert!(
+                (found - brute).abs() < 2e-4,
+                "drawn with α {drawn_with}: bisection {found}, brute force {brute}"
+            );
+        }
+    }
+
+    /// Pass after pass of records drawn with the learned α, the variance learner ends
+    /// at the second moment's minimiser (0.522), not the KL divergence's (0.667).
+    #[test]
+    fn variance_learner_reaches_the_second_moment_optimum() {
+        let mut s = SelectionState::new(0.5);
+        let mut seed = 99u64;
+        for pass in 0..16 {
+            let records = stationary_records(s.fraction(), 2 << pass, &mut seed);
+            s.learn_variance(&records);
+        }
+        let f = s.fraction();
+        assert!(
+            (f - SECOND_MOMENT_OPTIMUM).abs() < 0.02,
+            "learned {f}, optimum {SECOND_MOMENT_OPTIMUM}"
+        );
+    }
+
+    /// A leaf moves by the weight of its records: a handful that all favour the BSDF
+    /// move α a little, many move it to the bound; records without light change nothing.
+    #[test]
+    fn variance_learner_moves_by_the_records_behind_it() {
+        let favour_bsdf = |n| vec![rec(3.0, 0.1, 1.55, 1.0); n];
+        let mut s = SelectionState::new(0.5);
+        assert_eq!(s.learn_variance(&favour_bsdf(4)), 4);
+        // (64·0.5 + 4·0.95) / 68
+        assert!((s.fraction() - 0.5265).abs() < 1e-3, "{}", s.fraction());
+        let mut s = SelectionState::new(0.5);
+        s.learn_variance(&favour_bsdf(100_000));
+        assert!(s.fraction() > 0.94, "{}", s.fraction());
+        let before = s;
+        let bad = [
+            rec(f32::NAN, 0.1, 1.0, 1.0),
+            rec(1.0, 0.1, 0.0, 1.0),
+            rec(1.0, 0.1, 1.0, 0.0),
+        ];
+        assert_eq!(s.learn_variance(&bad), 0);
+        assert_eq!(s, before);
     }
 }

@@ -11,11 +11,12 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 /// The keyword options `Renderer` accepts besides its named parameters.
-pub const OPTIONS: [&str; 23] = [
+pub const OPTIONS: [&str; 24] = [
     "rr_depth",
     "source",
     "ris_candidates",
     "bsdf_fraction",
+    "selection_learner",
     "train_fraction",
     "record_nee",
     "guide_target",
@@ -92,6 +93,10 @@ pub fn apply(
                 let f: Option<f32> = v.extract()?;
                 settings.guiding.learn_selection = f.is_none();
                 settings.guiding.bsdf_fraction = f.unwrap_or(0.5);
+            }
+            "selection_learner" => {
+                settings.guiding.selection_learner =
+                    value_enum::<crate::guiding::SelectionLearner>(&flag, &v.extract::<String>()?)?
             }
             "guide_target" => {
                 settings.guiding.target =

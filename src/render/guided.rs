@@ -88,6 +88,7 @@ pub fn guiding_config(renderer: &Renderer) -> GuidingConfig {
         light_mix: g.light_mix,
         learn_light_mix: g.learns_light_mix(s.method),
         learn_selection: g.learn_selection,
+        selection_learner: g.selection_learner,
         target: g.target,
         density: g.density,
         history: g.history,
