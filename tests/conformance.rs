@@ -41,7 +41,7 @@
 //! - `sconces_far_from_origin`: no rebasing of the scene toward the origin (256-ulp ray
 //!   offsets are 0.24 m at 10⁴): block (8, 8) 0.147 vs 0.368, p = 7e-32.
 
-use lanterna::guiding::{GuideDensity, GuideTarget, SpatialFilter};
+use lanterna::guiding::{GuideDensity, GuideTarget, SelectionLearner, SpatialFilter};
 use lanterna::lights::LightTable;
 use lanterna::render::{Method, RenderSettings, Strategy};
 use lanterna::scene::export_mitsuba::{self, ExportOptions};
@@ -68,6 +68,8 @@ struct Config {
     /// None: the BSDF selection probability learned per leaf (the default); Some(x):
     /// fixed (`--bsdf-fraction x`).
     bsdf_fraction: Option<f32>,
+    /// How a learned selection probability is learned (`--selection-learner`).
+    selection_learner: SelectionLearner,
     target: GuideTarget,
     density: GuideDensity,
     spatial_filter: SpatialFilter,
@@ -82,6 +84,7 @@ const fn config(name: &'static str, method: Method, strategy: Strategy) -> Confi
         strategy,
         learn_lights: false,
         bsdf_fraction: None,
+        selection_learner: SelectionLearner::Variance,
         target: GuideTarget::All,
         density: GuideDensity::Radiance,
         spatial_filter: SpatialFilter::Nearest,
@@ -110,6 +113,11 @@ const GUIDED_LEARN: Config = Config {
 const GUIDED_FIXED: Config = Config {
     name: "guided --bsdf-fraction 0.5",
     bsdf_fraction: Some(0.5),
+    ..GUIDED
+};
+const GUIDED_KL_ADAM: Config = Config {
+    name: "guided --selection-learner kl-adam",
+    selection_learner: SelectionLearner::KlAdam,
     ..GUIDED
 };
 const GUIDED_INDIRECT: Config = Config {
@@ -289,6 +297,7 @@ fn render(ts: &TestScene, c: Config, max_depth: u32, batches: u32, spp: u64) -> 
             learn_lights: c.learn_lights,
             learn_selection: c.bsdf_fraction.is_none(),
             bsdf_fraction: c.bsdf_fraction.unwrap_or(0.5),
+            selection_learner: c.selection_learner,
             target: c.target,
             density: c.density,
             spatial_filter: c.spatial_filter,
@@ -453,7 +462,7 @@ fn sconces_global_illumination() {
     run_suite("sconces-d4", &ts, 4, &[PT, RIS, GUIDED_RIS], 16, 128);
 }
 
-/// The guiding options (learned or fixed selection probability, what the tree learns,
+/// The guiding options (selection probability learned by either learner or fixed, what the tree learns,
 /// which statistic of it)
 /// with indirect light, where the guide samples more than direct light.
 #[test]
@@ -467,6 +476,7 @@ fn sconces_guiding_options() {
             GUIDED,
             GUIDED_LEARN,
             GUIDED_FIXED,
+            GUIDED_KL_ADAM,
             GUIDED_INDIRECT,
             GUIDED_RIS_INDIRECT,
             GUIDED_CONTRIBUTION,
