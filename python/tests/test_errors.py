@@ -58,6 +58,10 @@ def test_other_bad_arguments(scene, pt):
         lanterna.Renderer(scene, 8, 6, method="guided", light_mix="sometimes")
     for mix in ("auto", "learned", None, 0.3):
         lanterna.Renderer(scene, 8, 6, method="guided", light_mix=mix)
+    with pytest.raises(ValueError, match="--selection-learner"):
+        lanterna.Renderer(scene, 8, 6, method="guided", selection_learner="adam")
+    for learner in ("variance", "kl-adam"):
+        lanterna.Renderer(scene, 8, 6, method="guided", selection_learner=learner)
     with pytest.raises(TypeError, match="unexpected keyword argument 'spp'"):
         lanterna.Renderer(scene, 8, 6, spp=4)
     with pytest.raises(ValueError, match="--load-guiding needs --method guided or guided-ris"):
