@@ -138,7 +138,7 @@ impl SelectionState {
         sigmoid(self.theta).clamp(MIN_FRACTION, MAX_FRACTION)
     }
 
-    /// Adam steps taken.
+    /// Learning steps taken: Adam steps, or passes learned from by the variance learner.
     pub fn steps(&self) -> u32 {
         self.steps
     }
@@ -217,10 +217,10 @@ impl SelectionState {
         let sum: f64 = used.iter().map(|u| u.0).sum();
         let sum_sq: f64 = used.iter().map(|u| u.0 * u.0).sum();
         let effective = (sum * sum / sum_sq) as f32;
-        let best = second_moment_minimiser(&used);
         if !(effective.is_finite() && effective > 0.0) {
             return 0;
         }
+        let best = second_moment_minimiser(&used);
         let alpha =
             (self.confidence * self.fraction() + effective * best) / (self.confidence + effective);
         self.theta = logit(alpha.clamp(MIN_FRACTION, MAX_FRACTION));
