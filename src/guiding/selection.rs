@@ -201,21 +201,12 @@ impl SelectionState {
         &mut self,
         records: impl IntoIterator<Item = &'a GuideSelectionRecord>,
     ) -> u64 {
-        let mut used = Vec::new();
-        for r in records {
-            if usable(r) {
-                let (wo, f) = (f64::from(r.wo_pdf), f64::from(r.product));
-                // (F/p_wo, F²/p_wo, p_bsdf − p_guide, p_guide)
-                let b = f64::from(r.bsdf_pdf);
-                let g = f64::from(r.guide_pdf);
-                used.push((f / wo, f * f / wo, b - g, g));
-            }
-        }
+        let used: Vec<Term> = records.into_iter().filter_map(Term::of).collect();
         if used.is_empty() {
             return 0;
         }
-        let sum: f64 = used.iter().map(|u| u.0).sum();
-        let sum_sq: f64 = used.iter().map(|u| u.0 * u.0).sum();
+        let sum: f64 = used.iter().map(|t| t.weight).sum();
+        let sum_sq: f64 = used.iter().map(|t| t.weight * t.weight).sum();
         let effective = (sum * sum / sum_sq) as f32;
         if !(effective.is_finite() && effective > 0.0) {
             return 0;
@@ -243,16 +234,44 @@ fn usable(r: &GuideSelectionRecord) -> bool {
         && r.wo_pdf > 0.0
 }
 
-/// argmin over α in [MIN_FRACTION, MAX_FRACTION] of V(α) = Σ F²/(p_wo·p_α), from the
-/// records' (_, F²/p_wo, p_bsdf − p_guide, p_guide): V is convex, so bisection on V′.
-fn second_moment_minimiser(records: &[(f64, f64, f64, f64)]) -> f32 {
+/// What the variance learner keeps of one usable record, in f64 (the ratios span many
+/// decades).
+struct Term {
+    /// F / p_wo: the record's importance weight (for the effective record count).
+    weight: f64,
+    /// F² / p_wo: its share of the second moment, up to the 1/p_α that α changes.
+    second: f64,
+    /// p_bsdf − p_guide and p_guide: p_α = p_guide + α·(p_bsdf − p_guide).
+    difference: f64,
+    guide: f64,
+}
+
+impl Term {
+    fn of(r: &GuideSelectionRecord) -> Option<Term> {
+        if !usable(r) {
+            return None;
+        }
+        let (wo, f) = (f64::from(r.wo_pdf), f64::from(r.product));
+        let guide = f64::from(r.guide_pdf);
+        Some(Term {
+            weight: f / wo,
+            second: f * f / wo,
+            difference: f64::from(r.bsdf_pdf) - guide,
+            guide,
+        })
+    }
+}
+
+/// argmin over α in [MIN_FRACTION, MAX_FRACTION] of V(α) = Σ F²/(p_wo·p_α): V is
+/// convex, so bisection on V′.
+fn second_moment_minimiser(terms: &[Term]) -> f32 {
     let slope = |a: f64| -> f64 {
-        records
+        terms
             .iter()
-            .map(|&(_, f2, d, g)| {
-                let p = g + a * d;
+            .map(|t| {
+                let p = t.guide + a * t.difference;
                 if p > 0.0 {
-                    -f2 * d / (p * p)
+                    -t.second * t.difference / (p * p)
                 } else {
                     0.0
                 }
@@ -516,16 +535,8 @@ mod tests {
                 .map(|i| 0.05 + 0.9 * f64::from(i) / 9000.0)
                 .min_by(|a, b| estimate(*a).total_cmp(&estimate(*b)))
                 .unwrap() as f32;
-            let packed: Vec<_> = records
-                .iter()
-                .filter(|r| usable(r))
-                .map(|r| {
-                    let (wo, f) = (f64::from(r.wo_pdf), f64::from(r.product));
-                    let (b, g) = (f64::from(r.bsdf_pdf), f64::from(r.guide_pdf));
-                    (f / wo, f * f / wo, b - g, g)
-                })
-                .collect();
-            let found = second_moment_minimiser(&packed);
+            let terms: Vec<Term> = records.iter().filter_map(Term::of).collect();
+            let found = second_moment_minimiser(&terms);
             assert!(
                 (found - brute).abs() < 2e-4,
                 "drawn with α {drawn_with}: bisection {found}, brute force {brute}"
