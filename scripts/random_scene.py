@@ -23,7 +23,7 @@ textures, vertex colours, solid glass boxes (KHR_materials_volume: smooth and ro
 indices 1.1-2.0, tinted, some absorbing, some mirrored), and thin panes without
 Fresnel reflection (specularFactor 0) that pass part of the light straight through. A
 scene with panes gets no point or spot lights: seen through smooth thin glass they
-differ by design (lanterna's smooth glass is a GGX lobe of α = 0.0016, Mitsuba's a
+differ by design (lanterna's smooth glass is a GGX lobe of α = 10⁻⁴, Mitsuba's a
 delta), and the export would say it is approximate.
 
 Emissive boxes are closed and one-sided unless `--two-sided-boxes`: Mitsuba 3 stops
@@ -163,7 +163,7 @@ def generate(seed, two_sided_boxes, materials=False):
                    scale=[size, size * r.uniform(0.2, 1), 1])
         kinds.append(kind + (" two-sided" if two else "") + (" textured" if glow else ""))
     # No point or spot lights with thin panes: seen through smooth thin glass they differ
-    # by design (lanterna's smooth glass is a GGX lobe of α = 0.0016; the export says so).
+    # by design (lanterna's smooth glass is a GGX lobe of α = 1e-4; the export says so).
     for _ in range(0 if panes else r.randint(0, 3)):
         light = {"type": r.choice(["point", "spot"]), "color": rgb(0.3, 1.0),
                  "intensity": 10 ** r.uniform(-0.5, 1)}

@@ -784,7 +784,7 @@ fn solid_glass_agrees_with_mitsuba() {
 /// export at max depth 2 `volpath` and `path` agree, while with `thindielectric` put back
 /// `volpath` is much brighter (the floor under the pane gets its direct light through the
 /// pane only there). Point and spot lights seen through smooth thin glass make the export
-/// approximate (lanterna's smooth glass is a GGX lobe of α = 0.0016, Mitsuba's a delta).
+/// approximate (lanterna's smooth glass is a GGX lobe of α = MIN_GGX_ALPHA = 10⁻⁴, Mitsuba's a delta).
 /// Found by random scenes with absorbing glass and thin panes (lanterna 2–3 % darker than
 /// `volpath`, agreeing once the panes were removed) and with a point light behind a pane.
 /// Seen to fail with the export writing `thindielectric` again, and without the flag.

@@ -55,14 +55,25 @@ struct BsdfParams {
     float sheen_roughness; // its roughness r (α = r², r taken as at least 0.1)
 };
 
-// GGX's D of a microfacet normal at cosine `c` from the macro normal.
-float ggx_d_cos(float c, float a) {
+// GGX's D of a unit microfacet normal whose cosine from the macro normal is `c` and
+// squared sine `s2`: α² / (π (sin²θ + α² cos²θ)²). The common form c²(α² − 1) + 1
+// cancels to nothing near the peak once α² is below float's resolution of 1 (α below
+// about 2.4e-4; MIN_GGX_ALPHA is 1e-4), so the sine comes from the tangential part.
+float ggx_d_cos_sin2(float c, float s2, float a) {
     float a2 = a * a;
-    float d = c * c * (a2 - 1.0) + 1.0;
-    return a2 / (PI * d * d);
+    float d = s2 + c * c * a2;
+    return d > 0.0 ? a2 / (PI * d * d) : 0.0;
 }
 
-float ggx_d(vec3 h, float a) { return ggx_d_cos(h.z, a); }
+// D of a unit microfacet normal in the local frame (z the macro normal).
+float ggx_d(vec3 h, float a) { return ggx_d_cos_sin2(h.z, dot(h.xy, h.xy), a); }
+
+// D of a unit microfacet normal `h` about the unit macro normal `n`.
+float ggx_d_about(vec3 h, vec3 n, float a) {
+    float c = dot(h, n);
+    vec3 t = h - c * n;
+    return ggx_d_cos_sin2(c, dot(t, t), a);
+}
 
 // Smith's Λ of a direction at cosine `c` from the macro normal.
 float ggx_lambda_cos(float c, float a) {
@@ -202,7 +213,7 @@ float coat_eval_pdf(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
     float co = dot(c.wo, p.coat_n);
     float ci = dot(wi, p.coat_n);
     if (co <= 0.0 || ci <= 0.0 || wi.z <= 0.0) return 0.0;
-    float d = ggx_d_cos(dot(normalize(c.wo + wi), p.coat_n), p.coat_alpha);
+    float d = ggx_d_about(normalize(c.wo + wi), p.coat_n, p.coat_alpha);
     pdf = d / ((1.0 + c.coat_lambda_wo) * 4.0 * co);
     return d / (1.0 + c.coat_lambda_wo + ggx_lambda_cos(ci, p.coat_alpha)) / (4.0 * co);
 }
