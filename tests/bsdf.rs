@@ -850,15 +850,13 @@ fn nearly_smooth_lobes_match_the_formulas_at_their_peak() {
         let mut worst = 0.0f64;
         for a in &got {
             let want = gltf_f_cos(&c, a.wi);
-            for k in 0..3 {
-                let err = (a.f[k] - want[k]).abs() / want[k].abs().max(1e-6 * top);
+            for (k, (got, want)) in a.f.iter().zip(want).enumerate() {
+                let err = (got - want).abs() / want.abs().max(1e-6 * top);
                 worst = worst.max(err);
                 assert!(
                     err < 1e-2,
-                    "{name}: f·cos toward {:?} channel {k}: kernel {} against the formulas' {}",
-                    a.wi,
-                    a.f[k],
-                    want[k]
+                    "{name}: f·cos toward {:?} channel {k}: kernel {got} against the formulas' {want}",
+                    a.wi
                 );
             }
         }
