@@ -63,6 +63,26 @@ struct Case {
 }
 
 impl Case {
+    /// A metal of colour `base_color` at GGX α `alpha`, seen from `wo`; no transmission,
+    /// coat or sheen.
+    fn metal(base_color: [f64; 3], alpha: f64, wo: [f64; 3]) -> Case {
+        Case {
+            base_color,
+            metallic: 1.0,
+            f0: [0.04; 3],
+            alpha,
+            wo,
+            specular: 1.0,
+            transmission: 0.0,
+            eta: 0.0,
+            coat: 0.0,
+            coat_alpha: 1.0,
+            coat_n: [0.0, 0.0, 1.0],
+            sheen: [0.0; 3],
+            sheen_roughness: 0.5,
+        }
+    }
+
     fn bytes(&self) -> Vec<u8> {
         let v = [
             self.base_color[0],
@@ -752,21 +772,7 @@ fn bsdf_matches_the_gltf_formulas() {
 fn nearly_smooth_lobes_match_the_formulas_at_their_peak() {
     let alpha = 1e-4;
     let wo = unit([0.45, -0.2, 0.87]);
-    let smooth = Case {
-        base_color: [0.9, 0.85, 0.8],
-        metallic: 1.0,
-        f0: [0.04; 3],
-        alpha,
-        wo,
-        specular: 1.0,
-        transmission: 0.0,
-        eta: 0.0,
-        coat: 0.0,
-        coat_alpha: 1.0,
-        coat_n: [0.0, 0.0, 1.0],
-        sheen: [0.0; 3],
-        sheen_roughness: 0.5,
-    };
+    let smooth = Case::metal([0.9, 0.85, 0.8], alpha, wo);
     let mirror = [-wo[0], -wo[1], wo[2]];
     // Snell's law into index 1.5 along the normal.
     let refracted = {
@@ -962,21 +968,7 @@ fn white_metal_reflects_at_most_all_light() {
         (0.3, unit([0.6, 0.3, 0.5])),
         (0.8, unit([0.0, 0.95, 0.2])),
     ] {
-        let c = Case {
-            base_color: [1.0; 3],
-            metallic: 1.0,
-            f0: [0.04; 3],
-            alpha,
-            wo,
-            specular: 1.0,
-            transmission: 0.0,
-            eta: 0.0,
-            coat: 0.0,
-            coat_alpha: 1.0,
-            coat_n: [0.0, 0.0, 1.0],
-            sheen: [0.0; 3],
-            sheen_roughness: 0.5,
-        };
+        let c = Case::metal([1.0; 3], alpha, wo);
         let eval = run(&c, 1, &cells);
         let mut albedo = 0.0;
         grid.for_each_cell(|i, j, dw| albedo += eval[i * grid.n_phi + j].f[1] * dw);
