@@ -63,12 +63,13 @@ struct Case {
 }
 
 impl Case {
-    /// A metal of colour `base_color` at GGX α `alpha`, seen from `wo`; no transmission,
-    /// coat or sheen.
-    fn metal(base_color: [f64; 3], alpha: f64, wo: [f64; 3]) -> Case {
+    /// An opaque material of colour `base_color` and metallic `metallic` at GGX α
+    /// `alpha`, seen from `wo`: dielectric F0 0.04 and specular 1, no transmission, coat
+    /// or sheen. Cases change what they test from it.
+    fn opaque(base_color: [f64; 3], metallic: f64, alpha: f64, wo: [f64; 3]) -> Case {
         Case {
             base_color,
-            metallic: 1.0,
+            metallic,
             f0: [0.04; 3],
             alpha,
             wo,
@@ -128,21 +129,7 @@ fn cases() -> Vec<(&'static str, Case)> {
     let near_normal = unit([0.2, 0.1, 0.97]);
     let oblique = unit([0.7, -0.2, 0.55]);
     let grazing = unit([-0.15, 0.97, 0.18]);
-    let plastic = Case {
-        base_color: [0.8, 0.3, 0.2],
-        metallic: 0.0,
-        f0: [0.04; 3],
-        alpha: 0.25,
-        wo: oblique,
-        specular: 1.0,
-        transmission: 0.0,
-        eta: 0.0,
-        coat: 0.0,
-        coat_alpha: 1.0,
-        coat_n: [0.0, 0.0, 1.0],
-        sheen: [0.0; 3],
-        sheen_roughness: 0.5,
-    };
+    let plastic = Case::opaque([0.8, 0.3, 0.2], 0.0, 0.25, oblique);
     vec![
         ("rough plastic, oblique", plastic),
         (
@@ -175,19 +162,9 @@ fn cases() -> Vec<(&'static str, Case)> {
         (
             "half metal with coloured specular, grazing",
             Case {
-                base_color: [0.2, 0.6, 0.9],
-                metallic: 0.5,
                 f0: [0.8 * 0.04, 0.8 * 0.02, 0.8 * 0.08],
-                alpha: 0.3,
-                wo: grazing,
                 specular: 0.8,
-                transmission: 0.0,
-                eta: 0.0,
-                coat: 0.0,
-                coat_alpha: 1.0,
-                coat_n: [0.0, 0.0, 1.0],
-                sheen: [0.0; 3],
-                sheen_roughness: 0.5,
+                ..Case::opaque([0.2, 0.6, 0.9], 0.5, 0.3, grazing)
             },
         ),
         (
@@ -214,19 +191,10 @@ fn cases() -> Vec<(&'static str, Case)> {
         (
             "glossy half-transmitting half metal with coloured specular, near the normal",
             Case {
-                base_color: [0.7, 0.5, 0.3],
-                metallic: 0.3,
                 f0: [0.8 * 0.04, 0.8 * 0.02, 0.8 * 0.08],
-                alpha: 0.1,
-                wo: near_normal,
                 specular: 0.8,
                 transmission: 0.6,
-                eta: 0.0,
-                coat: 0.0,
-                coat_alpha: 1.0,
-                coat_n: [0.0, 0.0, 1.0],
-                sheen: [0.0; 3],
-                sheen_roughness: 0.5,
+                ..Case::opaque([0.7, 0.5, 0.3], 0.3, 0.1, near_normal)
             },
         ),
         (
@@ -264,19 +232,11 @@ fn cases() -> Vec<(&'static str, Case)> {
         (
             "glossy half-transmitting half-metal solid with coloured specular, near the normal",
             Case {
-                base_color: [0.7, 0.5, 0.3],
-                metallic: 0.3,
                 f0: [0.8 * 0.04, 0.8 * 0.02, 0.8 * 0.08],
-                alpha: 0.1,
-                wo: near_normal,
                 specular: 0.8,
                 transmission: 0.6,
                 eta: 1.33,
-                coat: 0.0,
-                coat_alpha: 1.0,
-                coat_n: [0.0, 0.0, 1.0],
-                sheen: [0.0; 3],
-                sheen_roughness: 0.5,
+                ..Case::opaque([0.7, 0.5, 0.3], 0.3, 0.1, near_normal)
             },
         ),
         (
@@ -772,7 +732,7 @@ fn bsdf_matches_the_gltf_formulas() {
 fn nearly_smooth_lobes_match_the_formulas_at_their_peak() {
     let alpha = 1e-4;
     let wo = unit([0.45, -0.2, 0.87]);
-    let smooth = Case::metal([0.9, 0.85, 0.8], alpha, wo);
+    let smooth = Case::opaque([0.9, 0.85, 0.8], 1.0, alpha, wo);
     let mirror = [-wo[0], -wo[1], wo[2]];
     // Snell's law into index 1.5 along the normal.
     let refracted = {
@@ -968,7 +928,7 @@ fn white_metal_reflects_at_most_all_light() {
         (0.3, unit([0.6, 0.3, 0.5])),
         (0.8, unit([0.0, 0.95, 0.2])),
     ] {
-        let c = Case::metal([1.0; 3], alpha, wo);
+        let c = Case::opaque([1.0; 3], 1.0, alpha, wo);
         let eval = run(&c, 1, &cells);
         let mut albedo = 0.0;
         grid.for_each_cell(|i, j, dw| albedo += eval[i * grid.n_phi + j].f[1] * dw);
@@ -998,19 +958,8 @@ fn white_thin_glass_scatters_at_most_all_light() {
         (0.05, unit([0.0, 0.98, 0.15])),
     ] {
         let c = Case {
-            base_color: [1.0; 3],
-            metallic: 0.0,
-            f0: [0.04; 3],
-            alpha,
-            wo,
-            specular: 1.0,
             transmission: 1.0,
-            eta: 0.0,
-            coat: 0.0,
-            coat_alpha: 1.0,
-            coat_n: [0.0, 0.0, 1.0],
-            sheen: [0.0; 3],
-            sheen_roughness: 0.5,
+            ..Case::opaque([1.0; 3], 0.0, alpha, wo)
         };
         let mut parts = [0.0; 2];
         for (part, cells) in parts.iter_mut().zip(&halves) {
@@ -1049,19 +998,9 @@ fn white_glass_solid_reflects_the_fresnel_share_and_refracts_the_rest() {
         (1.0 / 1.5, unit([0.7, 0.3, 0.6])), // 53° from the normal: beyond 41.8°
     ] {
         let c = Case {
-            base_color: [1.0; 3],
-            metallic: 0.0,
-            f0: [0.04; 3],
-            alpha: 0.02,
-            wo,
-            specular: 1.0,
             transmission: 1.0,
             eta,
-            coat: 0.0,
-            coat_alpha: 1.0,
-            coat_n: [0.0, 0.0, 1.0],
-            sheen: [0.0; 3],
-            sheen_roughness: 0.5,
+            ..Case::opaque([1.0; 3], 0.0, 0.02, wo)
         };
         let mut parts = [0.0; 2];
         for (part, cells) in parts.iter_mut().zip(&halves) {
@@ -1116,19 +1055,12 @@ fn clearcoat_reflects_its_fresnel_share_over_the_base() {
         (1.0, unit([0.6, 0.1, 0.79]), unit([0.3, 0.0, 0.95])),
     ] {
         let black = Case {
-            base_color: [0.0; 3],
-            metallic: 0.0,
             f0: [0.0; 3],
-            alpha: 0.5,
-            wo,
             specular: 0.0,
-            transmission: 0.0,
-            eta: 0.0,
             coat,
             coat_alpha: 0.02,
             coat_n,
-            sheen: [0.0; 3],
-            sheen_roughness: 0.5,
+            ..Case::opaque([0.0; 3], 0.0, 0.5, wo)
         };
         let white = Case {
             base_color: [1.0; 3],
@@ -1213,19 +1145,11 @@ fn sheen_reflects_its_albedo_and_scales_the_base() {
         (1.0, unit([0.0, 0.96, 0.28])),
     ] {
         let black = Case {
-            base_color: [0.0; 3],
-            metallic: 0.0,
             f0: [0.0; 3],
-            alpha: 0.5,
-            wo,
             specular: 0.0,
-            transmission: 0.0,
-            eta: 0.0,
-            coat: 0.0,
-            coat_alpha: 1.0,
-            coat_n: [0.0, 0.0, 1.0],
             sheen: [1.0; 3],
             sheen_roughness: r,
+            ..Case::opaque([0.0; 3], 0.0, 0.5, wo)
         };
         let white = Case {
             base_color: [1.0; 3],
