@@ -17,6 +17,10 @@ method up to noise:
     python3 scripts/mitsuba_compare.py r7_mitsuba --lanterna target/release/lanterna \\
         --method ris --batches 8 --spp 512 --runs 16 --json r7_ris.json
 
+Give Mitsuba 64 runs (`--runs 64`, about 0.2 s each at 48×36) where the scene is dark or
+has glass: with 16, its rare bright samples leave most of its runs low in the dark pixels
+and the pixel test rejects methods that have fewer such samples (README, "Random scenes").
+
 `--materials` widens the material mix where the export stays exact: sRGB base colour
 textures (nearest and bilinear, on the walls, the floor and some boxes), emissive
 textures, vertex colours, solid glass boxes (KHR_materials_volume: smooth and rough,
