@@ -88,6 +88,7 @@ pub fn run_kernel(
 
 /// Run test kernel `name` over `invocations` (local size 64) with one storage buffer per
 /// `(binding, initial contents)`; returns every buffer's contents after the run, in order.
+/// The kernel comes from [`shader_source`], so `LANTERNA_TEST_SHADER_DIR` reaches it.
 pub fn dispatch(
     name: &str,
     buffers: &[(u32, &[u8])],
@@ -95,7 +96,7 @@ pub fn dispatch(
     invocations: u32,
 ) -> vk::Result<Vec<Vec<u8>>> {
     let device = device();
-    let spirv = ShaderSource::Builtin
+    let spirv = shader_source()
         .load(name)
         .map_err(|e| vk::VkError::Other(e.to_string()))?;
     let bindings: Vec<BindingSpec> = buffers

@@ -1,6 +1,14 @@
 //! The guiding test-kernel checks (`lanterna::guiding::kernel_checks`) run against the
 //! CPU mirror. The GPU test runs the same checks with runners that dispatch
 //! `tests/guiding_sample` and `tests/guiding_record` on the device.
+//!
+//! Seen to fail with defects injected into `inc/guiding.glsl` through
+//! LANTERNA_TEST_SHADER_DIR (2026-11-28):
+//! - `guide_sample` returning its density 0.1 % high: the device's sampling check
+//!   (every sample's pdf differs from `guide_pdf`'s and from the CPU mirror's, while
+//!   the χ² tests, blind to 0.1 %, pass);
+//! - the directional box filter clamping its cells at φ's seam instead of wrapping
+//!   around it: the device's record check (training energy 0.7 % off in relative L1).
 
 use lanterna::guiding::kernel_checks::{
     check_record_kernel, check_sampling_kernel, cpu_record_runner, cpu_sample_runner, deep_tree,

@@ -11,9 +11,10 @@
 //! LANTERNA_TEST_SHADER_DIR, a copy of shaders_glsl/, then reverted):
 //! - the gradient's sign flipped (the BSDF and quadtree pdfs swapped in the selection
 //!   records, raygen.glsl): furnace α 0.143, guide share 0.880 (gap α 0.418).
-//!
-//! Not yet run injected: the learned α not used by the kernel (closesthit.glsl reading
-//! the header's 0.5), which the guide-share checks are there to catch.
+//! - the learned α not used by the kernel (closesthit.glsl reading the header's 0.5
+//!   instead of the leaf's α; 2026-11-28): the CPU's α were right (furnace 0.939, gap
+//!   0.588), and the guide share caught it: 0.500 in both scenes (furnace: expected
+//!   < 0.3).
 
 use lanterna::guiding::SelectionLearner;
 use lanterna::lights::LightTable;

@@ -1,5 +1,13 @@
 //! RIS and reservoir sampling in the real GLSL (test kernels on lavapipe), checked
 //! against exact distributions computed on the CPU.
+//!
+//! Seen to fail with defects injected through LANTERNA_TEST_SHADER_DIR (2026-11-28):
+//! - the reservoir's comparison reversed, as printed in the paper's Algorithm 1
+//!   (`inc/reservoir.glsl` keeping x_i when u ≥ w_i/w_sum): every reservoir and RIS
+//!   test but the pixel sampler's two;
+//! - the resampling weights' denominator counting one slot too many (M + 1 instead of
+//!   M, so W is low by M/(M + 1)): `ris_contribution_weight_is_unbiased` alone (the
+//!   selection probabilities do not change).
 
 use lanterna::{stats, testing};
 
