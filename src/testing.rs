@@ -341,9 +341,6 @@ impl Batches {
     }
 }
 
-/// Two renders agree in expectation: Welch's t-test per block and channel, with the
-/// family-wise significance `alpha` split over all comparisons (Šidák). Returns the
-/// smallest p-value and where it was, or an error describing the worst block.
 /// Welch tests of the whole image's mean, per channel, between two sets of batches of the
 /// same image: an error that scales the whole image (a weight, a missing term) shows here
 /// first. `what` names the comparison in the failure message.
@@ -363,6 +360,10 @@ pub fn assert_same_image_mean(a: &Batches, b: &Batches, alpha: f64, what: &str) 
     }
 }
 
+/// Two renders agree in expectation: Welch's t-test per block and channel, with the
+/// family-wise significance `alpha` split over all comparisons (Šidák). Returns the
+/// smallest p-value; panics naming the worst block. A bias spread over the whole image
+/// hides below the per-block tests' power; [`assert_same_image_mean`] is the check for it.
 pub fn assert_same_expectation(a: &Batches, b: &Batches, block: u32, alpha: f64) -> f64 {
     let ea = a.block_estimates(block);
     let eb = b.block_estimates(block);
