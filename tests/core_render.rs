@@ -165,8 +165,16 @@ fn nee_only_bsdf_only_and_mis_agree() {
             render_batches(&t.scene, &t.camera, s, 12, 128)
         };
         let mis = run(Strategy::Mis);
-        testing::assert_same_expectation(&mis, &run(Strategy::Nee), 4, ALPHA);
-        testing::assert_same_expectation(&mis, &run(Strategy::Bsdf), 4, ALPHA);
+        for strategy in [Strategy::Nee, Strategy::Bsdf] {
+            let other = run(strategy);
+            testing::assert_same_expectation(&mis, &other, 4, ALPHA);
+            testing::assert_same_image_mean(
+                &mis,
+                &other,
+                ALPHA,
+                &format!("{method:?} {strategy:?}"),
+            );
+        }
     }
     testing::assert_no_validation_errors();
 }
