@@ -360,6 +360,23 @@ pub fn assert_same_image_mean(a: &Batches, b: &Batches, alpha: f64, what: &str) 
     }
 }
 
+/// Two renders agree in expectation, block by block ([`assert_same_expectation`], family
+/// level `alpha`) and in the whole image's mean per channel ([`assert_same_image_mean`],
+/// `mean_alpha` per channel). `what` names the comparison. Returns the smallest block
+/// p-value.
+pub fn assert_agree(
+    a: &Batches,
+    b: &Batches,
+    block: u32,
+    alpha: f64,
+    mean_alpha: f64,
+    what: &str,
+) -> f64 {
+    let p = assert_same_expectation(a, b, block, alpha);
+    assert_same_image_mean(a, b, mean_alpha, what);
+    p
+}
+
 /// Two renders agree in expectation: Welch's t-test per block and channel, with the
 /// family-wise significance `alpha` split over all comparisons (Šidák). Returns the
 /// smallest p-value; panics naming the worst block. A bias spread over the whole image

@@ -167,10 +167,11 @@ fn nee_only_bsdf_only_and_mis_agree() {
         let mis = run(Strategy::Mis);
         for strategy in [Strategy::Nee, Strategy::Bsdf] {
             let other = run(strategy);
-            testing::assert_same_expectation(&mis, &other, 4, ALPHA);
-            testing::assert_same_image_mean(
+            testing::assert_agree(
                 &mis,
                 &other,
+                4,
+                ALPHA,
                 ALPHA,
                 &format!("{method:?} {strategy:?}"),
             );
@@ -269,8 +270,14 @@ fn emission_rays_keep_the_expectation_and_cut_the_coverage_noise() {
     let a = render_batches(&t.scene, &t.camera, settings(Method::Pt, 1, 71), 12, 64);
     for (method, seed) in [(Method::Pt, 72), (Method::Ris, 73)] {
         let b = render_batches(&t.scene, &t.camera, settings(method, 4, seed), 12, 64);
-        testing::assert_same_expectation(&a, &b, 4, ALPHA);
-        testing::assert_same_image_mean(&a, &b, ALPHA, &format!("{method:?}, 4 emission rays"));
+        testing::assert_agree(
+            &a,
+            &b,
+            4,
+            ALPHA,
+            ALPHA,
+            &format!("{method:?}, 4 emission rays"),
+        );
     }
 
     let (_, stats) = testing::render_once(&t.scene, &t.camera, &settings(Method::Pt, 4, 74), 8);
@@ -342,8 +349,14 @@ fn pixel_emitters_keep_the_expectation_and_remove_the_coverage_noise() {
     );
     for (method, seed) in [(Method::Pt, 82), (Method::Ris, 83)] {
         let b = render_batches(&t.scene, &t.camera, settings(method, true, 3, seed), 12, 64);
-        testing::assert_same_expectation(&a, &b, 4, ALPHA);
-        testing::assert_same_image_mean(&a, &b, ALPHA, &format!("{method:?}, pixel emitters"));
+        testing::assert_agree(
+            &a,
+            &b,
+            4,
+            ALPHA,
+            ALPHA,
+            &format!("{method:?}, pixel emitters"),
+        );
     }
 
     // An orthographic view of the same box (its own projection to the image), depth 1.
@@ -359,8 +372,7 @@ fn pixel_emitters_keep_the_expectation_and_remove_the_coverage_noise() {
         mean_pixel_variance(&b) < 0.5 * mean_pixel_variance(&a),
         "orthographic: pixel emitters found no lamp in view"
     );
-    testing::assert_same_expectation(&a, &b, 4, ALPHA);
-    testing::assert_same_image_mean(&a, &b, ALPHA, "orthographic, pixel emitters");
+    testing::assert_agree(&a, &b, 4, ALPHA, ALPHA, "orthographic, pixel emitters");
 
     // The set is not empty: some pixels trace their pixel-emitter ray.
     let (_, stats) =

@@ -409,7 +409,17 @@ fn assert_methods_agree_with_direction_sampling_alone(scene: &Scene, max_depth: 
     };
     let bsdf_only = run(Method::Pt, Strategy::Bsdf);
     for method in [Method::Pt, Method::Ris, Method::Guided, Method::GuidedRis] {
-        testing::assert_same_expectation(&run(method, Strategy::Mis), &bsdf_only, 8, 1e-3);
+        // The whole image's mean too: a bias spread thinly over it passes the blocks
+        // (README, Testing). 10⁻⁴ per channel: guided training makes each run a new draw.
+        let mis = run(method, Strategy::Mis);
+        testing::assert_agree(
+            &mis,
+            &bsdf_only,
+            8,
+            1e-3,
+            1e-4,
+            &format!("{method:?} under MIS"),
+        );
     }
 }
 
