@@ -6,6 +6,10 @@
 //!   with the leaf's learned α (`direction_pdf_mix`): `cornell-lights` `guided` red
 //!   0.831 against `pt`'s 0.855, p = 4e-8, and the kept-passes test; the block tests
 //!   alone passed it, the whole image's mean (added for this) did not.
+//! - the light tables' filter testing the neighbouring bit (`guide_light_filter_may_hold`:
+//!   models in a leaf's table ruled out, their table share left out of the mixture pmf):
+//!   the small street (120 lamps, so the filter is built), block p = 8·10⁻¹²;
+//!   `cornell-lights` (16 models, no filter) passes, as it should.
 //! - Not caught here, nor by tests/conformance.rs: `guide_sample` returning its density
 //!   5 % high (about 0.5 % of these images). tests/guiding_kernel_checks.rs catches it,
 //!   and a 0.1 % error, by comparing every sample's pdf with `guide_pdf`'s.
