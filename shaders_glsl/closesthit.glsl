@@ -155,7 +155,7 @@ DirectionSample direction_choose(Surface s, DirectionSampler d, inout Rng rng) {
         // microfacet normal, with a number of its own; a coat and a sheen are chosen with
         // it too.
         float u_fresnel = s.bsdf.eta > 0.0 || d.bsdf.coat_prob > 0.0 || d.bsdf.sheen_prob > 0.0 ? rng_next(rng) : 0.0;
-        ds.valid = bsdf_sample(s.bsdf, d.bsdf, u, u_fresnel, wi_local);
+        ds.valid = surface_bsdf_sample(s, d.bsdf, u, u_fresnel, wi_local);
         ds.wi = ds.valid ? surface_to_world(s, wi_local) : s.n;
     } else {
         float unused_pdf;

@@ -600,6 +600,76 @@ fn scene_arrays_through_addresses_and_bound_buffers_agree() {
     testing::assert_no_validation_errors();
 }
 
+/// Where every material in use is Lambertian the kernels take the Lambertian lobe alone
+/// (specialization constant LAMBERTIAN), and render the general kernels' image bit for
+/// bit: same films for `pt` and `ris` (their numbers are the same either way; training's
+/// float atomics make guided films differ from run to run, so the guided kernels are
+/// checked by the statistical tests on these scenes). Scenes with another lobe keep the
+/// general kernels, and each lobe's factor alone makes a material non-Lambertian. The
+/// lobes themselves are compared bit for bit in tests/bsdf.rs. Seen to fail with
+/// `Scene::only_lambertian` asking every material (glTF's default one, metallic, is
+/// never used here: no scene took the Lambertian kernels) and with `is_lambertian`
+/// ignoring the specular factor.
+#[test]
+fn lambertian_kernels_render_the_general_kernels_image() {
+    for kind in [Kind::CornellLights, Kind::Gap, Kind::PunctualNear] {
+        let t = testing::generated(kind, &Options::default());
+        assert!(t.scene.only_lambertian(), "{kind:?}: not found Lambertian");
+        for method in [Method::Pt, Method::Ris] {
+            let film = |lambertian: bool| {
+                let mut s = testing::settings(method, 16, 12);
+                s.lambertian_kernel = lambertian;
+                let (r, _) = testing::render_once(&t.scene, &t.camera, &s, 4);
+                assert_eq!(r.lambertian_kernel(), lambertian, "{kind:?} {method}");
+                r.film().unwrap()
+            };
+            let (a, b) = (film(true), film(false));
+            assert!(
+                a.sums.iter().any(|&v| v > 0),
+                "{kind:?} {method}: black film"
+            );
+            assert_eq!(
+                a, b,
+                "{kind:?} {method}: the Lambertian and general kernels differ"
+            );
+        }
+    }
+    let street = testing::generated(Kind::Street, &Options::default());
+    assert!(
+        !street.scene.only_lambertian(),
+        "the street's metal and glossy materials"
+    );
+    let (r, _) = testing::render_once(
+        &street.scene,
+        &street.camera,
+        &testing::settings(Method::Pt, 8, 8),
+        1,
+    );
+    assert!(!r.lambertian_kernel());
+    // `cornell-lights`' white: Lambertian.
+    let matte = testing::generated(Kind::CornellLights, &Options::default())
+        .scene
+        .materials[0];
+    assert!(lanterna::scene::is_lambertian(&matte));
+    type Set = fn(&mut lanterna::gpu::Material);
+    let lobes: [(&str, Set); 5] = [
+        ("metallic", |m| m.metallic = 0.5),
+        ("specular", |m| m.specular = 0.5),
+        ("transmission", |m| m.transmission = 0.5),
+        ("clearcoat", |m| m.clearcoat = 0.5),
+        ("sheen", |m| m.sheen_color[1] = 0.5),
+    ];
+    for (what, set) in lobes {
+        let mut m = matte;
+        set(&mut m);
+        assert!(
+            !lanterna::scene::is_lambertian(&m),
+            "{what} 0.5 is not Lambertian"
+        );
+    }
+    testing::assert_no_validation_errors();
+}
+
 /// Light emitted inside a closed lamp stays inside. `closed_emitters.gltf` holds three
 /// small one-sided emissive cubes (1–3 cm, rotated, 1.5–2.5 m from the floor and the
 /// camera); made two-sided, they also emit inward, which no path from outside may

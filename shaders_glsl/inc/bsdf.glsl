@@ -454,4 +454,43 @@ bool bsdf_sample(BsdfParams p, BsdfWo c, vec3 u, float u_fresnel, out vec3 wi) {
     return wi.z > 0.0;
 }
 
+// ---- the Lambertian lobe alone -------------------------------------------------------
+// What the functions above compute for a Lambertian material (metallic 0, specular 0, no
+// transmission, coat or sheen, not a solid's boundary: bsdf_specular_probability is then
+// 0 and every other lobe has weight 0), without the other lobes' arithmetic. The kernels
+// call these instead when every material of the scene is Lambertian (specialization
+// constant LAMBERTIAN, inc/material.glsl). Each takes its values in the same order of
+// operations as the general functions, so a Lambertian material gets the same bits
+// either way (tests/bsdf.rs compares them).
+
+BsdfWo bsdf_at_lambertian(vec3 wo) {
+    BsdfWo c;
+    c.wo = wo;
+    c.lambda_wo = 0.0;  // only the specular lobes read it
+    c.spec_prob = 0.0;
+    c.coat_weight = 0.0;
+    c.coat_prob = 0.0;
+    c.coat_lambda_wo = 0.0;
+    c.sheen_albedo_wo = 0.0;
+    c.sheen_prob = 0.0;
+    return c;
+}
+
+// f·|cosθi| = base_color/π·cosθi and the cosine density, above the surface only.
+vec3 lambertian_eval_pdf(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
+    pdf = 0.0;
+    if (c.wo.z <= 0.0 || wi.z <= 0.0) return vec3(0.0);
+    pdf = wi.z * INV_PI;
+    return p.base_color * INV_PI * wi.z;
+}
+
+// bsdf_sample's diffuse branch: the cosine-weighted direction from u.yz (u.x chose the
+// lobe there; it is not read).
+bool lambertian_sample(BsdfWo c, vec3 u, out vec3 wi) {
+    wi = vec3(0.0);
+    if (c.wo.z <= 0.0) return false;
+    wi = square_to_cosine_hemisphere(u.yz);
+    return wi.z > 0.0;
+}
+
 #endif

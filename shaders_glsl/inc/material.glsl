@@ -193,12 +193,24 @@ Surface make_surface(Hit h, vec3 ray_dir) {
 vec3 surface_to_local(Surface s, vec3 v) { return to_local(v, s.t, s.b, s.n); }
 vec3 surface_to_world(Surface s, vec3 v) { return to_world(v, s.t, s.b, s.n); }
 
+// The surface's BSDF goes through these functions, which take the Lambertian lobe alone
+// (inc/bsdf.glsl) where every material of the scene is Lambertian (LAMBERTIAN).
+
 // What the BSDF needs of the surface's wo, once per shading point (see BsdfWo).
-BsdfWo surface_bsdf_at(Surface s) { return bsdf_at(s.bsdf, surface_to_local(s, s.wo)); }
+BsdfWo surface_bsdf_at(Surface s) {
+    vec3 wo = surface_to_local(s, s.wo);
+    return LAMBERTIAN ? bsdf_at_lambertian(wo) : bsdf_at(s.bsdf, wo);
+}
 
 // Whether light can go through the surface (KHR_materials_transmission): directions
 // below the geometric surface then carry light too.
-bool surface_transmits(Surface s) { return s.bsdf.transmission > 0.0; }
+bool surface_transmits(Surface s) { return !LAMBERTIAN && s.bsdf.transmission > 0.0; }
+
+// Sample a local direction (bsdf_sample's arguments; `c` is surface_bsdf_at(s)).
+bool surface_bsdf_sample(Surface s, BsdfWo c, vec3 u, float u_fresnel, out vec3 wi_local) {
+    if (LAMBERTIAN) return lambertian_sample(c, u, wi_local);
+    return bsdf_sample(s.bsdf, c, u, u_fresnel, wi_local);
+}
 
 // The absorption coefficient along a ray leaving the surface toward w, for a path that
 // reached it through a medium of coefficient `here` (the side of wo): crossing a solid's
@@ -222,6 +234,7 @@ vec3 surface_bsdf_eval_pdf(Surface s, BsdfWo c, vec3 wi, out float pdf) {
     if (cg == 0.0 || (cg < 0.0 && !surface_transmits(s))) return vec3(0.0);
     vec3 local = surface_to_local(s, wi);
     if ((local.z < 0.0) != (cg < 0.0)) return vec3(0.0);
+    if (LAMBERTIAN) return lambertian_eval_pdf(s.bsdf, c, local, pdf);
     return bsdf_eval_pdf(s.bsdf, c, local, pdf);
 }
 

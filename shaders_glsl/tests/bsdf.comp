@@ -2,7 +2,8 @@
 // tests/bsdf.rs: mode 0 samples a direction from each input's uniform numbers (xyz; w: the
 // choice of a coat, then of reflection or refraction on a solid's boundary) and
 // returns it with the density and f·|cosθ| that bsdf_eval_pdf gives it; mode 1 evaluates
-// f·|cosθ| and the density at each input direction.
+// f·|cosθ| and the density at each input direction. Modes 2 and 3 do the same with the
+// Lambertian lobe alone (bsdf_at_lambertian, lambertian_sample, lambertian_eval_pdf).
 #version 460
 #include "../inc/bsdf.glsl"
 
@@ -44,12 +45,15 @@ void main() {
     p.coat_n = bsdf_case.coat_n;
     p.sheen_color = bsdf_case.sheen_color;
     p.sheen_roughness = bsdf_case.sheen_roughness;
-    BsdfWo c = bsdf_at(p, bsdf_case.wo);
+    bool lambertian = pc.mode >= 2u;
+    BsdfWo c = lambertian ? bsdf_at_lambertian(bsdf_case.wo) : bsdf_at(p, bsdf_case.wo);
     vec3 wi = items[t].xyz;
     bool valid = true;
-    if (pc.mode == 0u) valid = bsdf_sample(p, c, items[t].xyz, items[t].w, wi);
+    if (pc.mode % 2u == 0u) {
+        valid = lambertian ? lambertian_sample(c, items[t].xyz, wi) : bsdf_sample(p, c, items[t].xyz, items[t].w, wi);
+    }
     float pdf;
-    vec3 f = bsdf_eval_pdf(p, c, wi, pdf);
+    vec3 f = lambertian ? lambertian_eval_pdf(p, c, wi, pdf) : bsdf_eval_pdf(p, c, wi, pdf);
     results[2u * t] = vec4(wi, valid ? pdf : -1.0);
     results[2u * t + 1u] = vec4(f, 0.0);
 }

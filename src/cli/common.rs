@@ -237,6 +237,11 @@ pub struct EstimatorArgs {
     /// gather), bound buffers on GPUs (measured faster on the H200). Same image.
     #[arg(long, value_enum, default_value = "auto")]
     pub scene_arrays: SceneArraysArg,
+    /// Keep the general BSDF in the kernels where every material the scene uses is
+    /// Lambertian (by default they take the Lambertian lobe alone there: faster, the same
+    /// image). For measurements.
+    #[arg(long)]
+    pub general_bsdf: bool,
 }
 
 /// `--scene-arrays`.
@@ -312,6 +317,7 @@ impl EstimatorArgs {
                 SceneArraysArg::Addresses => Some(true),
                 SceneArraysArg::Bound => Some(false),
             },
+            lambertian_kernel: !self.general_bsdf,
             ..RenderSettings::default()
         };
         settings.guiding.set_light_mix(self.light_mix);

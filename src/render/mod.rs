@@ -170,6 +170,9 @@ pub struct Renderer {
     has_clearcoat: bool,
     /// Whether any material has a sheen (the kernels' SHEEN constant).
     has_sheen: bool,
+    /// Whether every material in use is Lambertian (the kernels' LAMBERTIAN constant,
+    /// unless `settings.lambertian_kernel` is off).
+    only_lambertian: bool,
     guide: GuideBuffers,
     /// A trained SD-tree to render with instead of training (`--load-guiding`).
     pub preloaded_tree: Option<crate::guiding::SdTree>,
@@ -278,6 +281,7 @@ impl Renderer {
                 .materials
                 .iter()
                 .any(|m| m.sheen_color.iter().any(|&c| c > 0.0)),
+            only_lambertian: scene.only_lambertian(),
             guide,
             preloaded_tree: None,
             bounds: (scene.bounds_min, scene.bounds_max),
@@ -300,6 +304,16 @@ impl Renderer {
                 None => "auto: addresses on CPU devices",
             }
         );
+        if r.only_lambertian {
+            log::info!(
+                "BSDF: every material in use is Lambertian; {}",
+                if r.lambertian_kernel() {
+                    "the kernels take that lobe alone"
+                } else {
+                    "the general BSDF as asked (--general-bsdf)"
+                }
+            );
+        }
         r.upload_params()?;
         Ok(r)
     }

@@ -261,6 +261,11 @@ pub struct RenderSettings {
     /// either way.
     #[serde(skip)]
     pub scene_addresses: Option<bool>,
+    /// Compile the kernels' Lambertian-only BSDF where every material the scene uses is
+    /// Lambertian (`Scene::only_lambertian`; `--general-bsdf` turns it off, for
+    /// measurements). Same image either way.
+    #[serde(skip)]
+    pub lambertian_kernel: bool,
     pub guiding: GuidingSettings,
 }
 
@@ -280,6 +285,7 @@ impl Default for RenderSettings {
             emission_rays: 1,
             pixel_emitters: true,
             scene_addresses: None,
+            lambertian_kernel: true,
             fov_degrees: None,
             exposure: 0.0,
             aovs: false,

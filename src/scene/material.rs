@@ -530,6 +530,19 @@ pub fn bounds_solid(m: &gpu::Material) -> bool {
     m.transmission > 0.0 && m.flags & gpu::MATERIAL_FLAG_VOLUME != 0
 }
 
+/// Whether a material's BSDF is the Lambertian lobe alone, whatever its textures: no
+/// metal (the factor, which its texture only scales, at 0), no specular lobe
+/// (KHR_materials_specular's factor 0, which takes the dielectric's F0 and F90 to 0), no
+/// transmission, coat or sheen. The kernels compare these factors with 0 the same way
+/// (inc/material.glsl), and `Scene::only_lambertian` asks this of every material in use.
+pub fn is_lambertian(m: &gpu::Material) -> bool {
+    m.metallic <= 0.0
+        && m.specular == 0.0
+        && m.transmission <= 0.0
+        && m.clearcoat <= 0.0
+        && m.sheen_color.iter().all(|&c| c <= 0.0)
+}
+
 /// KHR_materials_volume: a thickness above 0 makes a transmitting surface the boundary of
 /// a solid (the spec's thin-walled case is thickness 0, its default); the solid absorbs
 /// with σ = −ln(attenuationColor) / attenuationDistance per world unit (none when the

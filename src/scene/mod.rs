@@ -20,7 +20,7 @@ mod texture;
 
 pub use camera::{Camera, CameraOverride, Projection};
 pub use load::LoadOptions;
-pub use material::bounds_solid;
+pub use material::{bounds_solid, is_lambertian};
 pub use stats::SceneStats;
 pub use texture::{TextureData, TextureKey};
 
@@ -116,6 +116,19 @@ impl Scene {
     /// Load a glTF 2.0 file (.gltf with external or embedded buffers, or .glb).
     pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         load::load(path, options)
+    }
+
+    /// Whether every material the scene's geometry uses is Lambertian
+    /// ([`is_lambertian`]; materials no instance uses, such as glTF's default material
+    /// where every primitive has one, do not count): the kernels then compile the
+    /// Lambertian lobe alone (specialization constant LAMBERTIAN).
+    pub fn only_lambertian(&self) -> bool {
+        self.instances.iter().all(|i| {
+            self.primitives
+                .get(i.primitive as usize)
+                .and_then(|p| self.materials.get(p.material as usize))
+                .is_some_and(is_lambertian)
+        })
     }
 
     /// World-space positions of instance `i`'s triangle `t`.
