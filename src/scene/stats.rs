@@ -21,6 +21,9 @@ pub struct SceneStats {
     /// (KHR_materials_sheen).
     pub coated_materials: u64,
     pub sheen_materials: u64,
+    /// Every material in use is Lambertian (`Scene::only_lambertian`): the kernels take
+    /// that lobe alone.
+    pub only_lambertian: bool,
     pub textures: u64,
     pub cameras: u64,
     pub light_models: u64,
@@ -81,6 +84,7 @@ impl SceneStats {
                 .iter()
                 .filter(|m| m.sheen_color.iter().any(|&c| c > 0.0))
                 .count() as u64,
+            only_lambertian: scene.only_lambertian(),
             textures: scene.textures.len() as u64,
             cameras: scene.cameras.len() as u64,
             light_models: lights.models.len() as u64,
@@ -122,6 +126,9 @@ impl fmt::Display for SceneStats {
         }
         if self.sheen_materials > 0 {
             kinds.push(format!("{} with sheen", self.sheen_materials));
+        }
+        if self.only_lambertian {
+            kinds.push("every one in use Lambertian".into());
         }
         if !kinds.is_empty() {
             write!(f, " ({})", kinds.join(", "))?;
