@@ -600,27 +600,40 @@ fn scene_arrays_through_addresses_and_bound_buffers_agree() {
     testing::assert_no_validation_errors();
 }
 
-/// Where every material in use is Lambertian the kernels take the Lambertian lobe alone
-/// (specialization constant LAMBERTIAN), and render the general kernels' image bit for
-/// bit: same films for `pt` and `ris` (their numbers are the same either way; training's
-/// float atomics make guided films differ from run to run, so the guided kernels are
-/// checked by the statistical tests on these scenes). Scenes with another lobe keep the
-/// general kernels, and each lobe's factor alone makes a material non-Lambertian. The
-/// lobes themselves are compared bit for bit in tests/bsdf.rs. Seen to fail with
-/// `Scene::only_lambertian` asking every material (glTF's default one, metallic, is
-/// never used here: no scene took the Lambertian kernels) and with `is_lambertian`
-/// ignoring the specular factor.
+/// The kernels take the Lambertian lobe alone at Lambertian surfaces (specialization
+/// constant BSDF_KERNEL: per surface, or compiled in alone where every material in use
+/// is Lambertian) and render the general BSDF's image bit for bit: same films for `pt`
+/// and `ris` (their numbers are the same either way; training's float atomics make guided
+/// films differ from run to run, so the guided kernels are checked by the statistical
+/// tests on these scenes) on three all-Lambertian scenes and on the street, whose metal
+/// and glossy materials keep the general BSDF where they are. Each lobe's factor alone
+/// makes a material non-Lambertian. The lobes themselves are compared bit for bit in
+/// tests/bsdf.rs. Seen to fail with `Scene::only_lambertian` asking every material
+/// (glTF's default one, metallic, is never used here: no scene took the Lambertian
+/// kernels), with `is_lambertian` ignoring the specular factor, and with the kernels'
+/// per-surface test ignoring it (the street's films differ).
 #[test]
-fn lambertian_kernels_render_the_general_kernels_image() {
-    for kind in [Kind::CornellLights, Kind::Gap, Kind::PunctualNear] {
+fn lambertian_shortcuts_render_the_general_bsdfs_image() {
+    use lanterna::gpu::{BSDF_KERNEL_GENERAL, BSDF_KERNEL_LAMBERTIAN, BSDF_KERNEL_PER_SURFACE};
+    for (kind, shortcut) in [
+        (Kind::CornellLights, BSDF_KERNEL_LAMBERTIAN),
+        (Kind::Gap, BSDF_KERNEL_LAMBERTIAN),
+        (Kind::PunctualNear, BSDF_KERNEL_LAMBERTIAN),
+        (Kind::Street, BSDF_KERNEL_PER_SURFACE),
+    ] {
         let t = testing::generated(kind, &Options::default());
-        assert!(t.scene.only_lambertian(), "{kind:?}: not found Lambertian");
+        assert_eq!(
+            t.scene.only_lambertian(),
+            shortcut == BSDF_KERNEL_LAMBERTIAN,
+            "{kind:?}: Scene::only_lambertian"
+        );
         for method in [Method::Pt, Method::Ris] {
-            let film = |lambertian: bool| {
+            let film = |on: bool| {
                 let mut s = testing::settings(method, 16, 12);
-                s.lambertian_kernel = lambertian;
+                s.lambertian_shortcut = on;
                 let (r, _) = testing::render_once(&t.scene, &t.camera, &s, 4);
-                assert_eq!(r.lambertian_kernel(), lambertian, "{kind:?} {method}");
+                let expected = if on { shortcut } else { BSDF_KERNEL_GENERAL };
+                assert_eq!(r.bsdf_kernel(), expected, "{kind:?} {method}");
                 r.film().unwrap()
             };
             let (a, b) = (film(true), film(false));
@@ -630,22 +643,10 @@ fn lambertian_kernels_render_the_general_kernels_image() {
             );
             assert_eq!(
                 a, b,
-                "{kind:?} {method}: the Lambertian and general kernels differ"
+                "{kind:?} {method}: the Lambertian shortcut and the general BSDF differ"
             );
         }
     }
-    let street = testing::generated(Kind::Street, &Options::default());
-    assert!(
-        !street.scene.only_lambertian(),
-        "the street's metal and glossy materials"
-    );
-    let (r, _) = testing::render_once(
-        &street.scene,
-        &street.camera,
-        &testing::settings(Method::Pt, 8, 8),
-        1,
-    );
-    assert!(!r.lambertian_kernel());
     // `cornell-lights`' white: Lambertian.
     let matte = testing::generated(Kind::CornellLights, &Options::default())
         .scene

@@ -458,8 +458,8 @@ bool bsdf_sample(BsdfParams p, BsdfWo c, vec3 u, float u_fresnel, out vec3 wi) {
 // What the functions above compute for a Lambertian material (metallic 0, specular 0, no
 // transmission, coat or sheen, not a solid's boundary: bsdf_specular_probability is then
 // 0 and every other lobe has weight 0), without the other lobes' arithmetic. The kernels
-// call these instead when every material of the scene is Lambertian (specialization
-// constant LAMBERTIAN, inc/material.glsl). Each takes its values in the same order of
+// call these instead at Lambertian surfaces (specialization constant BSDF_KERNEL,
+// inc/material.glsl). Each takes its values in the same order of
 // operations as the general functions, so a Lambertian material gets the same bits
 // either way (tests/bsdf.rs compares them).
 

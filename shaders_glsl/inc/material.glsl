@@ -25,6 +25,7 @@ struct Surface {
     vec2 uv0;
     vec2 uv1;
     BsdfParams bsdf;
+    bool lambertian;   // the BSDF is the Lambertian lobe alone here (is_lambertian's test)
     float roughness;   // perceptual roughness (AOVs)
     vec3 emission;     // radiance emitted toward wo
     uint light_tri;    // light triangle index, INVALID_INDEX if not a sampled light
@@ -181,6 +182,9 @@ Surface make_surface(Hit h, vec3 ray_dir) {
         s.bsdf.sheen_color = clamp(sheen, 0.0, 1.0);
         s.bsdf.sheen_roughness = clamp(r, 0.0, 1.0);
     }
+    // With these at 0 every lobe but the Lambertian one has weight 0 (inc/bsdf.glsl).
+    s.lambertian = s.bsdf.metallic == 0.0 && s.bsdf.specular == 0.0 && s.bsdf.transmission == 0.0
+        && s.bsdf.coat == 0.0 && max3(s.bsdf.sheen_color) == 0.0;
 
     // Emission: front face only unless the material is double-sided.
     bool emits = s.front || (m.flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;
@@ -194,21 +198,24 @@ vec3 surface_to_local(Surface s, vec3 v) { return to_local(v, s.t, s.b, s.n); }
 vec3 surface_to_world(Surface s, vec3 v) { return to_world(v, s.t, s.b, s.n); }
 
 // The surface's BSDF goes through these functions, which take the Lambertian lobe alone
-// (inc/bsdf.glsl) where every material of the scene is Lambertian (LAMBERTIAN).
+// (inc/bsdf.glsl: the same bits as the general BSDF there) where BSDF_KERNEL says.
+bool surface_lambertian(Surface s) {
+    return BSDF_KERNEL == BSDF_KERNEL_LAMBERTIAN || (BSDF_KERNEL == BSDF_KERNEL_PER_SURFACE && s.lambertian);
+}
 
 // What the BSDF needs of the surface's wo, once per shading point (see BsdfWo).
 BsdfWo surface_bsdf_at(Surface s) {
     vec3 wo = surface_to_local(s, s.wo);
-    return LAMBERTIAN ? bsdf_at_lambertian(wo) : bsdf_at(s.bsdf, wo);
+    return surface_lambertian(s) ? bsdf_at_lambertian(wo) : bsdf_at(s.bsdf, wo);
 }
 
 // Whether light can go through the surface (KHR_materials_transmission): directions
 // below the geometric surface then carry light too.
-bool surface_transmits(Surface s) { return !LAMBERTIAN && s.bsdf.transmission > 0.0; }
+bool surface_transmits(Surface s) { return BSDF_KERNEL != BSDF_KERNEL_LAMBERTIAN && s.bsdf.transmission > 0.0; }
 
 // Sample a local direction (bsdf_sample's arguments; `c` is surface_bsdf_at(s)).
 bool surface_bsdf_sample(Surface s, BsdfWo c, vec3 u, float u_fresnel, out vec3 wi_local) {
-    if (LAMBERTIAN) return lambertian_sample(c, u, wi_local);
+    if (surface_lambertian(s)) return lambertian_sample(c, u, wi_local);
     return bsdf_sample(s.bsdf, c, u, u_fresnel, wi_local);
 }
 
@@ -234,7 +241,7 @@ vec3 surface_bsdf_eval_pdf(Surface s, BsdfWo c, vec3 wi, out float pdf) {
     if (cg == 0.0 || (cg < 0.0 && !surface_transmits(s))) return vec3(0.0);
     vec3 local = surface_to_local(s, wi);
     if ((local.z < 0.0) != (cg < 0.0)) return vec3(0.0);
-    if (LAMBERTIAN) return lambertian_eval_pdf(s.bsdf, c, local, pdf);
+    if (surface_lambertian(s)) return lambertian_eval_pdf(s.bsdf, c, local, pdf);
     return bsdf_eval_pdf(s.bsdf, c, local, pdf);
 }
 

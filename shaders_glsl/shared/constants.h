@@ -33,6 +33,14 @@
 #define PUNCTUAL_SPOT 1u
 #define PUNCTUAL_DIRECTIONAL 2u
 
+// How the kernels take the BSDF (specialization constant BSDF_KERNEL): the general BSDF
+// everywhere; the Lambertian lobe alone at surfaces whose material is Lambertian (a
+// branch per surface); the Lambertian lobe alone everywhere (every material the scene
+// uses is Lambertian, so the other lobes compile away). The image is the same.
+#define BSDF_KERNEL_GENERAL 0u
+#define BSDF_KERNEL_PER_SURFACE 1u
+#define BSDF_KERNEL_LAMBERTIAN 2u
+
 // NEE light selection (specialization constant NEE_MODE).
 #define NEE_UNIFORM 0u
 #define NEE_RIS 1u

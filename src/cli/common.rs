@@ -237,9 +237,9 @@ pub struct EstimatorArgs {
     /// gather), bound buffers on GPUs (measured faster on the H200). Same image.
     #[arg(long, value_enum, default_value = "auto")]
     pub scene_arrays: SceneArraysArg,
-    /// Keep the general BSDF in the kernels where every material the scene uses is
-    /// Lambertian (by default they take the Lambertian lobe alone there: faster, the same
-    /// image). For measurements.
+    /// Keep the general BSDF everywhere (by default the kernels take the Lambertian lobe
+    /// alone at Lambertian surfaces, and compile it alone where every material in use is
+    /// Lambertian: faster, the same image). For measurements.
     #[arg(long)]
     pub general_bsdf: bool,
 }
@@ -317,7 +317,7 @@ impl EstimatorArgs {
                 SceneArraysArg::Addresses => Some(true),
                 SceneArraysArg::Bound => Some(false),
             },
-            lambertian_kernel: !self.general_bsdf,
+            lambertian_shortcut: !self.general_bsdf,
             ..RenderSettings::default()
         };
         settings.guiding.set_light_mix(self.light_mix);

@@ -170,8 +170,8 @@ pub struct Renderer {
     has_clearcoat: bool,
     /// Whether any material has a sheen (the kernels' SHEEN constant).
     has_sheen: bool,
-    /// Whether every material in use is Lambertian (the kernels' LAMBERTIAN constant,
-    /// unless `settings.lambertian_kernel` is off).
+    /// Whether every material in use is Lambertian (the kernels' BSDF_KERNEL constant:
+    /// `Renderer::bsdf_kernel`).
     only_lambertian: bool,
     guide: GuideBuffers,
     /// A trained SD-tree to render with instead of training (`--load-guiding`).
@@ -304,16 +304,15 @@ impl Renderer {
                 None => "auto: addresses on CPU devices",
             }
         );
-        if r.only_lambertian {
-            log::info!(
-                "BSDF: every material in use is Lambertian; {}",
-                if r.lambertian_kernel() {
-                    "the kernels take that lobe alone"
-                } else {
-                    "the general BSDF as asked (--general-bsdf)"
-                }
-            );
-        }
+        log::info!(
+            "BSDF: {}",
+            match r.bsdf_kernel() {
+                gpu::BSDF_KERNEL_LAMBERTIAN =>
+                    "every material in use is Lambertian; the kernels take that lobe alone",
+                gpu::BSDF_KERNEL_PER_SURFACE => "the Lambertian lobe alone at Lambertian surfaces",
+                _ => "the general BSDF everywhere, as asked (--general-bsdf)",
+            }
+        );
         r.upload_params()?;
         Ok(r)
     }

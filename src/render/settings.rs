@@ -261,11 +261,12 @@ pub struct RenderSettings {
     /// either way.
     #[serde(skip)]
     pub scene_addresses: Option<bool>,
-    /// Compile the kernels' Lambertian-only BSDF where every material the scene uses is
-    /// Lambertian (`Scene::only_lambertian`; `--general-bsdf` turns it off, for
-    /// measurements). Same image either way.
+    /// Take the Lambertian lobe alone at Lambertian surfaces, and compile the kernels
+    /// with that lobe alone where every material the scene uses is Lambertian
+    /// (`Renderer::bsdf_kernel`; `--general-bsdf` turns it off, for measurements). Same
+    /// image either way.
     #[serde(skip)]
-    pub lambertian_kernel: bool,
+    pub lambertian_shortcut: bool,
     pub guiding: GuidingSettings,
 }
 
@@ -285,7 +286,7 @@ impl Default for RenderSettings {
             emission_rays: 1,
             pixel_emitters: true,
             scene_addresses: None,
-            lambertian_kernel: true,
+            lambertian_shortcut: true,
             fov_degrees: None,
             exposure: 0.0,
             aovs: false,
