@@ -1183,8 +1183,8 @@ fn sheen_reflects_its_albedo_and_scales_the_base() {
 }
 
 /// The Lambertian lobe alone (`bsdf_at_lambertian`, `lambertian_sample`,
-/// `lambertian_eval_pdf`: what the kernels run when every material of the scene is
-/// Lambertian, specialization constant LAMBERTIAN) gives a Lambertian material the very
+/// `lambertian_eval_pdf`: what the kernels run at Lambertian surfaces, specialization
+/// constant BSDF_KERNEL) gives a Lambertian material the very
 /// bits of the general BSDF: the same sampled directions, validity, densities and f·cos,
 /// for outgoing directions from the normal to grazing and below the surface, directions
 /// over the whole sphere (and in the tangent plane), any roughness and colour (black: an

@@ -121,7 +121,7 @@ impl Scene {
     /// Whether every material the scene's geometry uses is Lambertian
     /// ([`is_lambertian`]; materials no instance uses, such as glTF's default material
     /// where every primitive has one, do not count): the kernels then compile the
-    /// Lambertian lobe alone (specialization constant LAMBERTIAN).
+    /// Lambertian lobe alone (`BSDF_KERNEL_LAMBERTIAN`, `Renderer::bsdf_kernel`).
     pub fn only_lambertian(&self) -> bool {
         self.instances.iter().all(|i| {
             self.primitives
