@@ -30,14 +30,17 @@ for s in street bistro-night; do
   timeout 60 $C --seed 1 --methods guided,guided-ris --selection-learner kl-adam --spp $SP --out-dir $R/$s-kl-1 > $R/$s-kl-1.log 2>&1 || tail -3 $R/$s-kl-1.log
   snap
 done
-# The Lambertian kernels (constant LAMBERTIAN, since 2026-11-28's later session) against the
-# general BSDF on the all-Lambertian street-matte: samples/s of pt and guided-ris, alternated.
+# The Lambertian shortcut (constant BSDF_KERNEL, since 2026-11-28's later session) against
+# the general BSDF: compiled in alone on the all-Lambertian street-matte, a branch per
+# surface on the street; samples/s of pt and guided-ris, alternated.
 for r in 1 2; do
-  for m in pt guided-ris; do
-    for g in "" --general-bsdf; do
-      [ $((SECONDS-t0)) -lt $LIMIT ] || break 3
-      log "street-matte lambertian $m ${g:-default} round $r"
-      timeout 60 $L --log info render scenes/street-matte.gltf $W --method $m --spp 256 --seed 1 $g -o /tmp/sm.exr 2>&1 | grep -E "BSDF|spp in" >> $R/lambertian.txt
+  for s in street-matte street; do
+    for m in pt guided-ris; do
+      for g in "" --general-bsdf; do
+        [ $((SECONDS-t0)) -lt $LIMIT ] || break 4
+        log "$s lambertian $m ${g:-default} round $r"
+        timeout 60 $L --log info render scenes/$s.gltf $W --method $m --spp 256 --seed 1 $g -o /tmp/sm.exr 2>&1 | grep -E "BSDF|spp in" >> $R/lambertian.txt
+      done
     done
   done
 done
