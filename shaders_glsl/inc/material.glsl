@@ -25,7 +25,7 @@ struct Surface {
     vec2 uv0;
     vec2 uv1;
     BsdfParams bsdf;
-    bool lambertian;   // the BSDF is the Lambertian lobe alone here (is_lambertian's test)
+    bool lambertian;   // every lobe but the Lambertian one has weight 0 here (textures included)
     float roughness;   // perceptual roughness (AOVs)
     vec3 emission;     // radiance emitted toward wo
     uint light_tri;    // light triangle index, INVALID_INDEX if not a sampled light
