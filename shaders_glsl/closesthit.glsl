@@ -397,11 +397,14 @@ float ris_denominator(RisContext ctx, RisCandidate c, uint M) {
 }
 
 #include "inc/ris.glsl"
+#include "inc/light_reuse.glsl"
 
 // RIS-selected light. `ds` is this vertex's direction sample and `next` the surface it
-// hit (valid when hit_next); an emitter there joins as the extra candidate.
-NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_next, Surface next, float next_t,
-                  vec3 medium, inout Rng rng) {
+// hit (valid when hit_next, at barycentrics next_bary of its triangle); an emitter there
+// joins as the extra candidate. `s_hit` is the hit that made s (world-space light reuse
+// stores it).
+NeeResult nee_ris(Surface s, Hit s_hit, DirectionSampler d, DirectionSample ds, bool hit_next, Surface next, float next_t,
+                  vec2 next_bary, vec3 medium, inout Rng rng) {
     NeeResult r = nee_none();
     if (params.strategy == STRATEGY_BSDF_ONLY) return r;
     d.lights = light_context_for_ris(d.lights);
@@ -436,6 +439,7 @@ NeeResult nee_ris(Surface s, DirectionSampler d, DirectionSample ds, bool hit_ne
     RisResult res = ris_resample(ctx, params.ris_candidates, rng, has_extra, extra, strata_offset);
     TRACE4("  ris: %u candidates + %u direction candidate, kept=%u (direction candidate: %u)\n", params.ris_candidates,
            uint(has_extra), uint(res.found), uint(res.extra_chosen));
+    if (LIGHT_REUSE) reuse_resample(ctx, s_hit, next_bary, res, rng);
     if (!res.found) return r;
     r.chosen_model = res.y.ls.model;
     r.ris_weight = res.W;

@@ -196,6 +196,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
     vec3 L = vec3(0.0);
     vec3 beta = vec3(1.0);
     Surface s;
+    Hit s_hit;  // the hit that made s
     DirectionSampler d;
     DirectionSample ds;
     ds.valid = true;
@@ -277,7 +278,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
             // an emitter hit there as a candidate; without RIS, sample_vertex chose it
             // with the direction). Its shadow ray is the next step.
             rng.vertex = depth;
-            if (NEE_MODE == NEE_RIS) nee = nee_ris(s, d, ds, next.valid, ns, next.t, medium, rng);
+            if (NEE_MODE == NEE_RIS) nee = nee_ris(s, s_hit, d, ds, next.valid, ns, next.t, next.bary, medium, rng);
             continue;
         } else {
             bool hit_next = next.valid;
@@ -342,6 +343,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
         // The next vertex: sample its direction, if the path may grow from it. It was
         // reached through the medium the ray crossed.
         s = ns;
+        s_hit = next;
         medium = ray_medium;
         if (depth + 1u >= params.max_depth) break;
         TRACE6("vertex %u p=%v3f n=%v3f material %u front=%u emission=%v3f\n", depth + 1u, s.p, s.n, s.material, uint(s.front),

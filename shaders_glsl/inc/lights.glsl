@@ -165,6 +165,40 @@ LightSample sample_punctual(uint index, vec3 x) {
     return s;
 }
 
+// The point with barycentrics b (of corners 1, 2) on light triangle `tri`, whose record
+// is `lt` and whose light model is `model`, seen from x: its emission exact or the
+// record's stand-in as sample_light says. The source density is the caller's (pdf 0).
+LightSample light_point(LightCandidateTriangle lt, uint tri, uint model, vec2 b, vec3 x, const bool exact_emission) {
+    vec3 p = lt.p0 + b.x * lt.e1 + b.y * lt.e2;
+    // |e1 × e2| = 2·area.
+    vec3 normal = cross(lt.e1, lt.e2) * (0.5 * lt.inv_area);
+    if ((lt.flags & LIGHT_CANDIDATE_FLIPPED) != 0u) normal = -normal;
+    LightSample s;
+    s.area = true;
+    s.tri = tri;
+    s.model = model;
+    s.p = p;
+    s.bary = b;
+    vec3 d = p - x;
+    float d2 = dot(d, d);
+    s.dist = sqrt(d2);
+    s.wi = d / max(s.dist, 1e-20);
+    float cos_signed = dot(normal, s.wi);
+    s.cos_y = abs(cos_signed);
+    s.n = cos_signed > 0.0 ? -normal : normal;
+    // One-sided emitters emit on the front face only (toward x: cos_signed < 0).
+    bool emits = (lt.flags & LIGHT_CANDIDATE_TWO_SIDED) != 0u || cos_signed < 0.0;
+    vec3 Le = emits ? lt.emission : vec3(0.0);
+    s.textured = (lt.flags & LIGHT_CANDIDATE_TEXTURED) != 0u;
+    if (exact_emission && s.textured && emits) {
+        Le = light_triangle_radiance(light_triangles(tri), b, -s.wi);
+        s.textured = false;
+    }
+    s.Le_G = d2 > 0.0 ? Le * s.cos_y / d2 : vec3(0.0);
+    s.pdf = 0.0;
+    return s;
+}
+
 // Draw a light point for shading point ctx.p with four uniform numbers. A point on an
 // emissive triangle reads the triangle's compact record alone (LightCandidateTriangle).
 // With `exact_emission` false the emission of a textured emitter is left at the record's
@@ -206,33 +240,7 @@ LightSample sample_light(LightContext ctx, vec4 u, const bool exact_emission) {
                                                        : min(floor_to_uint(u.y * float(m.triangle_count)), m.triangle_count - 1u);
     uint tri = m.first_triangle + local;
     LightCandidateTriangle lt = light_candidates(tri);
-    vec2 b = square_to_triangle(u.zw);
-    vec3 p = lt.p0 + b.x * lt.e1 + b.y * lt.e2;
-    // |e1 × e2| = 2·area.
-    vec3 normal = cross(lt.e1, lt.e2) * (0.5 * lt.inv_area);
-    if ((lt.flags & LIGHT_CANDIDATE_FLIPPED) != 0u) normal = -normal;
-    LightSample s;
-    s.area = true;
-    s.tri = tri;
-    s.model = model;
-    s.p = p;
-    s.bary = b;
-    vec3 d = p - x;
-    float d2 = dot(d, d);
-    s.dist = sqrt(d2);
-    s.wi = d / max(s.dist, 1e-20);
-    float cos_signed = dot(normal, s.wi);
-    s.cos_y = abs(cos_signed);
-    s.n = cos_signed > 0.0 ? -normal : normal;
-    // One-sided emitters emit on the front face only (toward x: cos_signed < 0).
-    bool emits = (lt.flags & LIGHT_CANDIDATE_TWO_SIDED) != 0u || cos_signed < 0.0;
-    vec3 Le = emits ? lt.emission : vec3(0.0);
-    s.textured = (lt.flags & LIGHT_CANDIDATE_TEXTURED) != 0u;
-    if (exact_emission && s.textured && emits) {
-        Le = light_triangle_radiance(light_triangles(tri), b, -s.wi);
-        s.textured = false;
-    }
-    s.Le_G = d2 > 0.0 ? Le * s.cos_y / d2 : vec3(0.0);
+    LightSample s = light_point(lt, tri, model, square_to_triangle(u.zw), x, exact_emission);
     s.pdf = pm * triangle_pmf(tri, m) * lt.inv_area;
     return s;
 }

@@ -43,7 +43,9 @@
 #define BINDING_PIXEL_EMITTER_FLAGS 31
 // Vertex colours (glTF COLOR_0, linear RGBA) of the primitives that have them.
 #define BINDING_VERTEX_COLORS 32
-#define BINDING_COUNT 33
+// World-space light reuse (--light-reuse world): the hash grid's two halves of ReuseCell.
+#define BINDING_REUSE_CELLS 33
+#define BINDING_COUNT 34
 
 // Upper bound on bindless textures in one scene.
 #define MAX_TEXTURES 8192

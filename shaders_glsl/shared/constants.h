@@ -41,6 +41,10 @@
 #define BSDF_KERNEL_PER_SURFACE 1u
 #define BSDF_KERNEL_LAMBERTIAN 2u
 
+// ReuseCell.light of a punctual light: this bit with its light model's index (a light
+// triangle's index otherwise; INVALID_INDEX: the reservoir holds no light).
+#define REUSE_PUNCTUAL 0x80000000u
+
 // NEE light selection (specialization constant NEE_MODE).
 #define NEE_UNIFORM 0u
 #define NEE_RIS 1u

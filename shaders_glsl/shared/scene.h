@@ -184,6 +184,31 @@ struct FrameParams {
     uvec2 triangle_light_index_address;
     uvec2 bvh_nodes_address;
     uvec2 bvh_triangles_address;
+    // World-space light reuse (inc/light_reuse.glsl): cells in each half of the hash
+    // grid (a power of two; 0 without reuse), a cell's edge in pixel footprints at its
+    // distance from the camera, and the most canonical reservoirs a cell stands for.
+    uint reuse_cells;
+    float reuse_cell_pixels;
+    float reuse_confidence_cap;
+};
+
+// One cell of the world-space light reuse's hash grid (inc/light_reuse.glsl): the RIS
+// reservoir a shading point in the cell ended with, and that point (its hit and the
+// direction it was seen from), so that a reader can evaluate the writer's target.
+struct ReuseCell {
+    uint key;          // the cell's fingerprint (0: empty)
+    uint instance;     // the writer's hit: instance, triangle and barycentrics
+    uint primitive;
+    uint light;        // the reservoir's light: a light triangle, REUSE_PUNCTUAL | model,
+                       // or INVALID_INDEX for none
+    vec2 bary;
+    vec2 light_bary;   // barycentrics of the light point on its triangle
+    vec3 wo;           // the writer's Surface.wo
+    float weight;      // the reservoir's contribution weight W (for the writer's target)
+    float confidence;  // canonical reservoirs it stands for (capped)
+    uint check;        // checksum of the words above (a torn write fails it)
+    uint pad0;
+    uint pad1;
 };
 
 // The part of a small emissive triangle's image that lies in one pixel, or one triangle
@@ -213,6 +238,10 @@ struct PushConstants {
     uvec2 guide_training_address;
     uvec2 guide_lights_address;
     uvec2 guide_light_training_address;
+    // World-space light reuse: the first cell of the half this dispatch reads (written
+    // by earlier dispatches) and of the half it writes.
+    uint reuse_read;
+    uint reuse_write;
 };
 
 #endif

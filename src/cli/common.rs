@@ -242,6 +242,27 @@ pub struct EstimatorArgs {
     /// Lambertian: faster, the same image). For measurements.
     #[arg(long)]
     pub general_bsdf: bool,
+    /// World-space light reuse (ris, guided-ris): each RIS vertex also considers the
+    /// light sample a vertex of the previous sample kept in its cell of a hash grid over
+    /// the scene, combined by generalized RIS (unbiased); off by default.
+    #[arg(long, value_enum, default_value = "off")]
+    pub light_reuse: LightReuseArg,
+    /// World-space light reuse: a cell's edge in pixel footprints at its distance from
+    /// the camera.
+    #[arg(long, default_value_t = lanterna::render::DEFAULT_REUSE_CELL_PIXELS)]
+    pub reuse_cell_pixels: f32,
+    /// World-space light reuse: the most earlier reservoirs a reused one stands for
+    /// against the vertex's own.
+    #[arg(long, default_value_t = lanterna::render::DEFAULT_REUSE_CAP)]
+    pub reuse_cap: f32,
+}
+
+/// `--light-reuse`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum LightReuseArg {
+    Off,
+    /// Reservoirs of earlier samples, shared through a hash grid in world space.
+    World,
 }
 
 /// `--scene-arrays`.
@@ -318,6 +339,11 @@ impl EstimatorArgs {
                 SceneArraysArg::Bound => Some(false),
             },
             lambertian_shortcut: !self.general_bsdf,
+            light_reuse: lanterna::render::LightReuse {
+                world: self.light_reuse == LightReuseArg::World,
+                cell_pixels: self.reuse_cell_pixels,
+                confidence_cap: self.reuse_cap,
+            },
             ..RenderSettings::default()
         };
         settings.guiding.set_light_mix(self.light_mix);

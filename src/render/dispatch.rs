@@ -23,6 +23,7 @@ impl Renderer {
     ) -> gpu::PushConstants {
         let g = &self.guide;
         let split = super::address_words;
+        let (reuse_read, reuse_write) = self.reuse_halves();
         gpu::PushConstants {
             tile_origin,
             tile_size,
@@ -34,6 +35,8 @@ impl Renderer {
             guide_training_address: split(g.training.address),
             guide_lights_address: split(g.lights.address),
             guide_light_training_address: split(g.light_training.address),
+            reuse_read,
+            reuse_write,
         }
     }
 
@@ -63,6 +66,7 @@ impl Renderer {
         self.debug_pixel = y * self.settings.width + x;
         self.debug_sample = traced.unwrap_or(gpu::INVALID_INDEX);
         self.clear_film()?;
+        self.ensure_reuse_cells()?;
         self.film_offset = begin;
         self.upload_params()?;
         let mut v = self.variant(false);
@@ -115,9 +119,11 @@ impl Renderer {
                 "sample indices beyond 2^32 are not supported".into(),
             ));
         }
+        self.ensure_reuse_cells()?;
         let v = self.variant(training);
         self.pipeline(v)?;
         let set = self.descriptor_set(v)?;
+        let reuse = self.reuses_lights();
         if self.film_spp == 0 && self.film_offset != begin {
             self.film_offset = begin;
             self.upload_params()?;
@@ -140,7 +146,8 @@ impl Renderer {
                     ((TARGET_SUBMIT_SECONDS / t.max(1e-6)).floor() as u32).clamp(1, 256),
                 ),
             };
-            let mut spp = spp as u64;
+            // With light reuse each sample is a generation of its own (light_reuse.rs).
+            let mut spp = if reuse { 1 } else { spp as u64 };
             if let Some(c) = count {
                 spp = spp.min(c - done);
             }
@@ -176,6 +183,7 @@ impl Renderer {
             }
             let elapsed = chunk_started.elapsed().as_secs_f64();
             self.seconds_per_sample = Some(elapsed / spp as f64);
+            self.reuse_generation += 1;
             done += spp;
             self.film_spp += spp;
             progress(done);

@@ -28,6 +28,8 @@ pub(super) struct Variant {
     pub sheen: bool,
     /// Where the kernels take the Lambertian lobe alone (`gpu::BSDF_KERNEL_*`).
     pub bsdf: u32,
+    /// World-space light reuse (`light_reuse.rs`; RIS methods).
+    pub reuse: bool,
 }
 
 /// Texture slots of the descriptor-set layout come in multiples of this many.
@@ -102,6 +104,7 @@ impl Renderer {
             ),
             (gpu::BINDING_PIXEL_EMITTERS, &self.pixel_emitter_pieces),
             (gpu::BINDING_PIXEL_EMITTER_FLAGS, &self.pixel_emitter_flags),
+            (gpu::BINDING_REUSE_CELLS, self.reuse_buffer()),
         ];
         let mut table: Vec<(u32, Bound<'_>)> = buffers
             .into_iter()
@@ -176,16 +179,17 @@ impl Renderer {
                 v.sheen as u32,
                 self.scene_addresses() as u32,
                 v.bsdf,
+                v.reuse as u32,
             ];
             let name = format!(
-                "render (ris={}, guiding={}, training={}, aovs={}, solids={}, clearcoat={}, sheen={}, bsdf={}, debug={}, lanes={}, traversal={})",
-                v.ris, v.guiding, v.training, v.aovs, v.solids, v.clearcoat, v.sheen, v.bsdf, v.debug, v.lanes, self.traversal.kind
+                "render (ris={}, guiding={}, training={}, aovs={}, solids={}, clearcoat={}, sheen={}, bsdf={}, reuse={}, debug={}, lanes={}, traversal={})",
+                v.ris, v.guiding, v.training, v.aovs, v.solids, v.clearcoat, v.sheen, v.bsdf, v.reuse, v.debug, v.lanes, self.traversal.kind
             );
             requests.push((v, spirv, spec, name));
         }
         let bindings = self.bindings();
         let device = &self.device;
-        let create = |(v, spirv, spec, name): &(Variant, Vec<u32>, [u32; 9], String)| {
+        let create = |(v, spirv, spec, name): &(Variant, Vec<u32>, [u32; 10], String)| {
             let started = Instant::now();
             let p = ComputePipeline::new(
                 device,
@@ -324,6 +328,7 @@ impl Renderer {
             clearcoat: self.has_clearcoat,
             sheen: self.has_sheen,
             bsdf: self.bsdf_kernel(),
+            reuse: self.settings.light_reuse.world && method.uses_ris(),
         }
     }
 

@@ -19,6 +19,7 @@ mod gpu_scene;
 mod guide_buffers;
 mod guided;
 mod kernel;
+mod light_reuse;
 mod limits;
 pub mod output;
 mod pass_output;
@@ -37,8 +38,8 @@ pub use guide_buffers::GuideBuffers;
 pub use guided::{train, GuidingOutcome, IterationStats, Training, TrainingPlan};
 pub use readback::Outlier;
 pub use settings::{
-    GuidedOutput, GuidingSettings, LightMix, LightSource, Method, RenderSettings, SettingsError,
-    Strategy, DEFAULT_GUIDE_HISTORY,
+    GuidedOutput, GuidingSettings, LightMix, LightReuse, LightSource, Method, RenderSettings,
+    SettingsError, Strategy, DEFAULT_GUIDE_HISTORY, DEFAULT_REUSE_CAP, DEFAULT_REUSE_CELL_PIXELS,
 };
 pub use traversal::{Traversal, TraversalChoice, TraversalKind};
 
@@ -174,6 +175,13 @@ pub struct Renderer {
     /// `Renderer::bsdf_kernel`).
     only_lambertian: bool,
     guide: GuideBuffers,
+    /// World-space light reuse's hash grid (`light_reuse.rs`): two halves of
+    /// `reuse_cell_count` cells; a placeholder until a render reuses.
+    reuse_cells: Buffer,
+    reuse_cell_count: u32,
+    /// Dispatch generations since the grid was cleared: generation g writes half g mod 2
+    /// and reads the other.
+    reuse_generation: u64,
     /// A trained SD-tree to render with instead of training (`--load-guiding`).
     pub preloaded_tree: Option<crate::guiding::SdTree>,
     /// Scene bounds (the SD-tree's cube is made from them).
@@ -233,6 +241,7 @@ impl Renderer {
         let aov = Buffer::zeroed(&device, aov_floats * 4, usage, "aovs")?;
         let outliers = Buffer::zeroed(&device, outlier_floats * 4, usage, "outliers")?;
         let guide = GuideBuffers::empty(&device)?;
+        let reuse_cells = Buffer::zeroed(&device, 64, usage, "light reuse cells (unused)")?;
         let emitters =
             pixel_emitters::build(&camera, settings.width, settings.height, &lights.triangles);
         log::info!(
@@ -283,6 +292,9 @@ impl Renderer {
                 .any(|m| m.sheen_color.iter().any(|&c| c > 0.0)),
             only_lambertian: scene.only_lambertian(),
             guide,
+            reuse_cells,
+            reuse_cell_count: 0,
+            reuse_generation: 0,
             preloaded_tree: None,
             bounds: (scene.bounds_min, scene.bounds_max),
             scene_hash: scene.hash.clone(),
@@ -379,6 +391,13 @@ impl Renderer {
             triangle_light_index_address: split(g.triangle_light_index.address),
             bvh_nodes_address: split(bvh_nodes),
             bvh_triangles_address: split(bvh_triangles),
+            reuse_cells: if s.light_reuse.world {
+                self.reuse_cell_count
+            } else {
+                0
+            },
+            reuse_cell_pixels: s.light_reuse.cell_pixels,
+            reuse_confidence_cap: s.light_reuse.confidence_cap,
         }
     }
 

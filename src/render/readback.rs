@@ -25,6 +25,7 @@ impl Renderer {
         self.film.fill_zero()?;
         self.aov.fill_zero()?;
         self.outliers.fill_zero()?;
+        self.clear_reuse_cells()?;
         self.film_spp = 0;
         self.film_offset = 0;
         Ok(())

@@ -267,8 +267,41 @@ pub struct RenderSettings {
     /// image either way.
     #[serde(skip)]
     pub lambertian_shortcut: bool,
+    /// World-space reuse of RIS light samples between paths (`--light-reuse`; RIS
+    /// methods only; off by default).
+    #[serde(default)]
+    pub light_reuse: LightReuse,
     pub guiding: GuidingSettings,
 }
+
+/// World-space light reuse (`shaders_glsl/inc/light_reuse.glsl`): each RIS vertex
+/// combines its reservoir with the one a vertex of an earlier dispatch left in its cell
+/// of a hash grid over the scene, by generalized RIS; unbiased.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LightReuse {
+    /// Reuse on (`--light-reuse world`) or off.
+    pub world: bool,
+    /// A cell's edge in pixel footprints at its distance from the camera
+    /// (`--reuse-cell-pixels`; rounded to a power of two in world units).
+    pub cell_pixels: f32,
+    /// The most canonical reservoirs one reused reservoir stands for (`--reuse-cap`).
+    pub confidence_cap: f32,
+}
+
+impl Default for LightReuse {
+    fn default() -> Self {
+        LightReuse {
+            world: false,
+            cell_pixels: DEFAULT_REUSE_CELL_PIXELS,
+            confidence_cap: DEFAULT_REUSE_CAP,
+        }
+    }
+}
+
+/// Default `--reuse-cell-pixels`.
+pub const DEFAULT_REUSE_CELL_PIXELS: f32 = 8.0;
+/// Default `--reuse-cap`.
+pub const DEFAULT_REUSE_CAP: f32 = 8.0;
 
 impl Default for RenderSettings {
     fn default() -> Self {
@@ -287,6 +320,7 @@ impl Default for RenderSettings {
             pixel_emitters: true,
             scene_addresses: None,
             lambertian_shortcut: true,
+            light_reuse: LightReuse::default(),
             fov_degrees: None,
             exposure: 0.0,
             aovs: false,
@@ -385,6 +419,31 @@ impl RenderSettings {
                 "--exposure",
                 self.exposure.to_string(),
                 format!("must be a number of stops in [-{MAX_EXPOSURE}, {MAX_EXPOSURE}]"),
+            );
+        }
+        let r = &self.light_reuse;
+        if r.world && !self.method.uses_ris() {
+            return bad(
+                "--light-reuse",
+                "world".into(),
+                format!(
+                    "reuses RIS reservoirs: it needs --method ris or guided-ris, not {}",
+                    self.method.name()
+                ),
+            );
+        }
+        if !(r.cell_pixels.is_finite() && (0.25..=65536.0).contains(&r.cell_pixels)) {
+            return bad(
+                "--reuse-cell-pixels",
+                r.cell_pixels.to_string(),
+                "must be a cell size in pixels, in [0.25, 65536]".into(),
+            );
+        }
+        if !(r.confidence_cap.is_finite() && (1.0..=1e6).contains(&r.confidence_cap)) {
+            return bad(
+                "--reuse-cap",
+                r.confidence_cap.to_string(),
+                "must be a number of reservoirs in [1, 1e6]".into(),
             );
         }
         self.guiding.validate()
@@ -549,6 +608,15 @@ mod tests {
             ),
             ("--max-depth", Box::new(|s| s.max_depth = 0)),
             ("--ris-candidates", Box::new(|s| s.ris_candidates = 0)),
+            ("--light-reuse", Box::new(|s| s.light_reuse.world = true)),
+            (
+                "--reuse-cell-pixels",
+                Box::new(|s| s.light_reuse.cell_pixels = f32::NAN),
+            ),
+            (
+                "--reuse-cap",
+                Box::new(|s| s.light_reuse.confidence_cap = 0.5),
+            ),
             ("--emission-rays", Box::new(|s| s.emission_rays = 0)),
             ("--emission-rays", Box::new(|s| s.emission_rays = 65)),
             ("--width/--height", Box::new(|s| s.width = 0)),

@@ -1,0 +1,163 @@
+// World-space reuse of RIS light samples between paths (`--light-reuse world`; beyond
+// the paper, whose future work names it). Part of the closest-hit side: included by
+// closesthit.glsl after its RIS interface (RisContext, RisCandidate, ris_target).
+//
+// Every RIS vertex of a dispatch writes the reservoir it ended with into a cell of a
+// hash grid over the scene (positions quantized to cells of a few pixels' footprint at
+// their distance from the camera, split by the geometric normal's dominant axis), with
+// the vertex itself: its hit and the direction it was seen from, from which a reader
+// rebuilds its Surface and so its target p̂₁. A vertex of a later dispatch in the same
+// cell combines its own reservoir (canonical: y₀, W₀, p̂) with that one (y₁, W₁) by
+// generalized RIS (Lin et al. 2022) with the identity shift: a light point is the same
+// point whoever sampled it, and
+//     m₀(y) = c₀·p̂(y) / (c₀·p̂(y) + c₁·p̂₁(y)),   m₁(y) = c₁·p̂₁(y) / (c₀·p̂(y) + c₁·p̂₁(y)),
+//     w_i = m_i(y_i)·p̂(y_i)·W_i,   y = y_i with probability w_i / Σw,   W = Σw / p̂(y).
+// The weights sum to one for every light point, and m₁ is positive only where p̂₁ is,
+// where the writer's reservoir can hold the point (its RIS draws from the whole
+// source), so W is again an unbiased contribution weight, with no visibility in either
+// target: the shadow ray toward the kept point decides, as for RIS alone. c₀ = 1 and c₁
+// is the number of canonical reservoirs the cell's reservoir stands for, capped
+// (FrameParams.reuse_confidence_cap), which bounds how far old samples outweigh new.
+//
+// Unbiasedness needs the reused reservoir to be independent of the vertex reading it.
+// So a dispatch reads only the half of the grid that earlier dispatches wrote and writes
+// the other (the renderer swaps them per range of samples and renders one sample per
+// dispatch with reuse): nothing a path does can come back to it. Which writer a cell
+// keeps is the GPU's order of writes, which does not depend on the samples' values; every
+// RIS vertex writes, found a light or not, so that no reservoir is kept for what it
+// holds. Writes of several lanes to one cell can interleave; the checksum turns such a
+// torn cell into an empty one.
+#ifndef INC_LIGHT_REUSE_GLSL
+#define INC_LIGHT_REUSE_GLSL
+
+layout(constant_id = 9) const bool LIGHT_REUSE = false;
+layout(set = 0, binding = BINDING_REUSE_CELLS, scalar) buffer ReuseCellBuffer { ReuseCell reuse_cells[]; };
+
+// The cell of shading point p with geometric normal ng (on the side it was seen from):
+// x its index in a half of the grid, y its fingerprint (never 0, which marks empty).
+uvec2 reuse_cell_of(vec3 p, vec3 ng) {
+    vec3 eye = params.camera_to_world[3].xyz;
+    float footprint = params.camera_type == CAMERA_ORTHOGRAPHIC
+        ? 2.0 * params.ortho_half_extent.y / float(params.height)
+        : 2.0 * params.tan_half_fov_y * distance(p, eye) / float(params.height);
+    float size = max(footprint * params.reuse_cell_pixels, 1e-6 * params.scene_radius);
+    // Power-of-two edges: neighbouring points at slightly different distances share a
+    // cell, and the level is part of the key.
+    int level = clamp(int(ceil(log2(max(size, 1e-30)))), -120, 120);
+    vec3 q = clamp(floor(p * exp2(float(-level))), vec3(-1073741824.0), vec3(1073741824.0));
+    vec3 a = abs(ng);
+    uint axis = a.x >= a.y && a.x >= a.z ? 0u : (a.y >= a.z ? 1u : 2u);
+    uint side = axis * 2u + (ng[axis] < 0.0 ? 1u : 0u);
+    uvec4 h = pcg4d(uvec4(uvec3(ivec3(q)), uint(level + 128) * 8u + side));
+    return uvec2(h.x & (params.reuse_cells - 1u), h.y | 1u);
+}
+
+uint reuse_checksum(ReuseCell c) {
+    uvec4 h = pcg4d(uvec4(c.key, c.instance, c.primitive, c.light));
+    h = pcg4d(h ^ uvec4(floatBitsToUint(c.bary), floatBitsToUint(c.light_bary)));
+    h = pcg4d(h ^ uvec4(floatBitsToUint(c.wo), floatBitsToUint(c.weight)));
+    h = pcg4d(h ^ uvec4(floatBitsToUint(c.confidence), c.pad0, c.pad1, 0x7e05eu));
+    return h.x;
+}
+
+// A stored light (ReuseCell.light, with barycentrics b on a triangle) seen from x, with
+// the emission RIS's target uses (the record's stand-in on textured emitters).
+LightSample reuse_light_at(uint light, vec2 b, vec3 x) {
+    if ((light & REUSE_PUNCTUAL) != 0u) {
+        uint model = light & ~REUSE_PUNCTUAL;
+        LightSample s = sample_punctual(light_models(model).punctual, x);
+        s.model = model;
+        return s;
+    }
+    return light_point(light_candidates(light), light, light_triangles(light).model, b, x, false);
+}
+
+RisCandidate reuse_candidate(LightSample ls) {
+    RisCandidate c;
+    c.ls = ls;
+    c.f = vec3(0.0);
+    c.bsdf_pdf = 0.0;
+    c.from_direction = false;
+    c.direction_pdf = 0.0;
+    return c;
+}
+
+// Combine the canonical RIS result `res` of the vertex (ctx; its hit `s_hit`) with the
+// reservoir of its cell in the read half, and write the outcome to the write half.
+// `extra_bary`: barycentrics of the direction candidate's point on its light triangle
+// (the reservoir stores light points by triangle and barycentrics). On return `res` is
+// the combined reservoir: its y (f cached at this vertex), p̂(y) and W.
+void reuse_resample(RisContext ctx, Hit s_hit, vec2 extra_bary, inout RisResult res, inout Rng rng) {
+    uvec2 cell = reuse_cell_of(ctx.s.p, ctx.s.ng);
+    uint light = INVALID_INDEX;
+    vec2 light_bary = vec2(0.0);
+    if (res.found) {
+        if (res.y.ls.area) {
+            light = res.y.ls.tri;
+            light_bary = res.extra_chosen ? extra_bary : res.y.ls.bary;
+        } else {
+            light = REUSE_PUNCTUAL | res.y.ls.model;
+        }
+    }
+    float confidence = 1.0;
+    ReuseCell n = reuse_cells[pc.reuse_read + cell.x];
+    if (n.key == cell.y && n.check == reuse_checksum(n)) {
+        float c1 = min(n.confidence, params.reuse_confidence_cap);
+        confidence += c1;
+        // The writer's shading point and its target p̂₁ (ris_target reads s and d.bsdf).
+        Hit h1;
+        h1.valid = true;
+        h1.instance = n.instance;
+        h1.primitive = n.primitive;
+        h1.bary = n.bary;
+        h1.t = 0.0;
+        RisContext ctx1;
+        ctx1.s = make_surface(h1, -n.wo);
+        ctx1.d.bsdf = surface_bsdf_at(ctx1.s);
+        float w0 = 0.0;
+        if (res.found && res.W > 0.0) {
+            RisCandidate y0_there = reuse_candidate(reuse_light_at(light, light_bary, ctx1.s.p));
+            float p1 = ris_target(ctx1, y0_there);
+            w0 = res.p_hat * res.p_hat * res.W / (res.p_hat + c1 * p1);
+        }
+        float w1 = 0.0;
+        RisCandidate y1;
+        float p_hat1 = 0.0;
+        if (n.light != INVALID_INDEX && n.weight > 0.0) {
+            y1 = reuse_candidate(reuse_light_at(n.light, n.light_bary, ctx.s.p));
+            p_hat1 = ris_target(ctx, y1);
+            RisCandidate y1_there = reuse_candidate(reuse_light_at(n.light, n.light_bary, ctx1.s.p));
+            float p11 = ris_target(ctx1, y1_there);
+            float den = p_hat1 + c1 * p11;
+            if (den > 0.0) w1 = c1 * p11 * p_hat1 * n.weight / den;
+        }
+        float w_sum = w0 + w1;
+        TRACE5("  reuse: cell %u confidence %f w0=%f w1=%f (neighbour light %u)\n", cell.x, c1, w0, w1, n.light);
+        if (w1 > 0.0 && rng_next(rng) * w_sum < w1) {
+            res.y = y1;
+            res.p_hat = p_hat1;
+            res.extra_chosen = false;
+            light = n.light;
+            light_bary = n.light_bary;
+        }
+        res.found = w_sum > 0.0 && res.p_hat > 0.0;
+        res.W = res.found ? w_sum / res.p_hat : 0.0;
+        if (!res.found) light = INVALID_INDEX;
+    }
+    ReuseCell o;
+    o.key = cell.y;
+    o.instance = s_hit.instance;
+    o.primitive = s_hit.primitive;
+    o.light = light;
+    o.bary = s_hit.bary;
+    o.light_bary = light_bary;
+    o.wo = ctx.s.wo;
+    o.weight = res.found ? res.W : 0.0;
+    o.confidence = min(confidence, params.reuse_confidence_cap);
+    o.pad0 = 0u;
+    o.pad1 = 0u;
+    o.check = reuse_checksum(o);
+    reuse_cells[pc.reuse_write + cell.x] = o;
+}
+
+#endif
