@@ -141,7 +141,10 @@ class Renderer:
             ("all-passes", the default, "late-passes", "render-phase" or
             "inverse-variance"), ``learn_lights`` (bool,
             default True; False: the paper's light selection),
-            ``light_mix`` (a probability, "learned", or "auto"/None), ``traversal`` ("auto"/"ray-query"/"software"); and
+            ``light_mix`` (a probability, "learned", or "auto"/None), ``light_reuse``
+            ("off", the default, or "world": RIS reservoirs shared between samples through
+            a world-space hash grid; `ris` and `guided-ris`), ``reuse_cell_pixels``,
+            ``reuse_cap``, ``traversal`` ("auto"/"ray-query"/"software"); and
             ``validation`` (Vulkan validation layers),
             ``shader_dir`` (compile the GLSL kernels from a directory).
 

@@ -22,6 +22,9 @@ def cli_error(cli, *args):
         ({"ris_candidates": 0, "method": "ris"}, ["--ris-candidates", "0", "--method", "ris"]),
         ({"bsdf_fraction": 1.5, "method": "guided"}, ["--bsdf-fraction", "1.5", "--method", "guided"]),
         ({"light_mix": 1.0, "method": "guided"}, ["--light-mix", "1", "--method", "guided"]),
+        ({"light_reuse": "world", "method": "pt"}, ["--light-reuse", "world", "--method", "pt"]),
+        ({"light_reuse": "world", "method": "ris", "reuse_cap": 0.5},
+         ["--light-reuse", "world", "--method", "ris", "--reuse-cap", "0.5"]),
         ({"camera": "nope"}, ["--camera", "nope"]),
     ],
 )

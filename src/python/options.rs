@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 /// The keyword options `Renderer` accepts besides its named parameters.
-pub const OPTIONS: [&str; 24] = [
+pub const OPTIONS: [&str; 27] = [
     "rr_depth",
     "source",
     "ris_candidates",
@@ -33,6 +33,9 @@ pub const OPTIONS: [&str; 24] = [
     "guided_output",
     "learn_lights",
     "light_mix",
+    "light_reuse",
+    "reuse_cell_pixels",
+    "reuse_cap",
     "traversal",
     "validation",
     "shader_dir",
@@ -150,6 +153,12 @@ pub fn apply(
                 };
                 settings.guiding.set_light_mix(mix);
             }
+            "light_reuse" => {
+                settings.light_reuse.world =
+                    choice(&flag, &v.extract::<String>()?, ["world", "off"])?
+            }
+            "reuse_cell_pixels" => settings.light_reuse.cell_pixels = v.extract()?,
+            "reuse_cap" => settings.light_reuse.confidence_cap = v.extract()?,
             "traversal" => {
                 settings.traversal = value_enum::<Traversal>(&flag, &v.extract::<String>()?)?
             }

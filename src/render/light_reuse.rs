@@ -5,7 +5,8 @@
 //! A dispatch reads the half earlier dispatches wrote and writes the other, so no path
 //! sees a reservoir that depends on its own random numbers. Each range of samples the
 //! dispatch loop submits is one generation; with reuse on, the loop submits one sample
-//! per range, so that a reservoir found in one sample is offered to the next.
+//! per dispatch (the dispatches of a range in one submission, with barriers between
+//! them), so that a reservoir found in one sample is offered to the next.
 
 use super::{Renderer, Result};
 use crate::gpu;
@@ -69,8 +70,13 @@ impl Renderer {
 
     /// First cells of the halves the current generation reads and writes.
     pub(super) fn reuse_halves(&self) -> (u32, u32) {
+        self.reuse_halves_at(self.reuse_generation)
+    }
+
+    /// First cells of the halves generation `generation` reads and writes.
+    pub(super) fn reuse_halves_at(&self, generation: u64) -> (u32, u32) {
         let n = self.reuse_cell_count;
-        if self.reuse_generation % 2 == 0 {
+        if generation % 2 == 0 {
             (n, 0)
         } else {
             (0, n)
