@@ -48,10 +48,14 @@ fn includes(root: &Path) -> Vec<PathBuf> {
 /// `ris_target` the including kernel defines (closesthit.glsl for lights, the test kernel
 /// `tests/ris.comp` for a stub distribution, which compiles it in every build).
 ///
+/// `light_reuse.glsl` combines reservoirs of that same interface (closesthit.glsl's
+/// `RisContext`, whose `s` and `d.bsdf` its `ris_target` reads, and `RisCandidate`), and
+/// is compiled through closesthit.glsl.
+///
 /// `bvh.glsl` is the software half of `trace.glsl` (its `trace_closest` and `visible`
 /// under `LANTERNA_SOFTWARE_TRAVERSAL`), included by it at that point and compiled
 /// through it here.
-const BRIDGED: [&str; 2] = ["ris.glsl", "bvh.glsl"];
+const BRIDGED: [&str; 3] = ["ris.glsl", "light_reuse.glsl", "bvh.glsl"];
 
 /// The parts that hold the kernel's `main`.
 const HAS_MAIN: [&str; 2] = ["raygen.glsl", "render_main.glsl"];

@@ -30,6 +30,15 @@
 #ifndef INC_LIGHT_REUSE_GLSL
 #define INC_LIGHT_REUSE_GLSL
 
+#include "common.glsl"
+#include "scene_data.glsl"
+#include "random.glsl"
+#include "debug.glsl"
+#include "trace.glsl"
+#include "material.glsl"
+#include "lights.glsl"
+#include "ris.glsl"
+
 layout(constant_id = 9) const bool LIGHT_REUSE = false;
 layout(set = 0, binding = BINDING_REUSE_CELLS, scalar) buffer ReuseCellBuffer { ReuseCell reuse_cells[]; };
 
