@@ -243,8 +243,8 @@ pub struct EstimatorArgs {
     #[arg(long)]
     pub general_bsdf: bool,
     /// World-space light reuse (ris, guided-ris): each RIS vertex also considers the
-    /// light sample a vertex of the previous sample kept in its cell of a hash grid over
-    /// the scene, combined by generalized RIS (unbiased); off by default.
+    /// light sample that a vertex of an earlier sample left in a cell of a hash grid
+    /// over the scene near it, combined by generalized RIS (unbiased); off by default.
     #[arg(long, value_enum, default_value = "off")]
     pub light_reuse: LightReuseArg,
     /// World-space light reuse: a cell's edge in pixel footprints at its distance from

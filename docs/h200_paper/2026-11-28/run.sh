@@ -45,6 +45,16 @@ for r in 1 2; do
   done
 done
 snap
+# World-space light reuse (--light-reuse world, opt-in since 2026-11-28's third session):
+# ris and guided-ris with it, at the same spp and time as the defaults above. On lavapipe
+# its one dispatch per sample cost 17-43 %; a GPU's dispatches should cost far less.
+for s in street bistro-night; do
+  [ -f /tmp/ref_$s.exr ] || continue
+  [ $((SECONDS-t0)) -lt $LIMIT ] || break
+  log "$s light reuse"
+  timeout 90 $L --log info compare scenes/$s.gltf $W --reference /tmp/ref_$s.exr --seed 1 --methods ris,guided-ris --light-reuse world --spp $SP --time $TT --out-dir $R/$s-reuse-1 > $R/$s-reuse-1.log 2>&1 || tail -3 $R/$s-reuse-1.log
+  snap
+done
 for s in street bistro-night; do
   [ -f /tmp/ref_$s.exr ] || continue
   C="$L --log info compare scenes/$s.gltf $W --reference /tmp/ref_$s.exr"
