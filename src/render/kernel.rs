@@ -104,7 +104,7 @@ impl Renderer {
             ),
             (gpu::BINDING_PIXEL_EMITTERS, &self.pixel_emitter_pieces),
             (gpu::BINDING_PIXEL_EMITTER_FLAGS, &self.pixel_emitter_flags),
-            (gpu::BINDING_REUSE_CELLS, self.reuse_buffer()),
+            (gpu::BINDING_REUSE_CELLS, &self.reuse_cells),
         ];
         let mut table: Vec<(u32, Bound<'_>)> = buffers
             .into_iter()

@@ -82,10 +82,6 @@ impl Renderer {
             (0, n)
         }
     }
-
-    pub(super) fn reuse_buffer(&self) -> &Buffer {
-        &self.reuse_cells
-    }
 }
 
 #[cfg(test)]
