@@ -38,29 +38,16 @@
 #include "material.glsl"
 #include "lights.glsl"
 #include "ris.glsl"
+#include "world_grid.glsl"
 
 layout(constant_id = 9) const bool LIGHT_REUSE = false;
 layout(set = 0, binding = BINDING_REUSE_CELLS, scalar) buffer ReuseCellBuffer { ReuseCell reuse_cells[]; };
 
 // The cell of shading point p with geometric normal ng (on the side it was seen from),
-// moved by `jitter` cell edges along the tangents t and b: x its index in a half of the
-// grid, y its fingerprint (never 0, which marks empty).
+// moved by `jitter` cell edges along the tangents t and b (inc/world_grid.glsl): x its
+// index in a half of the grid, y its fingerprint (never 0, which marks empty).
 uvec2 reuse_cell_of(vec3 p, vec3 ng, vec3 t, vec3 b, vec2 jitter) {
-    vec3 eye = params.camera_to_world[3].xyz;
-    float footprint = params.camera_type == CAMERA_ORTHOGRAPHIC
-        ? 2.0 * params.ortho_half_extent.y / float(params.height)
-        : 2.0 * params.tan_half_fov_y * distance(p, eye) / float(params.height);
-    float size = max(footprint * params.reuse_cell_pixels, 1e-6 * params.scene_radius);
-    // Power-of-two edges: neighbouring points at slightly different distances share a
-    // cell, and the level is part of the key.
-    int level = clamp(int(ceil(log2(max(size, 1e-30)))), -120, 120);
-    float edge = exp2(float(level));
-    p += edge * (jitter.x * t + jitter.y * b);
-    vec3 q = clamp(floor(p * exp2(float(-level))), vec3(-1073741824.0), vec3(1073741824.0));
-    vec3 a = abs(ng);
-    uint axis = a.x >= a.y && a.x >= a.z ? 0u : (a.y >= a.z ? 1u : 2u);
-    uint side = axis * 2u + (ng[axis] < 0.0 ? 1u : 0u);
-    uvec4 h = pcg4d(uvec4(uvec3(ivec3(q)), uint(level + 128) * 8u + side));
+    uvec4 h = world_cell_hash(p, ng, t, b, jitter, params.reuse_cell_pixels);
     return uvec2(h.x & (params.reuse_cells - 1u), h.y | 1u);
 }
 
