@@ -28,6 +28,7 @@
 #include "inc/guiding.glsl"
 #include "inc/lights.glsl"
 #include "inc/reservoir.glsl"
+#include "inc/light_visibility.glsl"
 
 // ---- direction sampling: BSDF / guiding mixture -----------------------------------------
 
@@ -334,7 +335,13 @@ void sample_vertex(Surface s, DirectionSampler d, vec3 medium, inout Rng rng, ou
 struct RisContext {
     Surface s;
     DirectionSampler d;
+    uvec2 vis_cell;  // the shading point's cell of learned light visibility (LIGHT_VISIBILITY)
 };
+
+// The RIS context of shading point s.
+RisContext ris_context(Surface s, DirectionSampler d) {
+    return RisContext(s, d, LIGHT_VISIBILITY ? visibility_cell(s.p, s.ng) : uvec2(0u));
+}
 
 struct RisCandidate {
     LightSample ls;    // Le_G: the target's emission (see ris_target)
@@ -367,7 +374,11 @@ RisCandidate ris_draw(RisContext ctx, vec4 u) {
 // ris_denominator.
 float ris_target(RisContext ctx, inout RisCandidate c) {
     c.f = surface_bsdf_eval_pdf(ctx.s, ctx.d.bsdf, c.ls.wi, c.bsdf_pdf);
-    return luminance(c.f * c.ls.Le_G);
+    float p = luminance(c.f * c.ls.Le_G);
+    // Learned light visibility (inc/light_visibility.glsl): a factor in [floor, 1] per
+    // light model, fixed for the dispatch.
+    if (LIGHT_VISIBILITY && p > 0.0) p *= visibility_factor(ctx.vis_cell, c.ls.model);
+    return p;
 }
 
 void ris_keep_target(inout RisCandidate into, RisCandidate c) {
@@ -408,7 +419,7 @@ NeeResult nee_ris(Surface s, Hit s_hit, DirectionSampler d, DirectionSample ds, 
     NeeResult r = nee_none();
     if (params.strategy == STRATEGY_BSDF_ONLY) return r;
     d.lights = light_context_for_ris(d.lights);
-    RisContext ctx = RisContext(s, d);
+    RisContext ctx = ris_context(s, d);
     RisCandidate extra;
     // Emitters NEE cannot sample (not in the light table) stay with direction sampling.
     bool has_extra = params.strategy == STRATEGY_MIS && ds.valid && hit_next && max3(next.emission) > 0.0

@@ -251,6 +251,7 @@ pub fn render_batches_on(
     let mut images = Vec::new();
     for b in 0..batches as u64 {
         r.clear_film().unwrap();
+        r.clear_light_visibility().unwrap();
         r.render_samples(b * spp, spp, false, &cancel, &mut |_| {}, &mut stats)
             .expect("render");
         images.push(r.film().unwrap().mean());

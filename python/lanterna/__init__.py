@@ -144,7 +144,10 @@ class Renderer:
             ``light_mix`` (a probability, "learned", or "auto"/None), ``light_reuse``
             ("off", the default, or "world": RIS reservoirs shared between samples through
             a world-space hash grid; `ris` and `guided-ris`), ``reuse_cell_pixels``,
-            ``reuse_cap``, ``traversal`` ("auto"/"ray-query"/"software"); and
+            ``reuse_cap``, ``light_visibility`` ("off", the default, or "learned": RIS's
+            target weighs each light by its learned unoccluded share; `ris` and
+            `guided-ris`), ``visibility_cell_pixels``, ``visibility_floor``, ``traversal``
+            ("auto"/"ray-query"/"software"); and
             ``validation`` (Vulkan validation layers),
             ``shader_dir`` (compile the GLSL kernels from a directory).
 

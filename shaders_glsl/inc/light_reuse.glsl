@@ -39,6 +39,7 @@
 #include "lights.glsl"
 #include "ris.glsl"
 #include "world_grid.glsl"
+#include "light_visibility.glsl"
 
 layout(constant_id = 9) const bool LIGHT_REUSE = false;
 layout(set = 0, binding = BINDING_REUSE_CELLS, scalar) buffer ReuseCellBuffer { ReuseCell reuse_cells[]; };
@@ -118,6 +119,7 @@ void reuse_resample(RisContext ctx, Hit s_hit, vec2 extra_bary, inout RisResult 
         RisContext ctx1;
         ctx1.s = make_surface(h1, -n.wo);
         ctx1.d.bsdf = surface_bsdf_at(ctx1.s);
+        ctx1.vis_cell = LIGHT_VISIBILITY ? visibility_cell(ctx1.s.p, ctx1.s.ng) : uvec2(0u);
         float w0 = 0.0;
         if (res.found && res.W > 0.0) {
             RisCandidate y0_there = reuse_candidate(reuse_light_at(light, light_bary, ctx1.s.p));

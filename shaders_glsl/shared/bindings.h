@@ -45,7 +45,10 @@
 #define BINDING_VERTEX_COLORS 32
 // World-space light reuse (--light-reuse world): the hash grid's two halves of ReuseCell.
 #define BINDING_REUSE_CELLS 33
-#define BINDING_COUNT 34
+// Learned light visibility (--light-visibility learned): a snapshot half and a live half
+// of per-(cell, light model) shadow-ray counts.
+#define BINDING_LIGHT_VISIBILITY 34
+#define BINDING_COUNT 35
 
 // Upper bound on bindless textures in one scene.
 #define MAX_TEXTURES 8192

@@ -190,6 +190,14 @@ struct FrameParams {
     uint reuse_cells;
     float reuse_cell_pixels;
     float reuse_confidence_cap;
+    // Learned light visibility (inc/light_visibility.glsl): the table's device address
+    // (0 when read through its binding), its entries per half (a power of two; 0 when
+    // off), a cell's edge in pixel footprints, and the least factor a learned visibility
+    // gives a light's target.
+    uvec2 visibility_address;
+    uint visibility_slots;
+    float visibility_cell_pixels;
+    float visibility_floor;
 };
 
 // One cell of the world-space light reuse's hash grid (inc/light_reuse.glsl): the RIS

@@ -255,6 +255,26 @@ pub struct EstimatorArgs {
     /// against the vertex's own.
     #[arg(long, default_value_t = lanterna::render::DEFAULT_REUSE_CAP)]
     pub reuse_cap: f32,
+    /// Learned light visibility (ris, guided-ris): RIS's target also weighs each light
+    /// by how often shadow rays from near the shading point found it unoccluded in
+    /// earlier dispatches (unbiased: the shadow ray still decides); off by default.
+    #[arg(long, value_enum, default_value = "off")]
+    pub light_visibility: LightVisibilityArg,
+    /// Learned light visibility: a cell's edge in pixel footprints at its distance from
+    /// the camera.
+    #[arg(long, default_value_t = lanterna::render::DEFAULT_VISIBILITY_CELL_PIXELS)]
+    pub visibility_cell_pixels: f32,
+    /// Learned light visibility: the least factor it gives a light, in (0, 1].
+    #[arg(long, default_value_t = lanterna::render::DEFAULT_VISIBILITY_FLOOR)]
+    pub visibility_floor: f32,
+}
+
+/// `--light-visibility`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum LightVisibilityArg {
+    Off,
+    /// Unoccluded fractions per light model, counted in a hash grid in world space.
+    Learned,
 }
 
 /// `--light-reuse`.
@@ -343,6 +363,11 @@ impl EstimatorArgs {
                 world: self.light_reuse == LightReuseArg::World,
                 cell_pixels: self.reuse_cell_pixels,
                 confidence_cap: self.reuse_cap,
+            },
+            light_visibility: lanterna::render::LightVisibility {
+                learned: self.light_visibility == LightVisibilityArg::Learned,
+                cell_pixels: self.visibility_cell_pixels,
+                floor: self.visibility_floor,
             },
             ..RenderSettings::default()
         };

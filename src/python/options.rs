@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 /// The keyword options `Renderer` accepts besides its named parameters.
-pub const OPTIONS: [&str; 27] = [
+pub const OPTIONS: [&str; 30] = [
     "rr_depth",
     "source",
     "ris_candidates",
@@ -36,6 +36,9 @@ pub const OPTIONS: [&str; 27] = [
     "light_reuse",
     "reuse_cell_pixels",
     "reuse_cap",
+    "light_visibility",
+    "visibility_cell_pixels",
+    "visibility_floor",
     "traversal",
     "validation",
     "shader_dir",
@@ -159,6 +162,12 @@ pub fn apply(
             }
             "reuse_cell_pixels" => settings.light_reuse.cell_pixels = v.extract()?,
             "reuse_cap" => settings.light_reuse.confidence_cap = v.extract()?,
+            "light_visibility" => {
+                settings.light_visibility.learned =
+                    choice(&flag, &v.extract::<String>()?, ["learned", "off"])?
+            }
+            "visibility_cell_pixels" => settings.light_visibility.cell_pixels = v.extract()?,
+            "visibility_floor" => settings.light_visibility.floor = v.extract()?,
             "traversal" => {
                 settings.traversal = value_enum::<Traversal>(&flag, &v.extract::<String>()?)?
             }

@@ -67,6 +67,8 @@ impl Renderer {
         self.debug_sample = traced.unwrap_or(gpu::INVALID_INDEX);
         self.clear_film()?;
         self.ensure_reuse_cells()?;
+        self.ensure_visibility_table()?;
+        self.clear_light_visibility()?;
         self.film_offset = begin;
         self.upload_params()?;
         let mut v = self.variant(false);
@@ -120,10 +122,12 @@ impl Renderer {
             ));
         }
         self.ensure_reuse_cells()?;
+        self.ensure_visibility_table()?;
         let v = self.variant(training);
         self.pipeline(v)?;
         let set = self.descriptor_set(v)?;
         let reuse = self.reuses_lights();
+        let visibility = self.learns_visibility();
         if self.film_spp == 0 && self.film_offset != begin {
             self.film_offset = begin;
             self.upload_params()?;
@@ -164,6 +168,15 @@ impl Renderer {
             // (Four samples per generation cost lavapipe less, ×1.10–1.20 against
             // ×1.14–1.43, but lost the gain: a pixel's samples then reuse the same
             // reservoirs; README, "World-space light reuse".)
+            // With learned light visibility the samples go in dispatches that grow as the
+            // counts do, the snapshot refreshed between them (light_visibility.rs).
+            let sizes: Vec<u64> = if reuse {
+                vec![1; spp as usize]
+            } else if visibility {
+                super::light_visibility::generations(self.visibility_samples, spp)
+            } else {
+                vec![spp]
+            };
             let generations = if reuse { spp } else { 1 };
             for band in 0..bands {
                 let y0 = band * band_rows;
@@ -171,25 +184,29 @@ impl Renderer {
                     break;
                 }
                 let rows = band_rows.min(h - y0);
-                let pushes: Vec<gpu::PushConstants> = (0..generations)
-                    .map(|g| {
-                        let (begin, count) = if reuse {
-                            (begin + done + g, 1)
-                        } else {
-                            (begin + done, spp)
-                        };
+                let mut first = begin + done;
+                let pushes: Vec<gpu::PushConstants> = sizes
+                    .iter()
+                    .enumerate()
+                    .map(|(g, &count)| {
                         let mut push =
-                            self.push_constants([0, y0], [w, rows], begin as u32, count as u32);
+                            self.push_constants([0, y0], [w, rows], first as u32, count as u32);
+                        first += count;
                         (push.reuse_read, push.reuse_write) =
-                            self.reuse_halves_at(self.reuse_generation + g);
+                            self.reuse_halves_at(self.reuse_generation + g as u64);
                         push
                     })
                     .collect();
                 let device = &self.device;
+                // The snapshot is refreshed before every dispatch but a render's first
+                // (earlier submissions' counts included).
+                let learned = self.visibility_samples > 0 || band > 0;
                 let (_, gpu_time) = self.device.submit_timed(
                     |cmd| {
                         for (i, push) in pushes.iter().enumerate() {
-                            if i > 0 {
+                            if visibility && (i > 0 || learned) {
+                                self.cmd_refresh_visibility(cmd);
+                            } else if i > 0 {
                                 device.full_barrier(cmd);
                             }
                             pipeline.cmd_dispatch(
@@ -207,6 +224,9 @@ impl Renderer {
             let elapsed = chunk_started.elapsed().as_secs_f64();
             self.seconds_per_sample = Some(elapsed / spp as f64);
             self.reuse_generation += generations;
+            if visibility {
+                self.visibility_samples += spp;
+            }
             done += spp;
             self.film_spp += spp;
             progress(done);

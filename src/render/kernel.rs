@@ -30,6 +30,8 @@ pub(super) struct Variant {
     pub bsdf: u32,
     /// World-space light reuse (`light_reuse.rs`; RIS methods).
     pub reuse: bool,
+    /// Learned light visibility in RIS's target (`light_visibility.rs`; RIS methods).
+    pub visibility: bool,
 }
 
 /// Texture slots of the descriptor-set layout come in multiples of this many.
@@ -105,6 +107,7 @@ impl Renderer {
             (gpu::BINDING_PIXEL_EMITTERS, &self.pixel_emitter_pieces),
             (gpu::BINDING_PIXEL_EMITTER_FLAGS, &self.pixel_emitter_flags),
             (gpu::BINDING_REUSE_CELLS, &self.reuse_cells),
+            (gpu::BINDING_LIGHT_VISIBILITY, &self.visibility),
         ];
         let mut table: Vec<(u32, Bound<'_>)> = buffers
             .into_iter()
@@ -180,16 +183,17 @@ impl Renderer {
                 self.scene_addresses() as u32,
                 v.bsdf,
                 v.reuse as u32,
+                v.visibility as u32,
             ];
             let name = format!(
-                "render (ris={}, guiding={}, training={}, aovs={}, solids={}, clearcoat={}, sheen={}, bsdf={}, reuse={}, debug={}, lanes={}, traversal={})",
-                v.ris, v.guiding, v.training, v.aovs, v.solids, v.clearcoat, v.sheen, v.bsdf, v.reuse, v.debug, v.lanes, self.traversal.kind
+                "render (ris={}, guiding={}, training={}, aovs={}, solids={}, clearcoat={}, sheen={}, bsdf={}, reuse={}, visibility={}, debug={}, lanes={}, traversal={})",
+                v.ris, v.guiding, v.training, v.aovs, v.solids, v.clearcoat, v.sheen, v.bsdf, v.reuse, v.visibility, v.debug, v.lanes, self.traversal.kind
             );
             requests.push((v, spirv, spec, name));
         }
         let bindings = self.bindings();
         let device = &self.device;
-        let create = |(v, spirv, spec, name): &(Variant, Vec<u32>, [u32; 10], String)| {
+        let create = |(v, spirv, spec, name): &(Variant, Vec<u32>, [u32; 11], String)| {
             let started = Instant::now();
             let p = ComputePipeline::new(
                 device,
@@ -329,6 +333,7 @@ impl Renderer {
             sheen: self.has_sheen,
             bsdf: self.bsdf_kernel(),
             reuse: self.settings.light_reuse.world && method.uses_ris(),
+            visibility: self.settings.light_visibility.learned && method.uses_ris(),
         }
     }
 

@@ -20,6 +20,7 @@ mod guide_buffers;
 mod guided;
 mod kernel;
 mod light_reuse;
+mod light_visibility;
 mod limits;
 pub mod output;
 mod pass_output;
@@ -38,8 +39,9 @@ pub use guide_buffers::GuideBuffers;
 pub use guided::{train, GuidingOutcome, IterationStats, Training, TrainingPlan};
 pub use readback::Outlier;
 pub use settings::{
-    GuidedOutput, GuidingSettings, LightMix, LightReuse, LightSource, Method, RenderSettings,
-    SettingsError, Strategy, DEFAULT_GUIDE_HISTORY, DEFAULT_REUSE_CAP, DEFAULT_REUSE_CELL_PIXELS,
+    GuidedOutput, GuidingSettings, LightMix, LightReuse, LightSource, LightVisibility, Method,
+    RenderSettings, SettingsError, Strategy, DEFAULT_GUIDE_HISTORY, DEFAULT_REUSE_CAP,
+    DEFAULT_REUSE_CELL_PIXELS, DEFAULT_VISIBILITY_CELL_PIXELS, DEFAULT_VISIBILITY_FLOOR,
 };
 pub use traversal::{Traversal, TraversalChoice, TraversalKind};
 
@@ -182,6 +184,12 @@ pub struct Renderer {
     /// Dispatch generations since the grid was cleared: generation g writes half g mod 2
     /// and reads the other.
     reuse_generation: u64,
+    /// Learned light visibility's table (`light_visibility.rs`): a snapshot half and a
+    /// live half of `visibility_slots` entries; a placeholder until a render learns.
+    visibility: Buffer,
+    visibility_slots: u32,
+    /// Samples rendered since the table was cleared (sizes the next dispatches).
+    visibility_samples: u64,
     /// A trained SD-tree to render with instead of training (`--load-guiding`).
     pub preloaded_tree: Option<crate::guiding::SdTree>,
     /// Scene bounds (the SD-tree's cube is made from them).
@@ -242,6 +250,7 @@ impl Renderer {
         let outliers = Buffer::zeroed(&device, outlier_floats * 4, usage, "outliers")?;
         let guide = GuideBuffers::empty(&device)?;
         let reuse_cells = Buffer::zeroed(&device, 64, usage, "light reuse cells (unused)")?;
+        let visibility = Buffer::zeroed(&device, 64, usage, "light visibility (unused)")?;
         let emitters =
             pixel_emitters::build(&camera, settings.width, settings.height, &lights.triangles);
         log::info!(
@@ -295,6 +304,9 @@ impl Renderer {
             reuse_cells,
             reuse_cell_count: 0,
             reuse_generation: 0,
+            visibility,
+            visibility_slots: 0,
+            visibility_samples: 0,
             preloaded_tree: None,
             bounds: (scene.bounds_min, scene.bounds_max),
             scene_hash: scene.hash.clone(),
@@ -398,6 +410,18 @@ impl Renderer {
             },
             reuse_cell_pixels: s.light_reuse.cell_pixels,
             reuse_confidence_cap: s.light_reuse.confidence_cap,
+            visibility_address: split(if self.scene_addresses() {
+                self.visibility.address
+            } else {
+                0
+            }),
+            visibility_slots: if s.light_visibility.learned {
+                self.visibility_slots
+            } else {
+                0
+            },
+            visibility_cell_pixels: s.light_visibility.cell_pixels,
+            visibility_floor: s.light_visibility.floor,
         }
     }
 

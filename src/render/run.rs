@@ -16,6 +16,9 @@ pub fn run_method(
     progress: &mut dyn FnMut(u64),
 ) -> Result<RunOutcome> {
     budget.check(first)?;
+    // Learned light visibility starts from nothing in every render (and persists over a
+    // guided render's passes).
+    renderer.clear_light_visibility()?;
     if renderer.settings.method.uses_guiding() {
         return super::guided::run_guided(renderer, budget, first, cancel, progress);
     }

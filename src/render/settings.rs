@@ -271,8 +271,43 @@ pub struct RenderSettings {
     /// methods only; off by default).
     #[serde(default)]
     pub light_reuse: LightReuse,
+    /// Learned light visibility in RIS's target (`--light-visibility`; RIS methods only;
+    /// off by default).
+    #[serde(default)]
+    pub light_visibility: LightVisibility,
     pub guiding: GuidingSettings,
 }
+
+/// Learned light visibility (`shaders_glsl/inc/light_visibility.glsl`): RIS's target
+/// p̂ = Le·f·G times each light model's unoccluded fraction, counted per cell of a
+/// world-space hash grid from the shadow rays of earlier dispatches; unbiased.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LightVisibility {
+    /// Learned visibility on (`--light-visibility learned`) or off.
+    pub learned: bool,
+    /// A cell's edge in pixel footprints at its distance from the camera
+    /// (`--visibility-cell-pixels`; rounded to a power of two in world units).
+    pub cell_pixels: f32,
+    /// The least factor a learned visibility gives a light's target
+    /// (`--visibility-floor`, in (0, 1]): bounds how much an occluded-looking light's
+    /// samples can weigh when it is visible after all.
+    pub floor: f32,
+}
+
+impl Default for LightVisibility {
+    fn default() -> Self {
+        LightVisibility {
+            learned: false,
+            cell_pixels: DEFAULT_VISIBILITY_CELL_PIXELS,
+            floor: DEFAULT_VISIBILITY_FLOOR,
+        }
+    }
+}
+
+/// Default `--visibility-cell-pixels`.
+pub const DEFAULT_VISIBILITY_CELL_PIXELS: f32 = 4.0;
+/// Default `--visibility-floor`.
+pub const DEFAULT_VISIBILITY_FLOOR: f32 = 0.1;
 
 /// World-space light reuse (`shaders_glsl/inc/light_reuse.glsl`): each RIS vertex
 /// combines its reservoir with the one a vertex of an earlier dispatch left in its cell
@@ -323,6 +358,7 @@ impl Default for RenderSettings {
             scene_addresses: None,
             lambertian_shortcut: true,
             light_reuse: LightReuse::default(),
+            light_visibility: LightVisibility::default(),
             fov_degrees: None,
             exposure: 0.0,
             aovs: false,
@@ -446,6 +482,31 @@ impl RenderSettings {
                 "--reuse-cap",
                 r.confidence_cap.to_string(),
                 "must be a number of reservoirs in [1, 1e6]".into(),
+            );
+        }
+        let v = &self.light_visibility;
+        if v.learned && !self.method.uses_ris() {
+            return bad(
+                "--light-visibility",
+                "learned".into(),
+                format!(
+                    "weights RIS's target: it needs --method ris or guided-ris, not {}",
+                    self.method.name()
+                ),
+            );
+        }
+        if !(v.cell_pixels.is_finite() && (0.25..=65536.0).contains(&v.cell_pixels)) {
+            return bad(
+                "--visibility-cell-pixels",
+                v.cell_pixels.to_string(),
+                "must be a cell size in pixels, in [0.25, 65536]".into(),
+            );
+        }
+        if !(v.floor.is_finite() && v.floor > 0.0 && v.floor <= 1.0) {
+            return bad(
+                "--visibility-floor",
+                v.floor.to_string(),
+                "must be a factor in (0, 1]: a learned visibility may not rule a light out".into(),
             );
         }
         self.guiding.validate()
@@ -618,6 +679,22 @@ mod tests {
             (
                 "--reuse-cap",
                 Box::new(|s| s.light_reuse.confidence_cap = 0.5),
+            ),
+            (
+                "--light-visibility",
+                Box::new(|s| s.light_visibility.learned = true),
+            ),
+            (
+                "--visibility-cell-pixels",
+                Box::new(|s| s.light_visibility.cell_pixels = 0.0),
+            ),
+            (
+                "--visibility-floor",
+                Box::new(|s| s.light_visibility.floor = 0.0),
+            ),
+            (
+                "--visibility-floor",
+                Box::new(|s| s.light_visibility.floor = 1.5),
             ),
             ("--emission-rays", Box::new(|s| s.emission_rays = 0)),
             ("--emission-rays", Box::new(|s| s.emission_rays = 65)),

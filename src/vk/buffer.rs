@@ -187,6 +187,20 @@ impl Buffer {
         };
     }
 
+    /// Record a copy of `size` bytes at `from` to `to` in the same buffer (the ranges
+    /// must not overlap).
+    pub fn cmd_copy_within(&self, cmd: vk::CommandBuffer, from: u64, to: u64, size: u64) {
+        let region = [vk::BufferCopy::default()
+            .src_offset(from)
+            .dst_offset(to)
+            .size(size)];
+        unsafe {
+            self.device
+                .raw
+                .cmd_copy_buffer(cmd, self.raw, self.raw, &region)
+        };
+    }
+
     /// Read the first `len` bytes back (through a staging buffer).
     pub fn read_bytes(&self, len: u64) -> Result<Vec<u8>> {
         self.read_with(len, <[u8]>::to_vec)
