@@ -80,6 +80,8 @@ struct Config {
     history: f32,
     /// `--light-reuse world` (RIS methods).
     light_reuse: bool,
+    /// `--light-visibility learned` (RIS methods).
+    light_visibility: bool,
 }
 
 const fn config(name: &'static str, method: Method, strategy: Strategy) -> Config {
@@ -95,6 +97,7 @@ const fn config(name: &'static str, method: Method, strategy: Strategy) -> Confi
         spatial_filter: SpatialFilter::Nearest,
         history: 0.0,
         light_reuse: false,
+        light_visibility: false,
     }
 }
 
@@ -162,6 +165,18 @@ const RIS_REUSE: Config = Config {
 const GUIDED_RIS_REUSE: Config = Config {
     name: "guided-ris --light-reuse world",
     light_reuse: true,
+    ..GUIDED_RIS
+};
+
+// Learned light visibility in RIS's target (opt-in), at its default cells and floor.
+const RIS_VISIBILITY: Config = Config {
+    name: "ris --light-visibility learned",
+    light_visibility: true,
+    ..RIS
+};
+const GUIDED_RIS_VISIBILITY: Config = Config {
+    name: "guided-ris --light-visibility learned",
+    light_visibility: true,
     ..GUIDED_RIS
 };
 
@@ -324,6 +339,10 @@ fn render(ts: &TestScene, c: Config, max_depth: u32, batches: u32, spp: u64) -> 
         },
         light_reuse: lanterna::render::LightReuse {
             world: c.light_reuse,
+            ..Default::default()
+        },
+        light_visibility: lanterna::render::LightVisibility {
+            learned: c.light_visibility,
             ..Default::default()
         },
         ..testing::settings(c.method, WIDTH, HEIGHT)
@@ -494,6 +513,22 @@ fn sconces_light_reuse() {
         &ts,
         4,
         &[RIS_REUSE, GUIDED_RIS_REUSE],
+        16,
+        128,
+    );
+}
+
+/// Learned light visibility (`--light-visibility learned`) with indirect light: `ris` and
+/// `guided-ris` with each light's target weighted by its learned unoccluded share, at the
+/// default cells and floor.
+#[test]
+fn sconces_learned_visibility() {
+    let ts = scene(Kind::Sconces, None);
+    run_suite(
+        "sconces-d4",
+        &ts,
+        4,
+        &[RIS_VISIBILITY, GUIDED_RIS_VISIBILITY],
         16,
         128,
     );

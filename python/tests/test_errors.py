@@ -25,6 +25,10 @@ def cli_error(cli, *args):
         ({"light_reuse": "world", "method": "pt"}, ["--light-reuse", "world", "--method", "pt"]),
         ({"light_reuse": "world", "method": "ris", "reuse_cap": 0.5},
          ["--light-reuse", "world", "--method", "ris", "--reuse-cap", "0.5"]),
+        ({"light_visibility": "learned", "method": "guided"},
+         ["--light-visibility", "learned", "--method", "guided"]),
+        ({"light_visibility": "learned", "method": "ris", "visibility_floor": 0.0},
+         ["--light-visibility", "learned", "--method", "ris", "--visibility-floor", "0"]),
         ({"camera": "nope"}, ["--camera", "nope"]),
     ],
 )
