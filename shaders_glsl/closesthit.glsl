@@ -196,6 +196,7 @@ struct NeeResult {
     float record_value;  // mean-RGB incident radiance / pdf along record_dir (0: none)
     float record_pdf;    // solid-angle pdf of record_dir, as the record's value divides by
     uint chosen_model;   // light model NEE picked (AOV), INVALID_INDEX if none
+    uvec2 vis_cell;      // RIS's cell of learned light visibility (LIGHT_VISIBILITY)
     bool connected;      // the shadow ray found the light visible
     float ris_weight;    // RIS contribution weight W (0 without RIS)
     // The shadow ray that decides it, when one does: the path loop traces it (raygen's
@@ -211,6 +212,7 @@ NeeResult nee_none() {
     r.record_value = 0.0;
     r.record_pdf = 0.0;
     r.chosen_model = INVALID_INDEX;
+    r.vis_cell = uvec2(0u);
     r.connected = false;
     r.ris_weight = 0.0;
     r.needs_shadow_ray = false;
@@ -453,6 +455,7 @@ NeeResult nee_ris(Surface s, Hit s_hit, DirectionSampler d, DirectionSample ds, 
     if (LIGHT_REUSE) reuse_resample(ctx, s_hit, next_bary, res, rng);
     if (!res.found) return r;
     r.chosen_model = res.y.ls.model;
+    r.vis_cell = ctx.vis_cell;
     r.ris_weight = res.W;
     // The extra candidate's visibility is known: its ray hit it.
     if (res.extra_chosen) r.connected = true;

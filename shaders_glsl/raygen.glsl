@@ -285,7 +285,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
             nee_resolve(nee, !hit.valid);
             // Learned light visibility counts what the shadow ray toward RIS's light said.
             if (LIGHT_VISIBILITY && NEE_MODE == NEE_RIS && nee.chosen_model != INVALID_INDEX)
-                visibility_learn(visibility_cell(s.p, s.ng), nee.chosen_model, nee.connected);
+                visibility_learn(nee.vis_cell, nee.chosen_model, nee.connected);
             TRACE2("  nee visible=%u contribution=%v3f\n", uint(nee.connected), nee.contribution);
             L += beta * nee.contribution;
             if (nee.connected) info.lights_connected += 1.0;

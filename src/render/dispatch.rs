@@ -177,7 +177,6 @@ impl Renderer {
             } else {
                 vec![spp]
             };
-            let generations = if reuse { spp } else { 1 };
             for band in 0..bands {
                 let y0 = band * band_rows;
                 if y0 >= h {
@@ -223,7 +222,7 @@ impl Renderer {
             }
             let elapsed = chunk_started.elapsed().as_secs_f64();
             self.seconds_per_sample = Some(elapsed / spp as f64);
-            self.reuse_generation += generations;
+            self.reuse_generation += sizes.len() as u64;
             if visibility {
                 self.visibility_samples += spp;
             }
