@@ -378,6 +378,30 @@ pub fn assert_agree(
     p
 }
 
+/// `settings` (any method; guided ones train on each batch's own sample range, as in
+/// [`run_batches`]) converges to `pt`'s image of the same size: `batches` independent
+/// batches of `spp` each on both sides (`pt` with seed 21), compared with [`assert_agree`]
+/// over 4-pixel blocks at `alpha`; then no validation errors.
+pub fn assert_agrees_with_pt(
+    t: &TestScene,
+    settings: RenderSettings,
+    batches: u32,
+    spp: u64,
+    alpha: f64,
+    what: &str,
+) {
+    let mut pt = self::settings(crate::render::Method::Pt, settings.width, settings.height);
+    pt.seed = 21;
+    let a = render_batches(&t.scene, &t.camera, pt, batches, spp);
+    let b = if settings.method.uses_guiding() {
+        run_batches(&t.scene, &t.camera, settings, batches, spp)
+    } else {
+        render_batches(&t.scene, &t.camera, settings, batches, spp)
+    };
+    assert_agree(&a, &b, 4, alpha, alpha, what);
+    assert_no_validation_errors();
+}
+
 /// Two renders agree in expectation: Welch's t-test per block and channel, with the
 /// family-wise significance `alpha` split over all comparisons (Šidák). Returns the
 /// smallest p-value; panics naming the worst block. A bias spread over the whole image

@@ -8,7 +8,7 @@
 
 use lanterna::render::{LightReuse, Method, RenderSettings};
 use lanterna::scene::generate::{Kind, Options};
-use lanterna::testing::{self, render_batches, run_batches};
+use lanterna::testing;
 
 const ALPHA: f64 = 1e-3;
 
@@ -21,19 +21,10 @@ fn reuse(s: &mut RenderSettings) {
 }
 
 fn agree(t: &testing::TestScene, method: Method, w: u32, h: u32, spp: u64) {
-    let mut pt = testing::settings(Method::Pt, w, h);
-    pt.seed = 21;
     let mut with_reuse = testing::settings(method, w, h);
     with_reuse.seed = 22;
     reuse(&mut with_reuse);
-    let a = render_batches(&t.scene, &t.camera, pt, 16, spp);
-    let b = if method.uses_guiding() {
-        run_batches(&t.scene, &t.camera, with_reuse, 16, spp)
-    } else {
-        render_batches(&t.scene, &t.camera, with_reuse, 16, spp)
-    };
-    testing::assert_agree(&a, &b, 4, ALPHA, ALPHA, "light reuse against pt");
-    testing::assert_no_validation_errors();
+    testing::assert_agrees_with_pt(t, with_reuse, 16, spp, ALPHA, "light reuse against pt");
 }
 
 #[test]

@@ -16,7 +16,7 @@
 
 use lanterna::render::{LightReuse, LightVisibility, Method, RenderSettings};
 use lanterna::scene::generate::{Kind, Options};
-use lanterna::testing::{self, render_batches, render_once, run_batches};
+use lanterna::testing::{self, render_once};
 
 const ALPHA: f64 = 1e-3;
 
@@ -29,8 +29,6 @@ fn learned(s: &mut RenderSettings) {
 }
 
 fn agree(t: &testing::TestScene, method: Method, w: u32, h: u32, spp: u64, reuse: bool) {
-    let mut pt = testing::settings(Method::Pt, w, h);
-    pt.seed = 31;
     let mut with = testing::settings(method, w, h);
     with.seed = 32;
     learned(&mut with);
@@ -40,21 +38,8 @@ fn agree(t: &testing::TestScene, method: Method, w: u32, h: u32, spp: u64, reuse
             ..LightReuse::default()
         };
     }
-    let a = render_batches(&t.scene, &t.camera, pt, 16, spp);
-    let b = if method.uses_guiding() {
-        run_batches(&t.scene, &t.camera, with, 16, spp)
-    } else {
-        render_batches(&t.scene, &t.camera, with, 16, spp)
-    };
-    testing::assert_agree(
-        &a,
-        &b,
-        4,
-        ALPHA,
-        ALPHA,
-        "learned light visibility against pt",
-    );
-    testing::assert_no_validation_errors();
+    let what = "learned light visibility against pt";
+    testing::assert_agrees_with_pt(t, with, 16, spp, ALPHA, what);
 }
 
 fn small_street() -> testing::TestScene {
