@@ -127,7 +127,7 @@ class Renderer:
         device: Vulkan device by index or name substring (default: the best capable).
         load_guiding: a saved SD-tree (``save_guiding``) for guided renders to use.
         **options: the command line's other estimator flags with ``_`` for ``-``:
-            ``rr_depth``, ``source`` ("uniform"/"power"), ``ris_candidates``,
+            ``rr_depth``, ``source`` ("uniform"/"power"/"tree"), ``ris_candidates``,
             ``bsdf_fraction``, ``selection_learner`` ("variance", the default, or
             "kl-adam"), ``train_fraction``, ``record_nee`` (bool),
             ``guide_target`` ("all"/"indirect"/"contribution"), ``guide_density``

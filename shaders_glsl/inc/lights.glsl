@@ -1,6 +1,7 @@
-// Light sampling from the source distribution q: a light model (uniformly, or by power
-// through an alias table), then one of its triangles (uniformly, or by power), then a
-// uniform point on it — or the punctual light the model stands for. Also the density q
+// Light sampling from the source distribution q: a light model (uniformly, by power
+// through an alias table, or by the light tree at the shading point), then one of its
+// triangles (uniformly, or by power), then a uniform point on it — or the punctual light
+// the model stands for. Also the density q
 // of a given light point (for MIS), and emitted radiance at a light point.
 #ifndef INC_LIGHTS_GLSL
 #define INC_LIGHTS_GLSL
@@ -12,6 +13,7 @@
 #include "geometry.glsl"
 #include "sampling.glsl"
 #include "random.glsl"
+#include "light_tree.glsl"
 
 // A light point seen from a shading point x.
 struct LightSample {
@@ -49,9 +51,15 @@ uint alias_sample(uint begin, uint count, float u, bool models) {
     return frac < threshold ? i : alias;
 }
 
-float source_model_pmf(uint model) {
+// The source's probability of light model `model` at shading point p. The tree source
+// is the tree mixed with the uniform one (LIGHT_TREE_UNIFORM_SHARE).
+float source_model_pmf(vec3 p, uint model) {
     if (params.ris_source == RIS_SOURCE_POWER) return model_alias(model).pmf;
-    return 1.0 / float(params.light_model_count);
+    float uniform_pmf = 1.0 / float(params.light_model_count);
+    if (params.ris_source == RIS_SOURCE_TREE)
+        return LIGHT_TREE_UNIFORM_SHARE * uniform_pmf
+            + (1.0 - LIGHT_TREE_UNIFORM_SHARE) * light_tree_pmf(light_models(model), p);
+    return uniform_pmf;
 }
 
 // Learned light selection (guided methods with GUIDE_FLAG_LEARN_LIGHTS): at a shading
@@ -97,8 +105,8 @@ LightContext light_context_for_ris(LightContext c) {
     return c;
 }
 
-float model_pmf(LightContext ctx, uint model) {
-    float p = source_model_pmf(model);
+// The probability of light model `model` at ctx, whose source probability is `p`.
+float model_pmf_given_source(LightContext ctx, uint model, float p) {
     if (GUIDING && ctx.mix > 0.0) {
         // Models the filter rules out are not in the table: their table pmf is 0.
         bool ruled_out = false;
@@ -109,8 +117,12 @@ float model_pmf(LightContext ctx, uint model) {
     return p;
 }
 
+float model_pmf(LightContext ctx, uint model) {
+    return model_pmf_given_source(ctx, model, source_model_pmf(ctx.p, model));
+}
+
 float triangle_pmf(uint tri, LightModel m) {
-    if (params.ris_source == RIS_SOURCE_POWER) return triangle_alias(tri).pmf;
+    if (params.ris_source != RIS_SOURCE_UNIFORM) return triangle_alias(tri).pmf;
     return 1.0 / float(m.triangle_count);
 }
 
@@ -219,16 +231,37 @@ LightSample sample_light(LightContext ctx, vec4 u, const bool exact_emission) {
             um = (um - ctx.mix) / (1.0 - ctx.mix);
         }
     }
+    float source_pmf = -1.0;  // the source's probability of `model`, when it chose it
     if (model == INVALID_INDEX) {
-        model = params.ris_source == RIS_SOURCE_POWER ? alias_sample(0u, count, um, true)
-                                                       : min(floor_to_uint(um * float(count)), count - 1u);
         table_pmf = -1.0;
+        if (params.ris_source == RIS_SOURCE_TREE) {
+            // The first LIGHT_TREE_UNIFORM_SHARE of u.x's range picks uniformly, the rest,
+            // rescaled, walks the tree (which finds the model's tree pmf on the way).
+            const float share = LIGHT_TREE_UNIFORM_SHARE;
+            if (um < share) {
+                model = min(floor_to_uint(um / share * float(count)), count - 1u);
+            } else {
+                float tree_pmf;
+                model = light_tree_sample(x, (um - share) / (1.0 - share), tree_pmf);
+                source_pmf = share / float(count) + (1.0 - share) * tree_pmf;
+                // A walk that found no leaf (not for a tree the host built) samples nothing.
+                if (model >= count) {
+                    model = 0u;
+                    source_pmf = 0.0;
+                }
+            }
+        } else {
+            model = params.ris_source == RIS_SOURCE_POWER ? alias_sample(0u, count, um, true)
+                                                           : min(floor_to_uint(um * float(count)), count - 1u);
+        }
     }
     LightModel m = light_models(model);
     // A model the table chose needs no second walk of the table for its mixture pmf
-    // (the same value model_pmf finds: a table holds each model once).
+    // (the same value model_pmf finds: a table holds each model once), nor one the tree
+    // chose a second walk of the tree.
     float pm = GUIDING && table_pmf >= 0.0
-        ? (1.0 - ctx.mix) * source_model_pmf(model) + ctx.mix * table_pmf
+        ? (1.0 - ctx.mix) * source_model_pmf(x, model) + ctx.mix * table_pmf
+        : source_pmf >= 0.0 ? model_pmf_given_source(ctx, model, source_pmf)
         : model_pmf(ctx, model);
     if (m.punctual != INVALID_INDEX) {
         LightSample s = sample_punctual(m.punctual, x);
@@ -236,7 +269,7 @@ LightSample sample_light(LightContext ctx, vec4 u, const bool exact_emission) {
         s.model = model;
         return s;
     }
-    uint local = params.ris_source == RIS_SOURCE_POWER ? alias_sample(m.first_triangle, m.triangle_count, u.y, false)
+    uint local = params.ris_source != RIS_SOURCE_UNIFORM ? alias_sample(m.first_triangle, m.triangle_count, u.y, false)
                                                        : min(floor_to_uint(u.y * float(m.triangle_count)), m.triangle_count - 1u);
     uint tri = m.first_triangle + local;
     LightCandidateTriangle lt = light_candidates(tri);

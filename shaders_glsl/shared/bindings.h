@@ -48,7 +48,9 @@
 // Learned light visibility (--light-visibility learned): a snapshot half and a live half
 // of per-(cell, light model) shadow-ray counts.
 #define BINDING_LIGHT_VISIBILITY 34
-#define BINDING_COUNT 35
+// The light tree's nodes (--source tree, LightTreeNode).
+#define BINDING_LIGHT_TREE 35
+#define BINDING_COUNT 36
 
 // Upper bound on bindless textures in one scene.
 #define MAX_TEXTURES 8192

@@ -58,6 +58,18 @@
 // RIS candidate sources (FrameParams.ris_source).
 #define RIS_SOURCE_UNIFORM 0u
 #define RIS_SOURCE_POWER 1u
+// The light tree (src/lights/tree.rs, inc/light_tree.glsl): models by a bound of what
+// they can send toward the shading point, mixed with the uniform source (below).
+#define RIS_SOURCE_TREE 2u
+
+// The uniform source's share of the tree source: every light model keeps at least this
+// share of the uniform probability wherever the tree's bounds rule it out or undervalue it.
+#define LIGHT_TREE_UNIFORM_SHARE 0.1
+
+// LightTreeNode.flags: an inner node whose left child's probability is the fixed
+// `power` field (the directional lights against the rest, and within the directional
+// lights), not the children's importance at the shading point.
+#define LIGHT_TREE_FIXED_SPLIT 1u
 
 // Film accumulation is fixed point so that sums are exact and order-independent:
 // a sample value v adds round(v * FILM_FIXED_SCALE) to a 64-bit integer.

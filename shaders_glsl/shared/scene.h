@@ -123,6 +123,27 @@ struct LightModel {
     uint triangle_count;   // 0 for a punctual light
     uint punctual;         // punctual light index, INVALID_INDEX for emissive geometry
     float power;           // emitted flux (luminance)
+    uint tree_path;        // the light tree's turns from its root to this model's leaf
+                           // (bit k set: right child at depth k; --source tree)
+    uint tree_depth;       // how many turns (0: the tree's root is this model's leaf)
+};
+
+// A node of the light tree (--source tree; src/lights/tree.rs builds it, the kernels walk
+// it in inc/light_tree.glsl). Every node bounds the light models below it: where they
+// are, how much they emit, and toward which directions. Inner nodes have their two
+// children at `child` and `child + 1`; a leaf holds one model.
+struct LightTreeNode {
+    vec3 bounds_min;       // box around the models' emitting points
+    float power;           // their emitted flux (luminance); with LIGHT_TREE_FIXED_SPLIT
+                           // the left child's probability instead
+    vec3 bounds_max;
+    float cos_normals;     // cos θo: every emitter's normal lies within θo of `axis`
+    vec3 axis;             // (−1: any direction, two-sided emitters and point lights)
+    float cos_emission;    // cos θe: emission leaves within θe of a normal (0 for area
+                           // lights, the outer cone for spots)
+    uint child;            // first child, INVALID_INDEX for a leaf
+    uint model;            // the leaf's light model, INVALID_INDEX for inner nodes
+    uint flags;            // LIGHT_TREE_*
 };
 
 // Alias-table entry (Walker/Vose). pmf is the entry's own probability.
@@ -184,6 +205,7 @@ struct FrameParams {
     uvec2 triangle_light_index_address;
     uvec2 bvh_nodes_address;
     uvec2 bvh_triangles_address;
+    uvec2 light_tree_address;
     // World-space light reuse (inc/light_reuse.glsl): cells in each half of the hash
     // grid (a power of two; 0 without reuse), a cell's edge in pixel footprints at its
     // distance from the camera, and the most canonical reservoirs a cell stands for.

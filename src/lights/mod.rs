@@ -4,12 +4,14 @@
 //! material emits, or one punctual light. The paper's source distribution picks a light
 //! model uniformly, then a triangle of it uniformly, then a point on it uniformly; the
 //! `power` source picks models and triangles proportionally to emitted power through
-//! alias tables. Triangles with zero area or zero emission are dropped here, so they are
+//! alias tables; the `tree` source picks models by what they can send toward the shading
+//! point (`tree`), then triangles by power. Triangles with zero area or zero emission are dropped here, so they are
 //! never sampled, and the triangle→light map lets a BSDF-sampled hit find the
 //! probability with which NEE would have chosen the same point (for MIS).
 
 pub mod alias;
 pub mod reservoir;
+pub mod tree;
 
 use crate::gpu;
 use crate::scene::{Scene, SceneError};
@@ -27,6 +29,8 @@ pub struct LightTable {
     /// Per model, an alias table over its triangles by power, stored at the model's
     /// `first_triangle` (same indices as `triangles`).
     pub triangle_alias: Vec<gpu::AliasEntry>,
+    /// The light tree's nodes (`--source tree`; each model holds its path in it).
+    pub tree: Vec<gpu::LightTreeNode>,
     /// For every triangle of every emissive instance: its light-triangle index or
     /// `INVALID_INDEX` (dropped). Instances point into it with `light_index_offset`.
     pub triangle_light_index: Vec<u32>,
@@ -164,6 +168,8 @@ impl LightTable {
                 triangle_count: count,
                 punctual: gpu::INVALID_INDEX,
                 power: model_power as f32,
+                tree_path: 0,
+                tree_depth: 0,
             });
             instance_lights.push((map_offset, model_index));
         }
@@ -189,6 +195,8 @@ impl LightTable {
                 triangle_count: 0,
                 punctual: i as u32,
                 power: power as f32,
+                tree_path: 0,
+                tree_depth: 0,
             });
         }
 
@@ -220,7 +228,13 @@ impl LightTable {
             triangle_alias[range].copy_from_slice(&table);
         }
         let total_power = model_weights.iter().sum();
+        let light_tree = tree::build(&models, &triangles, &scene.punctual);
+        for (m, &(path, depth)) in models.iter_mut().zip(&light_tree.paths) {
+            m.tree_path = path;
+            m.tree_depth = depth;
+        }
         Ok(LightTable {
+            tree: light_tree.nodes,
             triangles,
             candidates,
             models,

@@ -30,6 +30,7 @@ pub struct GpuScene {
     pub light_models: Buffer,
     pub model_alias: Buffer,
     pub triangle_alias: Buffer,
+    pub light_tree: Buffer,
     pub punctual: Buffer,
     pub triangle_light_index: Buffer,
     pub textures: Vec<Texture>,
@@ -146,6 +147,7 @@ impl GpuScene {
             STORAGE,
             "light triangle alias tables",
         )?;
+        let light_tree = Buffer::from_slice(device, &lights.tree, STORAGE, "light tree")?;
         let punctual = Buffer::from_slice(device, &scene.punctual, STORAGE, "punctual lights")?;
         let triangle_light_index = Buffer::from_slice(
             device,
@@ -217,6 +219,7 @@ impl GpuScene {
             &light_models,
             &model_alias,
             &triangle_alias,
+            &light_tree,
             &punctual,
             &triangle_light_index,
         ]
@@ -253,6 +256,7 @@ impl GpuScene {
             light_models,
             model_alias,
             triangle_alias,
+            light_tree,
             punctual,
             triangle_light_index,
             textures,

@@ -82,6 +82,7 @@ impl Renderer {
             (gpu::BINDING_LIGHT_MODELS, &g.light_models),
             (gpu::BINDING_MODEL_ALIAS, &g.model_alias),
             (gpu::BINDING_TRIANGLE_ALIAS, &g.triangle_alias),
+            (gpu::BINDING_LIGHT_TREE, &g.light_tree),
             (gpu::BINDING_PUNCTUAL_LIGHTS, &g.punctual),
             (gpu::BINDING_TRIANGLE_LIGHT_INDEX, &g.triangle_light_index),
             (gpu::BINDING_FILM, &self.film),

@@ -375,6 +375,7 @@ impl Renderer {
             ris_source: match s.source {
                 LightSource::Uniform => gpu::RIS_SOURCE_UNIFORM,
                 LightSource::Power => gpu::RIS_SOURCE_POWER,
+                LightSource::Tree => gpu::RIS_SOURCE_TREE,
             },
 
             debug_pixel: self.debug_pixel,
@@ -403,6 +404,7 @@ impl Renderer {
             triangle_light_index_address: split(g.triangle_light_index.address),
             bvh_nodes_address: split(bvh_nodes),
             bvh_triangles_address: split(bvh_triangles),
+            light_tree_address: split(g.light_tree.address),
             reuse_cells: if s.light_reuse.world {
                 self.reuse_cell_count
             } else {
@@ -475,7 +477,10 @@ impl Renderer {
     /// (`source_model_pmf` in shaders_glsl/inc/lights.glsl).
     pub fn source_model_pmf(&self) -> Vec<f32> {
         match self.settings.source {
-            LightSource::Power => self.model_power_pmf.clone(),
+            // The tree's probabilities depend on the shading point; the power source's
+            // stand in for them where a whole-scene pmf is asked for (the learned light
+            // mix's prediction, a heuristic: the kernels use the tree's own).
+            LightSource::Power | LightSource::Tree => self.model_power_pmf.clone(),
             LightSource::Uniform => {
                 vec![1.0 / self.light_model_count.max(1) as f32; self.light_model_count as usize]
             }

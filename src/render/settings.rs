@@ -73,6 +73,9 @@ pub enum LightSource {
     Uniform,
     /// Models and triangles proportionally to emitted power (alias tables).
     Power,
+    /// Models by a bound of what they send toward the shading point (a light tree over
+    /// the models, mixed with the uniform source), triangles by power.
+    Tree,
 }
 
 /// How direct light is estimated: both techniques combined by MIS (the default), or one

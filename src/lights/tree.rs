@@ -1,0 +1,586 @@
+//! The light tree of `--source tree`: a binary tree over the light models whose nodes
+//! bound where their lights are, how much they emit and toward which directions, so that
+//! a shading point can choose a model in proportion to an estimate of what it receives
+//! from it (the light-bounds importance of Conty Estevez & Kulla 2018, "Importance
+//! sampling of many lights with adaptive tree splitting", as pbrt-v4 states it).
+//!
+//! Sampling descends from the root, choosing each child in proportion to its importance
+//! at the shading point; the probability of a given model is the product of the choices
+//! along its path, which each model stores (`LightModel::tree_path`, `tree_depth`) so
+//! that MIS and RIS find it by walking that path alone. The kernels mix the tree with
+//! the uniform source (`LIGHT_TREE_UNIFORM_SHARE`), so a model the bounds undervalue is
+//! still sampled. Directional lights sit under a fixed split at the root: the tree's
+//! bounds need a distance. This module builds the tree and mirrors the kernels'
+//! importance and probabilities (`inc/light_tree.glsl`) for the tests.
+
+use crate::gpu;
+use glam::Vec3;
+
+/// The largest depth a model's path can describe (the bits of `tree_path`).
+pub const MAX_DEPTH: u32 = 32;
+
+/// Bounds of a set of emitters: a box, flux, and a cone of normals with the spread of the
+/// emission around each normal.
+#[derive(Clone, Copy, Debug)]
+struct Bounds {
+    min: Vec3,
+    max: Vec3,
+    power: f64,
+    axis: Vec3,
+    /// θo in radians (π: any direction).
+    theta_o: f32,
+    /// θe in radians.
+    theta_e: f32,
+}
+
+impl Bounds {
+    fn centroid(&self) -> Vec3 {
+        0.5 * (self.min + self.max)
+    }
+
+    fn union(&self, o: &Bounds) -> Bounds {
+        let (axis, theta_o) = cone_union(self.axis, self.theta_o, o.axis, o.theta_o);
+        Bounds {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+            power: self.power + o.power,
+            axis,
+            theta_o,
+            theta_e: self.theta_e.max(o.theta_e),
+        }
+    }
+
+    fn node(&self, child: u32, model: u32) -> gpu::LightTreeNode {
+        gpu::LightTreeNode {
+            bounds_min: self.min.into(),
+            power: self.power as f32,
+            bounds_max: self.max.into(),
+            cos_normals: if self.theta_o >= std::f32::consts::PI {
+                -1.0
+            } else {
+                self.theta_o.cos()
+            },
+            axis: self.axis.into(),
+            cos_emission: self.theta_e.cos(),
+            child,
+            model,
+            flags: 0,
+        }
+    }
+}
+
+/// The smallest cone (axis, half-angle) holding the cones (a, θa) and (b, θb).
+fn cone_union(a: Vec3, theta_a: f32, b: Vec3, theta_b: f32) -> (Vec3, f32) {
+    use std::f32::consts::PI;
+    if theta_a >= PI || theta_b >= PI {
+        return (Vec3::Z, PI);
+    }
+    let theta_d = a.dot(b).clamp(-1.0, 1.0).acos();
+    if (theta_d + theta_b).min(PI) <= theta_a {
+        return (a, theta_a);
+    }
+    if (theta_d + theta_a).min(PI) <= theta_b {
+        return (b, theta_b);
+    }
+    let theta_o = 0.5 * (theta_a + theta_d + theta_b);
+    if theta_o >= PI {
+        return (Vec3::Z, PI);
+    }
+    // Turn a toward b by θo − θa about their common perpendicular.
+    let turn = theta_o - theta_a;
+    let w = a.cross(b);
+    if w.length_squared() < 1e-12 {
+        return (Vec3::Z, PI);
+    }
+    let w = w.normalize();
+    let axis = (a * turn.cos() + w.cross(a) * turn.sin()).normalize();
+    // Widen by float slack so that both cones stay inside.
+    (axis, (theta_o * 1.0001 + 1e-5).min(PI))
+}
+
+/// The bounds of one light model, or None for a directional light.
+fn model_bounds(
+    m: &gpu::LightModel,
+    triangles: &[gpu::LightTriangle],
+    punctual: &[gpu::PunctualLight],
+) -> Option<Bounds> {
+    use std::f32::consts::{FRAC_PI_2, PI};
+    if m.punctual != gpu::INVALID_INDEX {
+        let l = &punctual[m.punctual as usize];
+        let p = Vec3::from(l.position);
+        return match l.kind {
+            gpu::PUNCTUAL_DIRECTIONAL => None,
+            gpu::PUNCTUAL_SPOT => Some(Bounds {
+                min: p,
+                max: p,
+                power: m.power as f64,
+                axis: Vec3::from(l.direction).normalize_or(Vec3::Z),
+                theta_o: 0.0,
+                // A little wider than the outer cone: the bound must hold it.
+                theta_e: (l.cos_outer.clamp(-1.0, 1.0).acos() * 1.0001 + 1e-5).min(PI),
+            }),
+            _ => Some(Bounds {
+                min: p,
+                max: p,
+                power: m.power as f64,
+                axis: Vec3::Z,
+                theta_o: PI,
+                theta_e: FRAC_PI_2,
+            }),
+        };
+    }
+    let range = m.first_triangle as usize..(m.first_triangle + m.triangle_count) as usize;
+    let mut b: Option<Bounds> = None;
+    for t in &triangles[range] {
+        let (p0, p1, p2) = (Vec3::from(t.p0), Vec3::from(t.p1), Vec3::from(t.p2));
+        let tb = Bounds {
+            min: p0.min(p1).min(p2),
+            max: p0.max(p1).max(p2),
+            power: t.power as f64,
+            axis: Vec3::from(t.normal).normalize_or(Vec3::Z),
+            theta_o: if t.two_sided != 0 { PI } else { 0.0 },
+            theta_e: FRAC_PI_2,
+        };
+        b = Some(match b {
+            None => tb,
+            Some(b) => b.union(&tb),
+        });
+    }
+    // A model keeps at least one triangle (LightTable::build drops empty ones).
+    b
+}
+
+/// The tree: its nodes (the root at 0) and, per light model, (path, depth).
+pub struct LightTree {
+    pub nodes: Vec<gpu::LightTreeNode>,
+    pub paths: Vec<(u32, u32)>,
+}
+
+/// Build the tree over `models` (their `tree_path` and `tree_depth` are the caller's to
+/// set from `paths`).
+pub fn build(
+    models: &[gpu::LightModel],
+    triangles: &[gpu::LightTriangle],
+    punctual: &[gpu::PunctualLight],
+) -> LightTree {
+    let mut finite = Vec::new();
+    let mut directional = Vec::new();
+    for (i, m) in models.iter().enumerate() {
+        match model_bounds(m, triangles, punctual) {
+            Some(b) => finite.push((i as u32, b)),
+            None => directional.push(i as u32),
+        }
+    }
+    let mut tree = LightTree {
+        nodes: Vec::with_capacity(2 * models.len()),
+        paths: vec![(0, 0); models.len()],
+    };
+    tree.nodes.push(placeholder());
+    match (finite.is_empty(), directional.is_empty()) {
+        (false, true) => build_finite(&mut tree, 0, &mut finite, 0, 0),
+        (true, false) => build_fixed(&mut tree, 0, &directional, 0, 0),
+        _ => {
+            // The directional lights against the rest, in proportion to their power (as
+            // the power source weighs them).
+            let p_dir: f64 = directional
+                .iter()
+                .map(|&m| models[m as usize].power as f64)
+                .sum();
+            let p_fin: f64 = finite.iter().map(|(_, b)| b.power).sum();
+            let children = push_pair(&mut tree);
+            tree.nodes[0] = fixed_split(children, (p_dir / (p_dir + p_fin)) as f32);
+            build_fixed(&mut tree, children, &directional, 0, 1);
+            build_finite(&mut tree, children + 1, &mut finite, 1, 1);
+        }
+    }
+    tree
+}
+
+fn placeholder() -> gpu::LightTreeNode {
+    gpu::LightTreeNode {
+        bounds_min: [0.0; 3],
+        power: 0.0,
+        bounds_max: [0.0; 3],
+        cos_normals: -1.0,
+        axis: [0.0, 0.0, 1.0],
+        cos_emission: 0.0,
+        child: gpu::INVALID_INDEX,
+        model: gpu::INVALID_INDEX,
+        flags: 0,
+    }
+}
+
+fn push_pair(tree: &mut LightTree) -> u32 {
+    let first = tree.nodes.len() as u32;
+    tree.nodes.push(placeholder());
+    tree.nodes.push(placeholder());
+    first
+}
+
+fn fixed_split(child: u32, left: f32) -> gpu::LightTreeNode {
+    gpu::LightTreeNode {
+        power: left,
+        child,
+        flags: gpu::LIGHT_TREE_FIXED_SPLIT,
+        ..placeholder()
+    }
+}
+
+fn set_path(tree: &mut LightTree, model: u32, path: u32, depth: u32) {
+    assert!(depth <= MAX_DEPTH, "light tree deeper than {MAX_DEPTH}");
+    tree.paths[model as usize] = (path, depth);
+}
+
+/// Directional lights: a balanced tree of fixed splits by count (uniform among them).
+fn build_fixed(tree: &mut LightTree, at: u32, models: &[u32], path: u32, depth: u32) {
+    if models.len() == 1 {
+        tree.nodes[at as usize] = gpu::LightTreeNode {
+            model: models[0],
+            ..placeholder()
+        };
+        set_path(tree, models[0], path, depth);
+        return;
+    }
+    let half = models.len() / 2;
+    let children = push_pair(tree);
+    tree.nodes[at as usize] = fixed_split(children, half as f32 / models.len() as f32);
+    build_fixed(tree, children, &models[..half], path, depth + 1);
+    build_fixed(
+        tree,
+        children + 1,
+        &models[half..],
+        path | (1 << depth),
+        depth + 1,
+    );
+}
+
+/// Finite lights: split at the median of the centroids along their widest axis (a
+/// balanced tree: depth ⌈log₂ n⌉).
+fn build_finite(tree: &mut LightTree, at: u32, items: &mut [(u32, Bounds)], path: u32, depth: u32) {
+    let bounds = items[1..].iter().fold(items[0].1, |b, (_, o)| b.union(o));
+    if items.len() == 1 {
+        tree.nodes[at as usize] = bounds.node(gpu::INVALID_INDEX, items[0].0);
+        set_path(tree, items[0].0, path, depth);
+        return;
+    }
+    let (lo, hi) = items
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (_, b)| {
+            (lo.min(b.centroid()), hi.max(b.centroid()))
+        });
+    let extent = hi - lo;
+    let axis = if extent.x >= extent.y && extent.x >= extent.z {
+        0
+    } else if extent.y >= extent.z {
+        1
+    } else {
+        2
+    };
+    // Ties broken by model index, so the build does not depend on the sort's stability.
+    items.sort_by(|(ia, a), (ib, b)| {
+        a.centroid()[axis]
+            .total_cmp(&b.centroid()[axis])
+            .then(ia.cmp(ib))
+    });
+    let half = items.len() / 2;
+    let children = push_pair(tree);
+    tree.nodes[at as usize] = bounds.node(children, gpu::INVALID_INDEX);
+    let (left, right) = items.split_at_mut(half);
+    build_finite(tree, children, left, path, depth + 1);
+    build_finite(tree, children + 1, right, path | (1 << depth), depth + 1);
+}
+
+// ---- the kernels' arithmetic (inc/light_tree.glsl), for the tests ---------------------
+
+/// An upper bound on what the node's emitters send toward `p`, up to a common factor:
+/// flux × cos θ′ / d², where θ′ is the least angle that a direction from the node's
+/// bounding sphere toward p can make with an emitter's normal less the emission's spread,
+/// and d the distance to the box's centre, at least the sphere's radius. Zero where
+/// nothing under the node can emit toward p.
+pub fn importance(n: &gpu::LightTreeNode, p: Vec3) -> f32 {
+    if n.power <= 0.0 {
+        return 0.0;
+    }
+    let (bmin, bmax) = (Vec3::from(n.bounds_min), Vec3::from(n.bounds_max));
+    let c = 0.5 * (bmin + bmax);
+    let h = 0.5 * (bmax - bmin);
+    let r2 = h.dot(h);
+    let v = p - c;
+    let d2 = v.dot(v);
+    let mut cos_t = 1.0f32;
+    if n.cos_normals > -1.0 && d2 > r2 {
+        let d = d2.sqrt();
+        let cos_w = Vec3::from(n.axis).dot(v / d);
+        let sin_w = (1.0 - cos_w * cos_w).max(0.0).sqrt();
+        let cos_o = n.cos_normals;
+        let sin_o = (1.0 - cos_o * cos_o).max(0.0).sqrt();
+        // θx = max(θw − θo, 0)
+        let (cos_x, sin_x) = if cos_w >= cos_o {
+            (1.0, 0.0)
+        } else {
+            (cos_w * cos_o + sin_w * sin_o, sin_w * cos_o - cos_w * sin_o)
+        };
+        // θ′ = max(θx − θb, 0), sin θb = r / d
+        let sin_b2 = r2 / d2;
+        let cos_b = (1.0 - sin_b2).max(0.0).sqrt();
+        let sin_b = sin_b2.sqrt();
+        cos_t = if cos_x >= cos_b {
+            1.0
+        } else {
+            cos_x * cos_b + sin_x * sin_b
+        };
+        if cos_t <= n.cos_emission {
+            return 0.0;
+        }
+    }
+    n.power * cos_t.max(0.0) / d2.max(r2).max(1e-30)
+}
+
+/// The probability of the left child at inner node `n`, seen from `p`.
+pub fn left_probability(nodes: &[gpu::LightTreeNode], n: &gpu::LightTreeNode, p: Vec3) -> f32 {
+    if n.flags & gpu::LIGHT_TREE_FIXED_SPLIT != 0 {
+        return n.power;
+    }
+    let a = importance(&nodes[n.child as usize], p);
+    let b = importance(&nodes[n.child as usize + 1], p);
+    if a + b > 0.0 {
+        a / (a + b)
+    } else {
+        0.5
+    }
+}
+
+/// The tree's probability of `model` at `p` (without the uniform share).
+pub fn pmf(tree: &LightTree, model: u32, p: Vec3) -> f32 {
+    let (path, depth) = tree.paths[model as usize];
+    let mut n = 0usize;
+    let mut pmf = 1.0f32;
+    for k in 0..depth {
+        let node = &tree.nodes[n];
+        let pl = left_probability(&tree.nodes, node, p);
+        let right = (path >> k) & 1 != 0;
+        pmf *= if right { 1.0 - pl } else { pl };
+        n = node.child as usize + right as usize;
+    }
+    pmf
+}
+
+/// The model the tree chooses at `p` with the uniform number `u`, and its probability.
+pub fn sample(tree: &LightTree, p: Vec3, mut u: f32) -> (u32, f32) {
+    let mut n = 0usize;
+    let mut pmf = 1.0f32;
+    loop {
+        let node = &tree.nodes[n];
+        if node.child == gpu::INVALID_INDEX {
+            return (node.model, pmf);
+        }
+        let pl = left_probability(&tree.nodes, node, p);
+        if u < pl {
+            u /= pl;
+            pmf *= pl;
+            n = node.child as usize;
+        } else {
+            u = (u - pl) / (1.0 - pl);
+            pmf *= 1.0 - pl;
+            n = node.child as usize + 1;
+        }
+        u = u.min(1.0 - f32::EPSILON / 2.0);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn model(first: u32, count: u32, punctual: u32, power: f32) -> gpu::LightModel {
+        gpu::LightModel {
+            first_triangle: first,
+            triangle_count: count,
+            punctual,
+            power,
+            tree_path: 0,
+            tree_depth: 0,
+        }
+    }
+
+    fn triangle(p0: Vec3, p1: Vec3, p2: Vec3, model: u32, two_sided: bool) -> gpu::LightTriangle {
+        let cross = (p1 - p0).cross(p2 - p0);
+        gpu::LightTriangle {
+            p0: p0.into(),
+            p1: p1.into(),
+            p2: p2.into(),
+            normal: cross.normalize().into(),
+            area: 0.5 * cross.length(),
+            material: 0,
+            model,
+            two_sided: two_sided as u32,
+            uv0: [0.0; 2],
+            uv1: [0.0; 2],
+            uv2: [0.0; 2],
+            power: 0.5 * cross.length(),
+        }
+    }
+
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f32 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+        }
+        fn vec(&mut self, s: f32) -> Vec3 {
+            Vec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5) * s
+        }
+    }
+
+    /// Random emitters: small triangles facing random ways (some two-sided, several per
+    /// model), points, spots and two directional lights.
+    fn scene(
+        seed: u64,
+    ) -> (
+        Vec<gpu::LightModel>,
+        Vec<gpu::LightTriangle>,
+        Vec<gpu::PunctualLight>,
+    ) {
+        let mut r = Rng(seed);
+        let mut models = Vec::new();
+        let mut tris = Vec::new();
+        for m in 0..40u32 {
+            let first = tris.len() as u32;
+            let centre = r.vec(20.0);
+            let n = 1 + (r.next() * 3.0) as u32;
+            let two_sided = r.next() < 0.2;
+            for _ in 0..n {
+                let a = centre + r.vec(0.5);
+                tris.push(triangle(a, a + r.vec(0.4), a + r.vec(0.4), m, two_sided));
+            }
+            let power = tris[first as usize..].iter().map(|t| t.power).sum();
+            models.push(model(first, n, gpu::INVALID_INDEX, power));
+        }
+        let mut punctual = Vec::new();
+        for k in 0..8u32 {
+            let kind = [
+                gpu::PUNCTUAL_POINT,
+                gpu::PUNCTUAL_SPOT,
+                gpu::PUNCTUAL_SPOT,
+                gpu::PUNCTUAL_DIRECTIONAL,
+            ][k as usize % 4];
+            let cos_outer = 0.3 + 0.6 * r.next();
+            punctual.push(gpu::PunctualLight {
+                position: r.vec(20.0).into(),
+                kind,
+                direction: r.vec(2.0).normalize().into(),
+                range: 0.0,
+                intensity: [1.0; 3],
+                cos_inner: cos_outer + 0.5 * (1.0 - cos_outer),
+                cos_outer,
+            });
+            models.push(model(0, 0, k, 1.0 + r.next()));
+        }
+        (models, tris, punctual)
+    }
+
+    #[test]
+    fn probabilities_sum_to_one_and_sampling_follows_them() {
+        let (models, tris, punctual) = scene(7);
+        let tree = build(&models, &tris, &punctual);
+        let mut r = Rng(3);
+        for _ in 0..20 {
+            let p = r.vec(30.0);
+            let pmfs: Vec<f32> = (0..models.len() as u32).map(|m| pmf(&tree, m, p)).collect();
+            let total: f32 = pmfs.iter().sum();
+            assert!((total - 1.0).abs() < 1e-4, "pmf sums to {total} at {p}");
+            // Sampling returns each model's own pmf, and picks it that often.
+            let n = 20_000;
+            let mut counts = vec![0u32; models.len()];
+            for i in 0..n {
+                let (m, q) = sample(&tree, p, (i as f32 + 0.5) / n as f32);
+                assert!(
+                    (q - pmfs[m as usize]).abs() <= 1e-5 * pmfs[m as usize].max(1e-3),
+                    "pmf {q} against {}",
+                    pmfs[m as usize]
+                );
+                counts[m as usize] += 1;
+            }
+            for (m, &c) in counts.iter().enumerate() {
+                // Stratified u: each model takes its pmf's share within a stratum or two.
+                let expected = pmfs[m] * n as f32;
+                assert!(
+                    (c as f32 - expected).abs() <= 2.0 + 1e-3 * expected,
+                    "model {m}: {c} of {n}, expected {expected}"
+                );
+            }
+        }
+    }
+
+    /// Wherever a model's light can reach p, the tree gives it a positive probability: the
+    /// bounds never rule out an emitter that emits toward the point.
+    #[test]
+    fn bounds_never_rule_out_light_that_reaches_the_point() {
+        for seed in 1..6 {
+            let (models, tris, punctual) = scene(seed);
+            let tree = build(&models, &tris, &punctual);
+            let mut r = Rng(seed + 100);
+            for _ in 0..400 {
+                let p = r.vec(30.0);
+                for (m, model) in models.iter().enumerate() {
+                    let emits = if model.punctual != gpu::INVALID_INDEX {
+                        let l = &punctual[model.punctual as usize];
+                        let w = (p - Vec3::from(l.position)).normalize();
+                        l.kind != gpu::PUNCTUAL_SPOT || w.dot(Vec3::from(l.direction)) > l.cos_outer
+                    } else {
+                        (0..model.triangle_count).any(|k| {
+                            let t = &tris[(model.first_triangle + k) as usize];
+                            // Any of a few points of the triangle facing p.
+                            [
+                                (0.2, 0.2),
+                                (0.6, 0.2),
+                                (0.2, 0.6),
+                                (0.0, 0.0),
+                                (1.0, 0.0),
+                                (0.0, 1.0),
+                            ]
+                            .iter()
+                            .any(|&(a, b)| {
+                                let (p0, p1, p2) =
+                                    (Vec3::from(t.p0), Vec3::from(t.p1), Vec3::from(t.p2));
+                                let y = p0 + a * (p1 - p0) + b * (p2 - p0);
+                                t.two_sided != 0 || Vec3::from(t.normal).dot(p - y) > 1e-4
+                            })
+                        })
+                    };
+                    if emits {
+                        assert!(
+                            pmf(&tree, m as u32, p) > 0.0,
+                            "seed {seed}: model {m} emits toward {p} but has pmf 0"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn nearby_lights_are_favoured() {
+        // Two equal point lights: the near one gets most of the probability.
+        let punctual: Vec<gpu::PunctualLight> = [Vec3::ZERO, Vec3::new(10.0, 0.0, 0.0)]
+            .iter()
+            .map(|&p| gpu::PunctualLight {
+                position: p.into(),
+                kind: gpu::PUNCTUAL_POINT,
+                direction: [0.0, 0.0, -1.0],
+                range: 0.0,
+                intensity: [1.0; 3],
+                cos_inner: 1.0,
+                cos_outer: 1.0,
+            })
+            .collect();
+        let models = vec![model(0, 0, 0, 1.0), model(0, 0, 1, 1.0)];
+        let tree = build(&models, &[], &punctual);
+        let p = Vec3::new(1.0, 0.0, 0.0);
+        // 1/1² against 1/9²: 81/82.
+        assert!((pmf(&tree, 0, p) - 81.0 / 82.0).abs() < 1e-5);
+    }
+}
