@@ -46,7 +46,7 @@
 
 use lanterna::guiding::{GuideDensity, GuideTarget, SelectionLearner, SpatialFilter};
 use lanterna::lights::LightTable;
-use lanterna::render::{Method, RenderSettings, Strategy};
+use lanterna::render::{LightSource, Method, RenderSettings, Strategy};
 use lanterna::scene::export_mitsuba::{self, ExportOptions};
 use lanterna::scene::generate::{Kind, Options};
 use lanterna::testing::{self, Batches, TestScene};
@@ -82,6 +82,8 @@ struct Config {
     light_reuse: bool,
     /// `--light-visibility learned` (RIS methods).
     light_visibility: bool,
+    /// `--source`.
+    source: LightSource,
 }
 
 const fn config(name: &'static str, method: Method, strategy: Strategy) -> Config {
@@ -98,6 +100,7 @@ const fn config(name: &'static str, method: Method, strategy: Strategy) -> Confi
         history: 0.0,
         light_reuse: false,
         light_visibility: false,
+        source: LightSource::Uniform,
     }
 }
 
@@ -178,6 +181,22 @@ const GUIDED_RIS_VISIBILITY: Config = Config {
     name: "guided-ris --light-visibility learned",
     light_visibility: true,
     ..GUIDED_RIS
+};
+// The light tree's source (`--source tree`).
+const PT_TREE: Config = Config {
+    name: "pt --source tree",
+    source: LightSource::Tree,
+    ..PT
+};
+const RIS_TREE: Config = Config {
+    name: "ris --source tree",
+    source: LightSource::Tree,
+    ..RIS
+};
+const GUIDED_TREE: Config = Config {
+    name: "guided --source tree",
+    source: LightSource::Tree,
+    ..GUIDED_LEARN
 };
 
 // The reference implementation's stochastic box filter (the default is nearest).
@@ -345,6 +364,7 @@ fn render(ts: &TestScene, c: Config, max_depth: u32, batches: u32, spp: u64) -> 
             learned: c.light_visibility,
             ..Default::default()
         },
+        source: c.source,
         ..testing::settings(c.method, WIDTH, HEIGHT)
     };
     testing::run_batches(&ts.scene, &ts.camera, settings, batches, spp)
@@ -532,6 +552,29 @@ fn sconces_learned_visibility() {
         16,
         128,
     );
+}
+
+/// The light tree's source (`--source tree`) with indirect light: lamps on, near and
+/// inside walls and ledges, whose bounds put some emitters behind the shading point.
+#[test]
+fn sconces_light_tree() {
+    let ts = scene(Kind::Sconces, None);
+    run_suite(
+        "sconces-d4",
+        &ts,
+        4,
+        &[PT_TREE, RIS_TREE, GUIDED_TREE],
+        16,
+        128,
+    );
+}
+
+/// Point and spot lights centimetres from surfaces under the light tree's source: a spot
+/// whose cone bound must hold every direction it lights.
+#[test]
+fn punctual_lights_near_surfaces_light_tree() {
+    let ts = scene(Kind::PunctualNear, None);
+    run_suite("punctual-near-d2", &ts, 2, &[PT_TREE, RIS_TREE], 16, 128);
 }
 
 /// The guiding options (selection probability learned by either learner or fixed, what the tree learns,
