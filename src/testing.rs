@@ -493,6 +493,19 @@ pub fn generated(
     }
 }
 
+/// The generated street with 120 lamps at aspect 1.5: many lights in a scene small enough
+/// for the agreement tests at 24×16.
+pub fn small_street() -> TestScene {
+    generated(
+        crate::scene::generate::Kind::Street,
+        &crate::scene::generate::Options {
+            lamps: Some(120),
+            aspect: Some(1.5),
+            ..Default::default()
+        },
+    )
+}
+
 /// The `asset.extras.lanterna.analytic` object of a generated scene.
 pub fn analytic(scene: &Scene) -> serde_json::Value {
     scene

@@ -35,14 +35,7 @@ fn ris_with_light_reuse_agrees_with_pt_on_cornell_lights() {
 
 #[test]
 fn ris_with_light_reuse_agrees_with_pt_on_a_small_street() {
-    let t = testing::generated(
-        Kind::Street,
-        &Options {
-            lamps: Some(120),
-            aspect: Some(1.5),
-            ..Options::default()
-        },
-    );
+    let t = testing::small_street();
     agree(&t, Method::Ris, 24, 16, 32);
 }
 

@@ -27,17 +27,6 @@ fn with_tree(method: Method, w: u32, h: u32) -> RenderSettings {
     s
 }
 
-fn small_street() -> testing::TestScene {
-    testing::generated(
-        Kind::Street,
-        &Options {
-            lamps: Some(120),
-            aspect: Some(1.5),
-            ..Options::default()
-        },
-    )
-}
-
 const WHAT: &str = "the light tree's source against pt's uniform one";
 
 #[test]
@@ -48,7 +37,7 @@ fn pt_with_the_light_tree_agrees_with_pt_on_cornell_lights() {
 
 #[test]
 fn pt_and_ris_with_the_light_tree_agree_with_pt_on_a_small_street() {
-    let t = small_street();
+    let t = testing::small_street();
     for method in [Method::Pt, Method::Ris] {
         testing::assert_agrees_with_pt(&t, with_tree(method, 24, 16), 16, 32, ALPHA, WHAT);
     }

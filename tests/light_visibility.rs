@@ -42,17 +42,6 @@ fn agree(t: &testing::TestScene, method: Method, w: u32, h: u32, spp: u64, reuse
     testing::assert_agrees_with_pt(t, with, 16, spp, ALPHA, what);
 }
 
-fn small_street() -> testing::TestScene {
-    testing::generated(
-        Kind::Street,
-        &Options {
-            lamps: Some(120),
-            aspect: Some(1.5),
-            ..Options::default()
-        },
-    )
-}
-
 #[test]
 fn ris_with_learned_visibility_agrees_with_pt_on_cornell_lights() {
     let t = testing::generated(Kind::CornellLights, &Options::default());
@@ -61,7 +50,7 @@ fn ris_with_learned_visibility_agrees_with_pt_on_cornell_lights() {
 
 #[test]
 fn ris_with_learned_visibility_agrees_with_pt_on_a_small_street() {
-    agree(&small_street(), Method::Ris, 24, 16, 32, false);
+    agree(&testing::small_street(), Method::Ris, 24, 16, 32, false);
 }
 
 /// Point and spot lights a few centimetres from surfaces: punctual lights have their own
@@ -109,7 +98,7 @@ fn connected_per_path(t: &testing::TestScene, visibility: bool) -> f64 {
 /// (both renders at the defaults; measured: 0.44 → 0.51).
 #[test]
 fn learned_visibility_sends_more_shadow_rays_to_visible_lights() {
-    let t = small_street();
+    let t = testing::small_street();
     let off = connected_per_path(&t, false);
     let on = connected_per_path(&t, true);
     eprintln!("unoccluded connections per path: {off:.4} without, {on:.4} with");
