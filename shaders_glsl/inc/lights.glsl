@@ -261,7 +261,8 @@ LightSample sample_light(LightContext ctx, vec4 u, const bool exact_emission) {
     // chose a second walk of the tree.
     float pm = GUIDING && table_pmf >= 0.0
         ? (1.0 - ctx.mix) * source_model_pmf(x, model) + ctx.mix * table_pmf
-        : source_pmf >= 0.0 ? model_pmf_given_source(ctx, model, source_pmf)
+        : source_pmf > 0.0 ? model_pmf_given_source(ctx, model, source_pmf)
+        : source_pmf == 0.0 ? 0.0  // the walk found no leaf: not a sample (pdf 0)
         : model_pmf(ctx, model);
     if (m.punctual != INVALID_INDEX) {
         LightSample s = sample_punctual(m.punctual, x);
