@@ -74,7 +74,7 @@ DirectionSampler direction_sampler(Surface s) {
                 d.bsdf_fraction = max(d.bsdf_fraction, bsdf_glass_probability(s.bsdf, d.bsdf));
         }
     }
-    d.lights = light_context(s.p, d.leaf);
+    d.lights = light_context(s.p, surface_transmits(s) ? vec3(0.0) : s.ng, d.leaf);
     return d;
 }
 

@@ -51,14 +51,15 @@ uint alias_sample(uint begin, uint count, float u, bool models) {
     return frac < threshold ? i : alias;
 }
 
-// The source's probability of light model `model` at shading point p. The tree source
-// is the tree mixed with the uniform one (LIGHT_TREE_UNIFORM_SHARE).
-float source_model_pmf(vec3 p, uint model) {
+// The source's probability of light model `model` at shading point p with receiver
+// normal nr (LightContext.n). The tree source is the tree mixed with the uniform one
+// (LIGHT_TREE_UNIFORM_SHARE).
+float source_model_pmf(vec3 p, vec3 nr, uint model) {
     if (params.ris_source == RIS_SOURCE_POWER) return model_alias(model).pmf;
     float uniform_pmf = 1.0 / float(params.light_model_count);
     if (params.ris_source == RIS_SOURCE_TREE)
         return LIGHT_TREE_UNIFORM_SHARE * uniform_pmf
-            + (1.0 - LIGHT_TREE_UNIFORM_SHARE) * light_tree_pmf(light_models(model), p);
+            + (1.0 - LIGHT_TREE_UNIFORM_SHARE) * light_tree_pmf(light_models(model), p, nr);
     return uniform_pmf;
 }
 
@@ -73,6 +74,9 @@ float source_model_pmf(vec3 p, uint model) {
 // sampling and pdf function (pbrt's LightSampleContext).
 struct LightContext {
     vec3 p;       // the shading point
+    vec3 n;       // its receiver normal for the light tree's bound: the geometric normal
+                  // of an opaque surface (nothing below its tangent plane can light it),
+                  // zero where light arrives from every side (a surface that transmits)
     uint leaf;    // its SD-tree leaf when light selection is learned, else INVALID_INDEX
     float mix;    // probability of choosing the model from that table (0: source only)
     uvec4 models; // filter of the models that table holds (guide_light_filter); all set: probe every model
@@ -86,9 +90,10 @@ bool light_filter_pays() {
     return params.light_model_count > 4u * GUIDE_LIGHT_SLOTS;
 }
 
-// The light-sampling context of shading point p (`leaf`: its SD-tree leaf if known).
-LightContext light_context(vec3 p, uint leaf) {
-    LightContext c = LightContext(p, INVALID_INDEX, 0.0, uvec4(~0u));
+// The light-sampling context of shading point p with receiver normal n (see
+// LightContext; `leaf`: its SD-tree leaf if known).
+LightContext light_context(vec3 p, vec3 n, uint leaf) {
+    LightContext c = LightContext(p, n, INVALID_INDEX, 0.0, uvec4(~0u));
     if (!GUIDING || (guide_header.flags & GUIDE_FLAG_LEARN_LIGHTS) == 0u) return c;
     if (leaf == INVALID_INDEX) leaf = guide_find_leaf(p);
     c.leaf = leaf;
@@ -118,7 +123,7 @@ float model_pmf_given_source(LightContext ctx, uint model, float p) {
 }
 
 float model_pmf(LightContext ctx, uint model) {
-    return model_pmf_given_source(ctx, model, source_model_pmf(ctx.p, model));
+    return model_pmf_given_source(ctx, model, source_model_pmf(ctx.p, ctx.n, model));
 }
 
 float triangle_pmf(uint tri, LightModel m) {
@@ -242,7 +247,7 @@ LightSample sample_light(LightContext ctx, vec4 u, const bool exact_emission) {
                 model = min(floor_to_uint(um / share * float(count)), count - 1u);
             } else {
                 float tree_pmf;
-                model = light_tree_sample(x, (um - share) / (1.0 - share), tree_pmf);
+                model = light_tree_sample(x, ctx.n, (um - share) / (1.0 - share), tree_pmf);
                 source_pmf = share / float(count) + (1.0 - share) * tree_pmf;
                 // A walk that found no leaf (not for a tree the host built) samples nothing.
                 if (model >= count) {
@@ -260,7 +265,7 @@ LightSample sample_light(LightContext ctx, vec4 u, const bool exact_emission) {
     // (the same value model_pmf finds: a table holds each model once), nor one the tree
     // chose a second walk of the tree.
     float pm = GUIDING && table_pmf >= 0.0
-        ? (1.0 - ctx.mix) * source_model_pmf(x, model) + ctx.mix * table_pmf
+        ? (1.0 - ctx.mix) * source_model_pmf(x, ctx.n, model) + ctx.mix * table_pmf
         : source_pmf > 0.0 ? model_pmf_given_source(ctx, model, source_pmf)
         : source_pmf == 0.0 ? 0.0  // the walk found no leaf: not a sample (pdf 0)
         : model_pmf(ctx, model);

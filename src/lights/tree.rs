@@ -254,8 +254,105 @@ fn build_fixed(tree: &mut LightTree, at: u32, models: &[u32], path: u32, depth: 
     );
 }
 
-/// Finite lights: split at the median of the centroids along their widest axis (a
-/// balanced tree: depth ⌈log₂ n⌉).
+/// Buckets per axis that the surface-area-orientation heuristic tries splits between.
+const SAOH_BUCKETS: usize = 12;
+
+/// Depth left for median splits: a split by the heuristic may peel off one model per
+/// level, so below this margin the build falls back to the median (depth ⌈log₂ n⌉ from
+/// there), which keeps every path within MAX_DEPTH bits.
+const MEDIAN_MARGIN: u32 = 8;
+
+fn ceil_log2(n: usize) -> u32 {
+    usize::BITS - (n.max(1) - 1).leading_zeros()
+}
+
+impl Bounds {
+    /// The orientation measure of the bounds' cone of emission (Conty Estevez & Kulla
+    /// 2018): the solid angle of the normals' cone widened by the emission's spread,
+    /// weighted by cosine beyond θo.
+    fn orientation_measure(&self) -> f32 {
+        use std::f32::consts::PI;
+        let theta_o = self.theta_o.min(PI);
+        let theta_w = (theta_o + self.theta_e).min(PI);
+        let (sin_o, cos_o) = theta_o.sin_cos();
+        2.0 * PI * (1.0 - cos_o)
+            + 0.5
+                * PI
+                * (2.0 * theta_w * sin_o - (theta_o - 2.0 * theta_w).cos() - 2.0 * theta_o * sin_o
+                    + cos_o)
+    }
+
+    fn surface_area(&self) -> f32 {
+        let d = (self.max - self.min).max(Vec3::ZERO);
+        2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
+    }
+}
+
+/// The surface-area-orientation cost of a child with bounds `b` under a node of extent
+/// `extent`, split along `axis` (pbrt-v4's form: flux × orientation measure × area,
+/// stretched by how thin the node is along the split axis).
+fn saoh_cost(b: &Bounds, extent: Vec3, axis: usize) -> f64 {
+    let kr = extent.max_element() / extent[axis].max(1e-30);
+    kr as f64 * b.power * b.orientation_measure() as f64 * b.surface_area() as f64
+}
+
+/// Where the heuristic splits `items` (as (axis, how many go left once sorted along it)),
+/// or None where it finds no split that separates them (all centroids in one bucket).
+fn saoh_split(
+    items: &[(u32, Bounds)],
+    node: &Bounds,
+    lo: Vec3,
+    hi: Vec3,
+) -> Option<(usize, usize)> {
+    let extent = node.max - node.min;
+    let mut best: Option<(f64, usize, usize)> = None;
+    for axis in 0..3 {
+        let (a, b) = (lo[axis], hi[axis]);
+        if b <= a {
+            continue;
+        }
+        let bucket = |c: Vec3| {
+            (((c[axis] - a) / (b - a) * SAOH_BUCKETS as f32) as usize).min(SAOH_BUCKETS - 1)
+        };
+        let mut buckets: [Option<Bounds>; SAOH_BUCKETS] = [None; SAOH_BUCKETS];
+        let mut counts = [0usize; SAOH_BUCKETS];
+        for (_, lb) in items {
+            let k = bucket(lb.centroid());
+            counts[k] += 1;
+            buckets[k] = Some(buckets[k].map_or(*lb, |x| x.union(lb)));
+        }
+        let union = |x: Option<Bounds>, y: Option<Bounds>| match (x, y) {
+            (Some(x), Some(y)) => Some(x.union(&y)),
+            (x, None) => x,
+            (None, y) => y,
+        };
+        // Costs of the buckets right of each boundary, then a sweep from the left.
+        let mut right = [0.0f64; SAOH_BUCKETS];
+        let mut acc = None;
+        for k in (1..SAOH_BUCKETS).rev() {
+            acc = union(acc, buckets[k]);
+            right[k] = acc.map_or(0.0, |x| saoh_cost(&x, extent, axis));
+        }
+        let (mut acc, mut left_count) = (None, 0usize);
+        for k in 0..SAOH_BUCKETS - 1 {
+            acc = union(acc, buckets[k]);
+            left_count += counts[k];
+            if left_count == 0 || left_count == items.len() {
+                continue;
+            }
+            let cost = acc.map_or(0.0, |x| saoh_cost(&x, extent, axis)) + right[k + 1];
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, left_count));
+            }
+        }
+    }
+    best.map(|(_, axis, count)| (axis, count))
+}
+
+/// Finite lights: split where the surface-area-orientation heuristic (Conty Estevez &
+/// Kulla 2018) puts the least flux × orientation × area on the two sides, among splits
+/// between buckets of the centroids along each axis; at the median of the centroids along
+/// their widest axis where it finds none, or deep in the tree (MEDIAN_MARGIN).
 fn build_finite(tree: &mut LightTree, at: u32, items: &mut [(u32, Bounds)], path: u32, depth: u32) {
     let bounds = items[1..].iter().fold(items[0].1, |b, (_, o)| b.union(o));
     if items.len() == 1 {
@@ -269,20 +366,27 @@ fn build_finite(tree: &mut LightTree, at: u32, items: &mut [(u32, Bounds)], path
             (lo.min(b.centroid()), hi.max(b.centroid()))
         });
     let extent = hi - lo;
-    let axis = if extent.x >= extent.y && extent.x >= extent.z {
+    let widest = if extent.x >= extent.y && extent.x >= extent.z {
         0
     } else if extent.y >= extent.z {
         1
     } else {
         2
     };
+    let heuristic = if depth + ceil_log2(items.len()) + MEDIAN_MARGIN <= MAX_DEPTH {
+        saoh_split(items, &bounds, lo, hi)
+    } else {
+        None
+    };
+    let (axis, half) = heuristic.unwrap_or((widest, items.len() / 2));
     // Ties broken by model index, so the build does not depend on the sort's stability.
+    // (Splits between buckets keep every centroid of a bucket on one side, so sorting
+    // along the axis and cutting at the count reproduces them.)
     items.sort_by(|(ia, a), (ib, b)| {
         a.centroid()[axis]
             .total_cmp(&b.centroid()[axis])
             .then(ia.cmp(ib))
     });
-    let half = items.len() / 2;
     let children = push_pair(tree);
     tree.nodes[at as usize] = bounds.node(children, gpu::INVALID_INDEX);
     let (left, right) = items.split_at_mut(half);
@@ -295,9 +399,12 @@ fn build_finite(tree: &mut LightTree, at: u32, items: &mut [(u32, Bounds)], path
 /// An upper bound on what the node's emitters send toward `p`, up to a common factor:
 /// flux × cos θ′ / d², where θ′ is the least angle that a direction from the node's
 /// bounding sphere toward p can make with an emitter's normal less the emission's spread,
-/// and d the distance to the box's centre, at least the sphere's radius. Zero where
-/// nothing under the node can emit toward p.
-pub fn importance(n: &gpu::LightTreeNode, p: Vec3) -> f32 {
+/// and d the distance to the box's centre, at least the sphere's radius. With a
+/// `receiver` normal (zero for none: a surface that transmits, or no surface) the bound
+/// also takes cos θi′, the least angle between that normal and a direction from p into
+/// the sphere, and is zero for a node wholly below p's tangent plane (where an opaque
+/// surface's BSDF is zero). Zero where nothing under the node can emit toward p.
+pub fn importance(n: &gpu::LightTreeNode, p: Vec3, receiver: Vec3) -> f32 {
     if n.power <= 0.0 {
         return 0.0;
     }
@@ -308,41 +415,63 @@ pub fn importance(n: &gpu::LightTreeNode, p: Vec3) -> f32 {
     let v = p - c;
     let d2 = v.dot(v);
     let mut cos_t = 1.0f32;
-    if n.cos_normals > -1.0 && d2 > r2 {
+    let mut cos_i = 1.0f32;
+    if d2 > r2 {
         let d = d2.sqrt();
-        let cos_w = Vec3::from(n.axis).dot(v / d);
-        let sin_w = (1.0 - cos_w * cos_w).max(0.0).sqrt();
-        let cos_o = n.cos_normals;
-        let sin_o = (1.0 - cos_o * cos_o).max(0.0).sqrt();
-        // θx = max(θw − θo, 0)
-        let (cos_x, sin_x) = if cos_w >= cos_o {
-            (1.0, 0.0)
-        } else {
-            (cos_w * cos_o + sin_w * sin_o, sin_w * cos_o - cos_w * sin_o)
-        };
-        // θ′ = max(θx − θb, 0), sin θb = r / d
+        // θb, the half-angle of the bounding sphere seen from p: sin θb = r / d.
         let sin_b2 = r2 / d2;
         let cos_b = (1.0 - sin_b2).max(0.0).sqrt();
         let sin_b = sin_b2.sqrt();
-        cos_t = if cos_x >= cos_b {
-            1.0
-        } else {
-            cos_x * cos_b + sin_x * sin_b
+        // max(θ − θb, 0) for an angle θ given by its cosine and sine.
+        let less_b = |cos: f32, sin: f32| {
+            if cos >= cos_b {
+                1.0
+            } else {
+                cos * cos_b + sin * sin_b
+            }
         };
-        if cos_t <= n.cos_emission {
-            return 0.0;
+        if n.cos_normals > -1.0 {
+            let cos_w = Vec3::from(n.axis).dot(v / d);
+            let sin_w = (1.0 - cos_w * cos_w).max(0.0).sqrt();
+            let cos_o = n.cos_normals;
+            let sin_o = (1.0 - cos_o * cos_o).max(0.0).sqrt();
+            // θx = max(θw − θo, 0)
+            let (cos_x, sin_x) = if cos_w >= cos_o {
+                (1.0, 0.0)
+            } else {
+                (cos_w * cos_o + sin_w * sin_o, sin_w * cos_o - cos_w * sin_o)
+            };
+            // θ′ = max(θx − θb, 0)
+            cos_t = less_b(cos_x, sin_x);
+            if cos_t <= n.cos_emission {
+                return 0.0;
+            }
+        }
+        if receiver != Vec3::ZERO {
+            // θi′ = max(θi − θb, 0), θi the angle between the receiver's normal and the
+            // direction toward the box's centre.
+            let cos_r = -receiver.dot(v / d);
+            cos_i = less_b(cos_r, (1.0 - cos_r * cos_r).max(0.0).sqrt());
+            if cos_i <= 0.0 {
+                return 0.0;
+            }
         }
     }
-    n.power * cos_t.max(0.0) / d2.max(r2).max(1e-30)
+    n.power * cos_t.max(0.0) * cos_i / d2.max(r2).max(1e-30)
 }
 
 /// The probability of the left child at inner node `n`, seen from `p`.
-pub fn left_probability(nodes: &[gpu::LightTreeNode], n: &gpu::LightTreeNode, p: Vec3) -> f32 {
+pub fn left_probability(
+    nodes: &[gpu::LightTreeNode],
+    n: &gpu::LightTreeNode,
+    p: Vec3,
+    receiver: Vec3,
+) -> f32 {
     if n.flags & gpu::LIGHT_TREE_FIXED_SPLIT != 0 {
         return n.power;
     }
-    let a = importance(&nodes[n.child as usize], p);
-    let b = importance(&nodes[n.child as usize + 1], p);
+    let a = importance(&nodes[n.child as usize], p, receiver);
+    let b = importance(&nodes[n.child as usize + 1], p, receiver);
     if a + b > 0.0 {
         a / (a + b)
     } else {
@@ -351,13 +480,13 @@ pub fn left_probability(nodes: &[gpu::LightTreeNode], n: &gpu::LightTreeNode, p:
 }
 
 /// The tree's probability of `model` at `p` (without the uniform share).
-pub fn pmf(tree: &LightTree, model: u32, p: Vec3) -> f32 {
+pub fn pmf(tree: &LightTree, model: u32, p: Vec3, receiver: Vec3) -> f32 {
     let (path, depth) = tree.paths[model as usize];
     let mut n = 0usize;
     let mut pmf = 1.0f32;
     for k in 0..depth {
         let node = &tree.nodes[n];
-        let pl = left_probability(&tree.nodes, node, p);
+        let pl = left_probability(&tree.nodes, node, p, receiver);
         let right = (path >> k) & 1 != 0;
         pmf *= if right { 1.0 - pl } else { pl };
         n = node.child as usize + right as usize;
@@ -366,7 +495,7 @@ pub fn pmf(tree: &LightTree, model: u32, p: Vec3) -> f32 {
 }
 
 /// The model the tree chooses at `p` with the uniform number `u`, and its probability.
-pub fn sample(tree: &LightTree, p: Vec3, mut u: f32) -> (u32, f32) {
+pub fn sample(tree: &LightTree, p: Vec3, receiver: Vec3, mut u: f32) -> (u32, f32) {
     let mut n = 0usize;
     let mut pmf = 1.0f32;
     loop {
@@ -374,7 +503,7 @@ pub fn sample(tree: &LightTree, p: Vec3, mut u: f32) -> (u32, f32) {
         if node.child == gpu::INVALID_INDEX {
             return (node.model, pmf);
         }
-        let pl = left_probability(&tree.nodes, node, p);
+        let pl = left_probability(&tree.nodes, node, p, receiver);
         if u < pl {
             u /= pl;
             pmf *= pl;
@@ -487,16 +616,24 @@ mod tests {
         let (models, tris, punctual) = scene(7);
         let tree = build(&models, &tris, &punctual);
         let mut r = Rng(3);
-        for _ in 0..20 {
+        for i in 0..20 {
             let p = r.vec(30.0);
-            let pmfs: Vec<f32> = (0..models.len() as u32).map(|m| pmf(&tree, m, p)).collect();
+            // Half the points on a surface (a receiver normal), half not.
+            let receiver = if i % 2 == 0 {
+                r.vec(2.0).normalize()
+            } else {
+                Vec3::ZERO
+            };
+            let pmfs: Vec<f32> = (0..models.len() as u32)
+                .map(|m| pmf(&tree, m, p, receiver))
+                .collect();
             let total: f32 = pmfs.iter().sum();
             assert!((total - 1.0).abs() < 1e-4, "pmf sums to {total} at {p}");
             // Sampling returns each model's own pmf, and picks it that often.
             let n = 20_000;
             let mut counts = vec![0u32; models.len()];
             for i in 0..n {
-                let (m, q) = sample(&tree, p, (i as f32 + 0.5) / n as f32);
+                let (m, q) = sample(&tree, p, receiver, (i as f32 + 0.5) / n as f32);
                 assert!(
                     (q - pmfs[m as usize]).abs() <= 1e-5 * pmfs[m as usize].max(1e-3),
                     "pmf {q} against {}",
@@ -515,21 +652,35 @@ mod tests {
         }
     }
 
-    /// Wherever a model's light can reach p, the tree gives it a positive probability: the
-    /// bounds never rule out an emitter that emits toward the point.
+    /// Wherever a model's light can reach p from above its receiver's tangent plane, the
+    /// tree gives it a positive probability: the bounds never rule out an emitter that
+    /// emits toward the point.
     #[test]
     fn bounds_never_rule_out_light_that_reaches_the_point() {
         for seed in 1..6 {
             let (models, tris, punctual) = scene(seed);
             let tree = build(&models, &tris, &punctual);
             let mut r = Rng(seed + 100);
-            for _ in 0..400 {
+            for i in 0..400 {
                 let p = r.vec(30.0);
+                let receiver = if i % 2 == 0 {
+                    r.vec(2.0).normalize()
+                } else {
+                    Vec3::ZERO
+                };
+                let above = |y: Vec3| receiver.dot(y - p) > 1e-4 || receiver == Vec3::ZERO;
                 for (m, model) in models.iter().enumerate() {
                     let emits = if model.punctual != gpu::INVALID_INDEX {
                         let l = &punctual[model.punctual as usize];
-                        let w = (p - Vec3::from(l.position)).normalize();
-                        l.kind != gpu::PUNCTUAL_SPOT || w.dot(Vec3::from(l.direction)) > l.cos_outer
+                        if l.kind == gpu::PUNCTUAL_DIRECTIONAL {
+                            // Under the fixed split: every receiver sees them.
+                            true
+                        } else {
+                            let w = (p - Vec3::from(l.position)).normalize();
+                            (l.kind != gpu::PUNCTUAL_SPOT
+                                || w.dot(Vec3::from(l.direction)) > l.cos_outer)
+                                && above(Vec3::from(l.position))
+                        }
                     } else {
                         (0..model.triangle_count).any(|k| {
                             let t = &tris[(model.first_triangle + k) as usize];
@@ -547,13 +698,14 @@ mod tests {
                                 let (p0, p1, p2) =
                                     (Vec3::from(t.p0), Vec3::from(t.p1), Vec3::from(t.p2));
                                 let y = p0 + a * (p1 - p0) + b * (p2 - p0);
-                                t.two_sided != 0 || Vec3::from(t.normal).dot(p - y) > 1e-4
+                                (t.two_sided != 0 || Vec3::from(t.normal).dot(p - y) > 1e-4)
+                                    && above(y)
                             })
                         })
                     };
                     if emits {
                         assert!(
-                            pmf(&tree, m as u32, p) > 0.0,
+                            pmf(&tree, m as u32, p, receiver) > 0.0,
                             "seed {seed}: model {m} emits toward {p} but has pmf 0"
                         );
                     }
@@ -581,6 +733,59 @@ mod tests {
         let tree = build(&models, &[], &punctual);
         let p = Vec3::new(1.0, 0.0, 0.0);
         // 1/1² against 1/9²: 81/82.
-        assert!((pmf(&tree, 0, p) - 81.0 / 82.0).abs() < 1e-5);
+        assert!((pmf(&tree, 0, p, Vec3::ZERO) - 81.0 / 82.0).abs() < 1e-5);
+        // On a surface facing the far light, the near one is below its tangent plane.
+        assert_eq!(pmf(&tree, 0, p, Vec3::X), 0.0);
+        assert!((pmf(&tree, 1, p, Vec3::X) - 1.0).abs() < 1e-6);
+    }
+
+    /// Lights spaced ever wider apart along a line put nearly all centroids in the first
+    /// bucket of every split, so the heuristic peels off a few per level: the build
+    /// falls back to median splits in time and every path fits its 32 bits.
+    #[test]
+    fn lopsided_splits_stay_within_the_path_bits() {
+        let n = 2000;
+        let punctual: Vec<gpu::PunctualLight> = (0..n)
+            .map(|k| gpu::PunctualLight {
+                position: [1.02f32.powi(k), 0.0, 0.0],
+                kind: gpu::PUNCTUAL_POINT,
+                direction: [0.0, 0.0, -1.0],
+                range: 0.0,
+                intensity: [1.0; 3],
+                cos_inner: 1.0,
+                cos_outer: 1.0,
+            })
+            .collect();
+        let models: Vec<_> = (0..n as u32).map(|k| model(0, 0, k, 1.0)).collect();
+        let tree = build(&models, &[], &punctual);
+        let deepest = tree.paths.iter().map(|&(_, d)| d).max().unwrap();
+        assert!(
+            deepest > ceil_log2(n as usize),
+            "the heuristic's splits were taken"
+        );
+        assert!(deepest <= MAX_DEPTH, "depth {deepest}");
+        let p = Vec3::new(3.0, 1.0, 0.0);
+        let total: f32 = (0..n as u32).map(|m| pmf(&tree, m, p, Vec3::ZERO)).sum();
+        assert!((total - 1.0).abs() < 1e-4, "pmf sums to {total}");
+    }
+
+    #[test]
+    fn lights_at_grazing_angles_count_less() {
+        // Two equal point lights at equal distances, one straight above the receiver and
+        // one 60° off its normal: cos θi weighs them 1 : 1/2.
+        let at = |p: Vec3| gpu::PunctualLight {
+            position: p.into(),
+            kind: gpu::PUNCTUAL_POINT,
+            direction: [0.0, 0.0, -1.0],
+            range: 0.0,
+            intensity: [1.0; 3],
+            cos_inner: 1.0,
+            cos_outer: 1.0,
+        };
+        let s3 = 3f32.sqrt() / 2.0;
+        let punctual = vec![at(Vec3::Y), at(Vec3::new(s3, 0.5, 0.0))];
+        let models = vec![model(0, 0, 0, 1.0), model(0, 0, 1, 1.0)];
+        let tree = build(&models, &[], &punctual);
+        assert!((pmf(&tree, 0, Vec3::ZERO, Vec3::Y) - 2.0 / 3.0).abs() < 1e-5);
     }
 }
