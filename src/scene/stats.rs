@@ -27,6 +27,10 @@ pub struct SceneStats {
     pub textures: u64,
     pub cameras: u64,
     pub light_models: u64,
+    /// The deepest and the mean depth of a light model in the light tree (`--source
+    /// tree`): the levels a walk to it evaluates.
+    pub light_tree_depth_max: u32,
+    pub light_tree_depth_mean: f64,
     pub emissive_triangles: u64,
     pub dropped_emissive_triangles: u64,
     pub punctual_lights: u64,
@@ -88,6 +92,18 @@ impl SceneStats {
             textures: scene.textures.len() as u64,
             cameras: scene.cameras.len() as u64,
             light_models: lights.models.len() as u64,
+            light_tree_depth_max: lights
+                .models
+                .iter()
+                .map(|m| m.tree_depth)
+                .max()
+                .unwrap_or(0),
+            light_tree_depth_mean: lights
+                .models
+                .iter()
+                .map(|m| m.tree_depth as f64)
+                .sum::<f64>()
+                / lights.models.len().max(1) as f64,
             emissive_triangles: lights.triangles.len() as u64,
             dropped_emissive_triangles: lights.dropped_triangles,
             punctual_lights: scene.punctual.len() as u64,
@@ -136,7 +152,11 @@ impl fmt::Display for SceneStats {
         writeln!(f)?;
         writeln!(f, "textures            {}", self.textures)?;
         writeln!(f, "cameras             {}", self.cameras)?;
-        writeln!(f, "light models        {}", self.light_models)?;
+        writeln!(
+            f,
+            "light models        {} (light tree depth {:.1} mean, {} most)",
+            self.light_models, self.light_tree_depth_mean, self.light_tree_depth_max
+        )?;
         writeln!(
             f,
             "emissive triangles  {} ({} dropped: zero area or emission)",
