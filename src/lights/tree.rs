@@ -714,21 +714,26 @@ mod tests {
         }
     }
 
+    /// A point light of unit intensity at `p`.
+    fn point_light(p: Vec3) -> gpu::PunctualLight {
+        gpu::PunctualLight {
+            position: p.into(),
+            kind: gpu::PUNCTUAL_POINT,
+            direction: [0.0, 0.0, -1.0],
+            range: 0.0,
+            intensity: [1.0; 3],
+            cos_inner: 1.0,
+            cos_outer: 1.0,
+        }
+    }
+
     #[test]
     fn nearby_lights_are_favoured() {
         // Two equal point lights: the near one gets most of the probability.
-        let punctual: Vec<gpu::PunctualLight> = [Vec3::ZERO, Vec3::new(10.0, 0.0, 0.0)]
-            .iter()
-            .map(|&p| gpu::PunctualLight {
-                position: p.into(),
-                kind: gpu::PUNCTUAL_POINT,
-                direction: [0.0, 0.0, -1.0],
-                range: 0.0,
-                intensity: [1.0; 3],
-                cos_inner: 1.0,
-                cos_outer: 1.0,
-            })
-            .collect();
+        let punctual = vec![
+            point_light(Vec3::ZERO),
+            point_light(Vec3::new(10.0, 0.0, 0.0)),
+        ];
         let models = vec![model(0, 0, 0, 1.0), model(0, 0, 1, 1.0)];
         let tree = build(&models, &[], &punctual);
         let p = Vec3::new(1.0, 0.0, 0.0);
@@ -745,16 +750,8 @@ mod tests {
     #[test]
     fn lopsided_splits_stay_within_the_path_bits() {
         let n = 2000;
-        let punctual: Vec<gpu::PunctualLight> = (0..n)
-            .map(|k| gpu::PunctualLight {
-                position: [1.02f32.powi(k), 0.0, 0.0],
-                kind: gpu::PUNCTUAL_POINT,
-                direction: [0.0, 0.0, -1.0],
-                range: 0.0,
-                intensity: [1.0; 3],
-                cos_inner: 1.0,
-                cos_outer: 1.0,
-            })
+        let punctual: Vec<_> = (0..n)
+            .map(|k| point_light(Vec3::new(1.02f32.powi(k), 0.0, 0.0)))
             .collect();
         let models: Vec<_> = (0..n as u32).map(|k| model(0, 0, k, 1.0)).collect();
         let tree = build(&models, &[], &punctual);
@@ -773,17 +770,8 @@ mod tests {
     fn lights_at_grazing_angles_count_less() {
         // Two equal point lights at equal distances, one straight above the receiver and
         // one 60° off its normal: cos θi weighs them 1 : 1/2.
-        let at = |p: Vec3| gpu::PunctualLight {
-            position: p.into(),
-            kind: gpu::PUNCTUAL_POINT,
-            direction: [0.0, 0.0, -1.0],
-            range: 0.0,
-            intensity: [1.0; 3],
-            cos_inner: 1.0,
-            cos_outer: 1.0,
-        };
         let s3 = 3f32.sqrt() / 2.0;
-        let punctual = vec![at(Vec3::Y), at(Vec3::new(s3, 0.5, 0.0))];
+        let punctual = vec![point_light(Vec3::Y), point_light(Vec3::new(s3, 0.5, 0.0))];
         let models = vec![model(0, 0, 0, 1.0), model(0, 0, 1, 1.0)];
         let tree = build(&models, &[], &punctual);
         assert!((pmf(&tree, 0, Vec3::ZERO, Vec3::Y) - 2.0 / 3.0).abs() < 1e-5);
