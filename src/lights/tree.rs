@@ -296,6 +296,15 @@ fn saoh_cost(b: &Bounds, extent: Vec3, axis: usize) -> f64 {
     kr as f64 * b.power * b.orientation_measure() as f64 * b.surface_area() as f64
 }
 
+/// The union of two optional bounds (None: empty).
+fn union(x: Option<Bounds>, y: Option<Bounds>) -> Option<Bounds> {
+    match (x, y) {
+        (Some(x), Some(y)) => Some(x.union(&y)),
+        (x, None) => x,
+        (None, y) => y,
+    }
+}
+
 /// Where the heuristic splits `items` (as (axis, how many go left once sorted along it)),
 /// or None where it finds no split that separates them (all centroids in one bucket).
 fn saoh_split(
@@ -319,13 +328,8 @@ fn saoh_split(
         for (_, lb) in items {
             let k = bucket(lb.centroid());
             counts[k] += 1;
-            buckets[k] = Some(buckets[k].map_or(*lb, |x| x.union(lb)));
+            buckets[k] = union(buckets[k], Some(*lb));
         }
-        let union = |x: Option<Bounds>, y: Option<Bounds>| match (x, y) {
-            (Some(x), Some(y)) => Some(x.union(&y)),
-            (x, None) => x,
-            (None, y) => y,
-        };
         // Costs of the buckets right of each boundary, then a sweep from the left.
         let mut right = [0.0f64; SAOH_BUCKETS];
         let mut acc = None;
