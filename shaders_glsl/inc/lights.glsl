@@ -30,7 +30,7 @@ struct LightSample {
     vec3 n;         // geometric normal at the light point, on the side facing x (area
                     // lights; shadow rays start their far end off the light along it)
     vec2 bary;      // barycentrics of the point on triangle `tri` (of its corners 1, 2)
-    bool textured;  // Le_G holds the untextured stand-in of a textured emitter
+    bool textured;  // Le_G holds the stand-in of a textured or alpha-masked emitter
                     // (sample_light without exact emission; light_sample_complete)
 };
 
@@ -138,7 +138,9 @@ float light_source_pdf(LightContext ctx, uint tri) {
     return model_pmf(ctx, model) * triangle_pmf(tri, light_models(model)) * light_candidates(tri).inv_area;
 }
 
-// Radiance leaving light triangle `lt` at barycentrics (b1, b2) in direction `dir`.
+// Radiance leaving light triangle `lt` at barycentrics (b1, b2) in direction `dir`: the
+// emission (textured or not) times the surface's coverage there where its material is
+// not opaque.
 vec3 light_triangle_radiance(LightTriangle lt, vec2 b, vec3 dir) {
     if (lt.two_sided == 0u && dot(lt.normal, dir) <= 0.0) return vec3(0.0);
     Material m = materials(lt.material);
@@ -147,6 +149,7 @@ vec3 light_triangle_radiance(LightTriangle lt, vec2 b, vec3 dir) {
         vec2 uv = (1.0 - b.x - b.y) * lt.uv0 + b.x * lt.uv1 + b.y * lt.uv2;
         e *= sample_texture(m.emissive_tex, uv).rgb;
     }
+    if (lt.instance != INVALID_INDEX) e *= geometry_coverage(lt.instance, lt.primitive, b);
     return e;
 }
 
@@ -206,7 +209,8 @@ LightSample light_point(LightCandidateTriangle lt, uint tri, uint model, vec2 b,
     // One-sided emitters emit on the front face only (toward x: cos_signed < 0).
     bool emits = (lt.flags & LIGHT_CANDIDATE_TWO_SIDED) != 0u || cos_signed < 0.0;
     vec3 Le = emits ? lt.emission : vec3(0.0);
-    s.textured = (lt.flags & LIGHT_CANDIDATE_TEXTURED) != 0u;
+    // Textured and alpha-masked emitters: the record's emission is a stand-in.
+    s.textured = (lt.flags & (LIGHT_CANDIDATE_TEXTURED | LIGHT_CANDIDATE_ALPHA)) != 0u;
     if (exact_emission && s.textured && emits) {
         Le = light_triangle_radiance(light_triangles(tri), b, -s.wi);
         s.textured = false;

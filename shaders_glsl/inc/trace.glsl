@@ -34,14 +34,7 @@ bool alpha_passes(uint instance, uint primitive, vec2 bary, uvec4 ray_key) {
     Instance inst = instances(instance);
     Material m = materials(inst.material);
     if (m.alpha_mode == ALPHA_MODE_OPAQUE) return true;
-    float alpha = m.base_color.a;
-    if (m.base_color_tex.index >= 0 || inst.color_offset != INVALID_INDEX) {
-        uvec3 v = triangle_vertices(inst, primitive);
-        vec3 w = vec3(1.0 - bary.x - bary.y, bary.x, bary.y);
-        alpha *= interpolate_color(inst, v, w).a;
-        if (m.base_color_tex.index >= 0)
-            alpha *= sample_texture(m.base_color_tex, interpolate_uv(v, w, m.base_color_tex.uv_set)).a;
-    }
+    float alpha = geometry_alpha(inst, m, primitive, bary);
     if (m.alpha_mode == ALPHA_MODE_MASK) return alpha >= m.alpha_cutoff;
     return hash_to_float(ray_key ^ uvec4(instance, primitive, floatBitsToUint(bary.x), 0x9e3779b9u)) < alpha;
 }

@@ -23,6 +23,9 @@
 #define LIGHT_CANDIDATE_TWO_SIDED 1u
 #define LIGHT_CANDIDATE_TEXTURED 2u
 #define LIGHT_CANDIDATE_FLIPPED 4u
+// Alpha-masked or blended (alphaMode MASK or BLEND): the emission at a point is scaled by
+// the surface's coverage there (geometry_coverage), so the candidate's is a stand-in.
+#define LIGHT_CANDIDATE_ALPHA 8u
 
 // Camera projections.
 #define CAMERA_PERSPECTIVE 0u

@@ -62,7 +62,7 @@ impl LightTable {
         let mut instance_lights = Vec::with_capacity(scene.instances.len());
         let mut dropped = 0u64;
 
-        for inst in &scene.instances {
+        for (instance_index, inst) in scene.instances.iter().enumerate() {
             let prim = &scene.primitives[inst.primitive as usize];
             let material = &scene.materials[prim.material as usize];
             let factor = material.emission;
@@ -77,6 +77,8 @@ impl LightTable {
                 continue;
             }
             let two_sided = material.flags & gpu::MATERIAL_FLAG_DOUBLE_SIDED != 0;
+            // Not opaque: the kernels scale the emission by the coverage at the point.
+            let masked = material.alpha_mode != gpu::ALPHA_MODE_OPAQUE;
             let flipped = inst.transform.determinant() < 0.0;
             let model_index = models.len() as u32;
             let first = triangles.len() as u32;
@@ -132,6 +134,10 @@ impl LightTable {
                     gpu::LIGHT_CANDIDATE_FLIPPED
                 } else {
                     0
+                } | if masked {
+                    gpu::LIGHT_CANDIDATE_ALPHA
+                } else {
+                    0
                 };
                 candidates.push(gpu::LightCandidateTriangle {
                     p0: p0.into(),
@@ -154,6 +160,13 @@ impl LightTable {
                     uv1: uvs[1],
                     uv2: uvs[2],
                     power: power as f32,
+                    // The scene's instance here; `GpuScene` renumbers it in kernel order.
+                    instance: if masked {
+                        instance_index as u32
+                    } else {
+                        gpu::INVALID_INDEX
+                    },
+                    primitive: t,
                 });
                 model_power += power;
             }

@@ -126,8 +126,25 @@ impl GpuScene {
             .collect();
         let instances = Buffer::from_slice(device, &gpu_instances, STORAGE, "instances")?;
         let materials = Buffer::from_slice(device, &scene.materials, STORAGE, "materials")?;
+        // Light triangles of alpha-masked emitters name their instance, in kernel order.
+        let mut kernel_index = vec![gpu::INVALID_INDEX; scene.instances.len()];
+        for (k, &i) in plan.order.iter().enumerate() {
+            kernel_index[i] = k as u32;
+        }
+        let light_triangles: Vec<gpu::LightTriangle> = lights
+            .triangles
+            .iter()
+            .map(|t| gpu::LightTriangle {
+                instance: if t.instance == gpu::INVALID_INDEX {
+                    gpu::INVALID_INDEX
+                } else {
+                    kernel_index[t.instance as usize]
+                },
+                ..*t
+            })
+            .collect();
         let light_triangles =
-            Buffer::from_slice(device, &lights.triangles, STORAGE, "light triangles")?;
+            Buffer::from_slice(device, &light_triangles, STORAGE, "light triangles")?;
         let light_candidates = Buffer::from_slice(
             device,
             &lights.candidates,
