@@ -148,13 +148,19 @@ fn direct_light_from_a_spot_light_matches_closed_form() {
 
 /// Emitters whose material is not opaque light only as much as rays find of them: a
 /// BLEND emitter of alpha a is kept by a ray with probability a, a MASK emitter is there
-/// where its alpha reaches the cutoff. The plane-quad light made BLEND with alpha 0.4
-/// must give 0.4 × the closed form, MASK with alpha 0.7 all of it and with alpha 0.3 none,
-/// by NEE alone and with MIS, `pt` and `ris` (whose candidates carry the light's emission
-/// as a stand-in and the kept one its coverage). Seen to fail with light samples that
-/// ignore the coverage (`pt` by NEE alone 0.368 against 0.147 for the BLEND light).
+/// where its alpha reaches the cutoff. The plane-quad light, with its alpha in the
+/// material's factor (the same everywhere: the light table scales its power and RIS's
+/// stand-in emission too) or in its vertex colours (the kernels find it per light
+/// sample), must give the closed form times its coverage: BLEND at 0.4, 0.4 × it; MASK
+/// above the cutoff, all of it; MASK below, none (through vertex colours; through the
+/// factor the light table has no light left and says so). By NEE alone and with MIS,
+/// `pt` and `ris` (whose candidates weigh a stand-in emission and the kept one its
+/// coverage). Seen to fail with light samples that ignore the coverage (`pt` by NEE
+/// alone 0.368 against 0.147 for the BLEND light) and with a coverage that takes the
+/// material's alpha factor alone (0.368 against 0.147 with the alpha in the colours).
 #[test]
 fn emitters_that_are_not_opaque_light_as_much_as_rays_find_of_them() {
+    use lanterna::gpu::{ALPHA_MODE_BLEND, ALPHA_MODE_MASK};
     let t = testing::generated(Kind::PlaneQuad, &Options::default());
     let full = testing::analytic(&t.scene)["expected_radiance_at_look_at"]
         .as_f64()
@@ -166,11 +172,13 @@ fn emitters_that_are_not_opaque_light_as_much_as_rays_find_of_them() {
             fov_degrees: Some(0.05),
             ..Default::default()
         });
-    use lanterna::gpu::{ALPHA_MODE_BLEND, ALPHA_MODE_MASK};
-    for (mode, alpha, share) in [
-        (ALPHA_MODE_BLEND, 0.4f32, 0.4),
-        (ALPHA_MODE_MASK, 0.7, 1.0),
-        (ALPHA_MODE_MASK, 0.3, 0.0),
+    // (alpha mode, alpha, in the vertex colours rather than the factor, expected share)
+    for (mode, alpha, per_vertex, share) in [
+        (ALPHA_MODE_BLEND, 0.4f32, false, Some(0.4)),
+        (ALPHA_MODE_BLEND, 0.4, true, Some(0.4)),
+        (ALPHA_MODE_MASK, 0.7, false, Some(1.0)),
+        (ALPHA_MODE_MASK, 0.3, true, Some(0.0)),
+        (ALPHA_MODE_MASK, 0.3, false, None),
     ] {
         let mut scene = lanterna::scene::Scene::load(&t.path, &Default::default()).unwrap();
         let lights: Vec<u32> = (0..scene.materials.len() as u32)
@@ -186,15 +194,32 @@ fn emitters_that_are_not_opaque_light_as_much_as_rays_find_of_them() {
             let mat = &mut scene.materials[m as usize];
             mat.alpha_mode = mode;
             mat.alpha_cutoff = 0.5;
-            mat.base_color[3] = alpha;
+            mat.base_color[3] = if per_vertex { 1.0 } else { alpha };
         }
-        for p in scene
-            .primitives
-            .iter_mut()
-            .filter(|p| lights.contains(&p.material))
-        {
-            p.opaque = false;
+        for p in 0..scene.primitives.len() {
+            if !lights.contains(&scene.primitives[p].material) {
+                continue;
+            }
+            scene.primitives[p].opaque = false;
+            if per_vertex {
+                scene.primitives[p].color_offset = scene.colors.len() as u32;
+                let n = scene.primitives[p].vertex_count as usize;
+                scene
+                    .colors
+                    .extend(std::iter::repeat_n([1.0, 1.0, 1.0, alpha], n));
+            }
         }
+        let what = format!("alpha mode {mode}, alpha {alpha} (per vertex: {per_vertex})");
+        let Some(share) = share else {
+            assert!(
+                matches!(
+                    lanterna::lights::LightTable::build(&scene),
+                    Err(lanterna::scene::SceneError::NoLights { .. })
+                ),
+                "{what}: a light cut out everywhere left in the light table"
+            );
+            continue;
+        };
         for method in [Method::Pt, Method::Ris] {
             for strategy in [Strategy::Nee, Strategy::Mis] {
                 let mut s = testing::settings(method, 3, 3);
@@ -205,7 +230,7 @@ fn emitters_that_are_not_opaque_light_as_much_as_rays_find_of_them() {
                     &b,
                     (1, 1, 1, 1),
                     share * full,
-                    &format!("alpha mode {mode}, alpha {alpha}: {method} {strategy:?}"),
+                    &format!("{what}: {method} {strategy:?}"),
                 );
             }
         }

@@ -69,7 +69,8 @@ impl LightTable {
             let texture = (material.emissive_tex.index >= 0)
                 .then(|| &scene.textures[material.emissive_tex.index as usize]);
             let texture_black = texture.is_some_and(|t| t.max_luminance() <= 0.0);
-            if factor.iter().all(|&c| c <= 0.0) || texture_black {
+            let coverage = uniform_coverage(material, prim.color_offset);
+            if factor.iter().all(|&c| c <= 0.0) || texture_black || coverage == Some(0.0) {
                 if factor.iter().any(|&c| c > 0.0) {
                     dropped += prim.triangle_count as u64;
                 }
@@ -106,6 +107,7 @@ impl LightTable {
                     avg.max(1e-3 * tex.max_luminance())
                 });
                 let power = area as f64
+                    * coverage.unwrap_or(1.0) as f64
                     * std::f64::consts::PI
                     * luminance(factor) as f64
                     * mean_texture as f64
@@ -145,7 +147,7 @@ impl LightTable {
                     e1: (p1 - p0).into(),
                     flags,
                     e2: (p2 - p0).into(),
-                    emission: factor.map(|c| c * mean_texture),
+                    emission: factor.map(|c| c * mean_texture * coverage.unwrap_or(1.0)),
                 });
                 triangles.push(gpu::LightTriangle {
                     p0: p0.into(),
@@ -219,7 +221,9 @@ impl LightTable {
             });
         }
         if dropped > 0 {
-            log::info!("dropped {dropped} emissive triangles with zero area or zero emission");
+            log::info!(
+                "dropped {dropped} emissive triangles with zero area, emission or alpha coverage"
+            );
         }
 
         let model_weights: Vec<f64> = models.iter().map(|m| m.power as f64).collect();
@@ -297,4 +301,28 @@ fn mean_texture_luminance(
 /// Area of the triangle (p0, p1, p2).
 pub fn triangle_area(p: [Vec3; 3]) -> f32 {
     0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length()
+}
+
+/// The coverage of an emitter's surface where it is the same everywhere on it (no base
+/// colour texture and no vertex colours): 1 when opaque, for alpha MASK 1 or 0 as its
+/// alpha passes the cutoff, for BLEND its alpha (what `geometry_coverage` in
+/// inc/geometry.glsl finds at every point). `None` where it varies: the kernels then find
+/// it per light sample, and the power and RIS's stand-in emission take none.
+fn uniform_coverage(material: &gpu::Material, color_offset: u32) -> Option<f32> {
+    if material.alpha_mode == gpu::ALPHA_MODE_OPAQUE {
+        return Some(1.0);
+    }
+    if material.base_color_tex.index >= 0 || color_offset != gpu::INVALID_INDEX {
+        return None;
+    }
+    let alpha = material.base_color[3];
+    Some(if material.alpha_mode == gpu::ALPHA_MODE_MASK {
+        if alpha >= material.alpha_cutoff {
+            1.0
+        } else {
+            0.0
+        }
+    } else {
+        alpha.clamp(0.0, 1.0)
+    })
 }

@@ -551,6 +551,8 @@ mod tests {
             uv1: [0.0; 2],
             uv2: [0.0; 2],
             power: 0.5 * cross.length(),
+            instance: gpu::INVALID_INDEX,
+            primitive: 0,
         }
     }
 

@@ -50,7 +50,7 @@ pub enum SceneError {
         wanted: String,
         available: String,
     },
-    #[error("{path}: the scene has no lights (no emissive triangles with non-zero area and emission, and no punctual lights)")]
+    #[error("{path}: the scene has no lights (no emissive triangles with non-zero area, emission and alpha coverage, and no punctual lights)")]
     NoLights { path: PathBuf },
     #[error("{path}: the scene has no triangles")]
     Empty { path: PathBuf },

@@ -159,7 +159,7 @@ impl fmt::Display for SceneStats {
         )?;
         writeln!(
             f,
-            "emissive triangles  {} ({} dropped: zero area or emission)",
+            "emissive triangles  {} ({} dropped: zero area, emission or alpha coverage)",
             self.emissive_triangles, self.dropped_emissive_triangles
         )?;
         writeln!(f, "punctual lights     {}", self.punctual_lights)?;
