@@ -153,7 +153,8 @@ fn direct_light_from_a_spot_light_matches_closed_form() {
 /// stand-in emission too) or in its vertex colours (the kernels find it per light
 /// sample), must give the closed form times its coverage: BLEND at 0.4, 0.4 × it; MASK
 /// above the cutoff, all of it; MASK below, none (through vertex colours; through the
-/// factor the light table has no light left and says so). By NEE alone and with MIS,
+/// factor the light table has no light left and says so; the light table weighs it by
+/// its mean coverage, at least 1/64). By NEE alone and with MIS,
 /// `pt` and `ris` (whose candidates weigh a stand-in emission and the kept one its
 /// coverage). Seen to fail with light samples that ignore the coverage (`pt` by NEE
 /// alone 0.368 against 0.147 for the BLEND light) and with a coverage that takes the
@@ -172,9 +173,12 @@ fn emitters_that_are_not_opaque_light_as_much_as_rays_find_of_them() {
             fov_degrees: Some(0.05),
             ..Default::default()
         });
+    let opaque_power = lanterna::lights::LightTable::build(&t.scene)
+        .unwrap()
+        .total_power;
     // (alpha mode, alpha, in the vertex colours rather than the factor, expected share)
     for (mode, alpha, per_vertex, share) in [
-        (ALPHA_MODE_BLEND, 0.4f32, false, Some(0.4)),
+        (ALPHA_MODE_BLEND, 0.4f32, false, Some(0.4f64)),
         (ALPHA_MODE_BLEND, 0.4, true, Some(0.4)),
         (ALPHA_MODE_MASK, 0.7, false, Some(1.0)),
         (ALPHA_MODE_MASK, 0.3, true, Some(0.0)),
@@ -210,6 +214,17 @@ fn emitters_that_are_not_opaque_light_as_much_as_rays_find_of_them() {
             }
         }
         let what = format!("alpha mode {mode}, alpha {alpha} (per vertex: {per_vertex})");
+        // The light table weighs the light by its mean coverage (at least 1/64).
+        if let Some(share) = share {
+            let power = lanterna::lights::LightTable::build(&scene)
+                .unwrap()
+                .total_power;
+            let ratio = power / opaque_power;
+            assert!(
+                (ratio - share.max(1.0 / 64.0)).abs() < 1e-5,
+                "{what}: the light's power is {ratio} of the opaque light's"
+            );
+        }
         let Some(share) = share else {
             assert!(
                 matches!(

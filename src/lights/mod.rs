@@ -106,8 +106,15 @@ impl LightTable {
                     // source must stay positive wherever emission may be.
                     avg.max(1e-3 * tex.max_luminance())
                 });
+                // Where the coverage varies over the emitter, its mean over the triangle
+                // (at least 1/64, so that no estimate makes a lit part unsamplable).
+                let coverage = coverage.unwrap_or_else(|| {
+                    let local = |k: usize| scene.indices[base + k];
+                    mean_coverage(scene, material, prim, [local(0), local(1), local(2)])
+                        .max(1.0 / 64.0)
+                });
                 let power = area as f64
-                    * coverage.unwrap_or(1.0) as f64
+                    * coverage as f64
                     * std::f64::consts::PI
                     * luminance(factor) as f64
                     * mean_texture as f64
@@ -147,7 +154,7 @@ impl LightTable {
                     e1: (p1 - p0).into(),
                     flags,
                     e2: (p2 - p0).into(),
-                    emission: factor.map(|c| c * mean_texture * coverage.unwrap_or(1.0)),
+                    emission: factor.map(|c| c * mean_texture * coverage),
                 });
                 triangles.push(gpu::LightTriangle {
                     p0: p0.into(),
@@ -277,6 +284,15 @@ fn mean_texture_luminance(
     tref: &gpu::TextureRef,
     uvs: [[f32; 2]; 3],
 ) -> f32 {
+    mean_over_triangle(|b| {
+        let c = tex.texel(transform_uv(tref, interpolate(uvs, b)));
+        luminance([c[0], c[1], c[2]])
+    })
+}
+
+/// The mean of `f` over a triangle, from the centres of its 36 cells of an 8 × 8
+/// subdivision (barycentric coordinates of the corners 0, 1, 2).
+fn mean_over_triangle(f: impl Fn([f32; 3]) -> f32) -> f32 {
     const N: usize = 8;
     let mut sum = 0.0;
     let mut count = 0;
@@ -285,17 +301,58 @@ fn mean_texture_luminance(
             // Centre of a sub-triangle cell in barycentric coordinates.
             let b1 = (i as f32 + 1.0 / 3.0) / N as f32;
             let b2 = (j as f32 + 1.0 / 3.0) / N as f32;
-            let b0 = 1.0 - b1 - b2;
-            let uv = [
-                b0 * uvs[0][0] + b1 * uvs[1][0] + b2 * uvs[2][0],
-                b0 * uvs[0][1] + b1 * uvs[1][1] + b2 * uvs[2][1],
-            ];
-            let c = tex.texel(transform_uv(tref, uv));
-            sum += luminance([c[0], c[1], c[2]]);
+            sum += f([1.0 - b1 - b2, b1, b2]);
             count += 1;
         }
     }
     sum / count as f32
+}
+
+fn interpolate<const K: usize>(v: [[f32; K]; 3], b: [f32; 3]) -> [f32; K] {
+    std::array::from_fn(|k| b[0] * v[0][k] + b[1] * v[1][k] + b[2] * v[2][k])
+}
+
+/// The mean coverage (`geometry_coverage`) over a triangle of an emitter whose alpha
+/// varies: the material's alpha factor times its base colour texture's alpha and its
+/// vertex colours' (`local`: the triangle's vertex indices within the primitive).
+fn mean_coverage(
+    scene: &Scene,
+    material: &gpu::Material,
+    prim: &crate::scene::MeshPrimitive,
+    local: [u32; 3],
+) -> f32 {
+    let vertex = |k: usize| &scene.vertices[(prim.vertex_offset + local[k]) as usize];
+    let tref = &material.base_color_tex;
+    let texture = (tref.index >= 0).then(|| &scene.textures[tref.index as usize]);
+    let uvs: [[f32; 2]; 3] = std::array::from_fn(|k| {
+        if tref.uv_set == 1 {
+            vertex(k).uv1
+        } else {
+            vertex(k).uv0
+        }
+    });
+    let colour_alpha: [[f32; 1]; 3] = std::array::from_fn(|k| {
+        if prim.color_offset == gpu::INVALID_INDEX {
+            [1.0]
+        } else {
+            [scene.colors[(prim.color_offset + local[k]) as usize][3]]
+        }
+    });
+    mean_over_triangle(|b| {
+        let mut alpha = material.base_color[3] * interpolate(colour_alpha, b)[0];
+        if let Some(tex) = texture {
+            alpha *= tex.texel(transform_uv(tref, interpolate(uvs, b)))[3];
+        }
+        if material.alpha_mode == gpu::ALPHA_MODE_MASK {
+            if alpha >= material.alpha_cutoff {
+                1.0
+            } else {
+                0.0
+            }
+        } else {
+            alpha.clamp(0.0, 1.0)
+        }
+    })
 }
 
 /// Area of the triangle (p0, p1, p2).
@@ -307,7 +364,8 @@ pub fn triangle_area(p: [Vec3; 3]) -> f32 {
 /// colour texture and no vertex colours): 1 when opaque, for alpha MASK 1 or 0 as its
 /// alpha passes the cutoff, for BLEND its alpha (what `geometry_coverage` in
 /// inc/geometry.glsl finds at every point). `None` where it varies: the kernels then find
-/// it per light sample, and the power and RIS's stand-in emission take none.
+/// it per light sample, and the power and RIS's stand-in emission take its mean over each
+/// triangle (`mean_coverage`).
 fn uniform_coverage(material: &gpu::Material, color_offset: u32) -> Option<f32> {
     if material.alpha_mode == gpu::ALPHA_MODE_OPAQUE {
         return Some(1.0);
