@@ -14,6 +14,7 @@
 
 use lanterna::render::{Method, RenderStats, Strategy};
 use lanterna::scene::generate::{Kind, Options};
+use lanterna::scene::Camera;
 use lanterna::testing::{self, Batches};
 use lanterna::{stats, testing::render_batches};
 use std::sync::atomic::AtomicBool;
@@ -96,7 +97,19 @@ fn russian_roulette_keeps_the_furnace_closed_form() {
 /// footprint small enough that irradiance is constant over it (at the scene's 20° view a
 /// pixel of a tiny image averages over a visible cos³ fall-off).
 fn centre_pixel_matches(kind: Kind, options: Options, methods: &[Method]) {
-    let t = testing::generated(kind, &options);
+    let (t, expected, camera) = closed_form_view(kind, &options);
+    for &method in methods {
+        let mut s = testing::settings(method, 3, 3);
+        s.max_depth = 2;
+        let b = render_batches(&t.scene, &camera, s, 16, 128);
+        assert_mean(&b, (1, 1, 1, 1), expected, &format!("{kind} {method}"));
+    }
+    testing::assert_no_validation_errors();
+}
+
+/// An analytic scene, its radiance at the point under the light, and a 0.05° view of it.
+fn closed_form_view(kind: Kind, options: &Options) -> (testing::TestScene, f64, Camera) {
+    let t = testing::generated(kind, options);
     let expected = testing::analytic(&t.scene)["expected_radiance_at_look_at"]
         .as_f64()
         .unwrap();
@@ -107,13 +120,7 @@ fn centre_pixel_matches(kind: Kind, options: Options, methods: &[Method]) {
             fov_degrees: Some(0.05),
             ..Default::default()
         });
-    for &method in methods {
-        let mut s = testing::settings(method, 3, 3);
-        s.max_depth = 2;
-        let b = render_batches(&t.scene, &camera, s, 16, 128);
-        assert_mean(&b, (1, 1, 1, 1), expected, &format!("{kind} {method}"));
-    }
-    testing::assert_no_validation_errors();
+    (t, expected, camera)
 }
 
 #[test]
@@ -162,17 +169,7 @@ fn direct_light_from_a_spot_light_matches_closed_form() {
 #[test]
 fn emitters_that_are_not_opaque_light_as_much_as_rays_find_of_them() {
     use lanterna::gpu::{ALPHA_MODE_BLEND, ALPHA_MODE_MASK};
-    let t = testing::generated(Kind::PlaneQuad, &Options::default());
-    let full = testing::analytic(&t.scene)["expected_radiance_at_look_at"]
-        .as_f64()
-        .unwrap();
-    let camera = t
-        .camera
-        .clone()
-        .with_override(&lanterna::scene::CameraOverride {
-            fov_degrees: Some(0.05),
-            ..Default::default()
-        });
+    let (t, full, camera) = closed_form_view(Kind::PlaneQuad, &Options::default());
     let opaque_power = lanterna::lights::LightTable::build(&t.scene)
         .unwrap()
         .total_power;

@@ -343,16 +343,22 @@ fn mean_coverage(
         if let Some(tex) = texture {
             alpha *= tex.texel(transform_uv(tref, interpolate(uvs, b)))[3];
         }
-        if material.alpha_mode == gpu::ALPHA_MODE_MASK {
-            if alpha >= material.alpha_cutoff {
-                1.0
-            } else {
-                0.0
-            }
-        } else {
-            alpha.clamp(0.0, 1.0)
-        }
+        coverage_at(material, alpha)
     })
+}
+
+/// The coverage where a non-opaque material's alpha is `alpha`: for MASK 1 or 0 as it
+/// passes the cutoff, for BLEND the alpha itself.
+fn coverage_at(material: &gpu::Material, alpha: f32) -> f32 {
+    if material.alpha_mode == gpu::ALPHA_MODE_MASK {
+        if alpha >= material.alpha_cutoff {
+            1.0
+        } else {
+            0.0
+        }
+    } else {
+        alpha.clamp(0.0, 1.0)
+    }
 }
 
 /// Area of the triangle (p0, p1, p2).
@@ -373,14 +379,5 @@ fn uniform_coverage(material: &gpu::Material, color_offset: u32) -> Option<f32> 
     if material.base_color_tex.index >= 0 || color_offset != gpu::INVALID_INDEX {
         return None;
     }
-    let alpha = material.base_color[3];
-    Some(if material.alpha_mode == gpu::ALPHA_MODE_MASK {
-        if alpha >= material.alpha_cutoff {
-            1.0
-        } else {
-            0.0
-        }
-    } else {
-        alpha.clamp(0.0, 1.0)
-    })
+    Some(coverage_at(material, material.base_color[3]))
 }
