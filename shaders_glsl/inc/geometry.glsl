@@ -25,7 +25,6 @@ vec4 interpolate_color(Instance inst, uvec3 v, vec3 w) {
 }
 
 // KHR_texture_transform: offset · rotation · scale applied to a UV.
-
 // The rotation (rare) is skipped when it is zero: sin() and cos() are costly on CPU
 // devices, and with c = 1, s = 0 the rotation is the identity anyway.
 vec2 texture_uv(TextureRef t, vec2 uv) {
@@ -57,7 +56,8 @@ float geometry_alpha(Instance inst, Material m, uint primitive, vec2 bary) {
 }
 
 // How much of the surface is there at a point, as rays find it (alpha_passes,
-// inc/trace.glsl): 1 for opaque materials; for MASK 1 where alpha reaches the cutoff and
+// inc/trace.glsl, keeps a hit with this probability; coverage_at in src/lights/mod.rs
+// mirrors it for the light table): 1 for opaque materials; for MASK 1 where alpha reaches the cutoff and
 // 0 elsewhere; for BLEND alpha, the probability that a ray's stochastic test keeps the
 // hit. Light emitted at the point is scaled by it: a light sample on a hole of a masked
 // emitter carries nothing, as a ray through that hole finds nothing.

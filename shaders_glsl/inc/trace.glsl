@@ -31,12 +31,10 @@ struct Hit {
 // cutoff; BLEND keeps the hit with probability alpha, decided by a hash of the ray and
 // the triangle so that the decision is deterministic.
 bool alpha_passes(uint instance, uint primitive, vec2 bary, uvec4 ray_key) {
-    Instance inst = instances(instance);
-    Material m = materials(inst.material);
-    if (m.alpha_mode == ALPHA_MODE_OPAQUE) return true;
-    float alpha = geometry_alpha(inst, m, primitive, bary);
-    if (m.alpha_mode == ALPHA_MODE_MASK) return alpha >= m.alpha_cutoff;
-    return hash_to_float(ray_key ^ uvec4(instance, primitive, floatBitsToUint(bary.x), 0x9e3779b9u)) < alpha;
+    // The surface's coverage there (inc/geometry.glsl): 1 or 0 where opaque or masked.
+    float c = geometry_coverage(instance, primitive, bary);
+    if (c >= 1.0 || c <= 0.0) return c > 0.0;
+    return hash_to_float(ray_key ^ uvec4(instance, primitive, floatBitsToUint(bary.x), 0x9e3779b9u)) < c;
 }
 
 uvec4 ray_key(vec3 o, vec3 d) {
