@@ -10,8 +10,6 @@ use lanterna::render::{LightReuse, Method, RenderSettings};
 use lanterna::scene::generate::{Kind, Options};
 use lanterna::testing;
 
-const ALPHA: f64 = 1e-3;
-
 fn reuse(s: &mut RenderSettings) {
     s.light_reuse = LightReuse {
         world: true,
@@ -24,7 +22,7 @@ fn agree(t: &testing::TestScene, method: Method, w: u32, h: u32, spp: u64) {
     let mut with_reuse = testing::settings(method, w, h);
     with_reuse.seed = 22;
     reuse(&mut with_reuse);
-    testing::assert_agrees_with_pt(t, with_reuse, 16, spp, ALPHA, "light reuse against pt");
+    testing::assert_agrees_with_pt(t, with_reuse, 16, spp, "light reuse against pt");
 }
 
 #[test]

@@ -18,8 +18,6 @@ use lanterna::render::{LightReuse, LightVisibility, Method, RenderSettings};
 use lanterna::scene::generate::{Kind, Options};
 use lanterna::testing::{self, render_once};
 
-const ALPHA: f64 = 1e-3;
-
 fn learned(s: &mut RenderSettings) {
     s.light_visibility = LightVisibility {
         learned: true,
@@ -39,7 +37,7 @@ fn agree(t: &testing::TestScene, method: Method, w: u32, h: u32, spp: u64, reuse
         };
     }
     let what = "learned light visibility against pt";
-    testing::assert_agrees_with_pt(t, with, 16, spp, ALPHA, what);
+    testing::assert_agrees_with_pt(t, with, 16, spp, what);
 }
 
 #[test]
