@@ -986,3 +986,46 @@ fn a_lamp_through_smooth_glass_has_no_halo() {
     );
     testing::assert_no_validation_errors();
 }
+
+/// Normal maps: NEE + direction sampling under MIS, for every method, agree with `pt`'s
+/// direction sampling alone on `glossy.gltf` whose floor and back wall (one material)
+/// take a rough dielectric with a bumpy normal map (texels tilted up to 50° at random,
+/// nearest filtering), so that shading and geometric normals disagree by a lot: both
+/// strategies must treat directions between the two hemispheres alike, and sample in
+/// the frame they take densities in. Seen to fail (2026-11-29) with BSDF samples turned
+/// into the geometric frame (block p = 7·10⁻¹⁰), which `clearcoat_nee_and_direction_
+/// sampling_agree`, whose shading and geometric normals are the same, passes.
+#[test]
+fn normal_mapped_nee_and_direction_sampling_agree() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut rng = 0x2545f491u32;
+    let mut next = move || {
+        rng ^= rng << 13;
+        rng ^= rng >> 17;
+        rng ^= rng << 5;
+        rng as f32 / u32::MAX as f32
+    };
+    let img = image::RgbaImage::from_fn(16, 16, |_, _| {
+        let (tilt, turn) = (next() * 50f32.to_radians(), next() * std::f32::consts::TAU);
+        let n = [tilt.sin() * turn.cos(), tilt.sin() * turn.sin(), tilt.cos()];
+        let c = |v: f32| ((v * 0.5 + 0.5) * 255.0).round() as u8;
+        image::Rgba([c(n[0]), c(n[1]), c(n[2]), 255])
+    });
+    img.save(dir.path().join("n.png")).unwrap();
+    let src = root().join("tests/data/mitsuba/glossy.gltf");
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&src).unwrap()).unwrap();
+    json["images"] = serde_json::json!([{ "uri": "n.png" }]);
+    json["samplers"] = serde_json::json!([{ "magFilter": 9728, "minFilter": 9728 }]);
+    json["textures"] = serde_json::json!([{ "source": 0, "sampler": 0 }]);
+    json["materials"][0] = serde_json::json!({
+        "pbrMetallicRoughness": {
+            "baseColorFactor": [0.6, 0.6, 0.6, 1], "metallicFactor": 0, "roughnessFactor": 0.35
+        },
+        "normalTexture": { "index": 0, "scale": 1.0 }
+    });
+    let path = dir.path().join("bumpy.gltf");
+    std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
+    let scene = load(&path);
+    assert_methods_agree_with_direction_sampling_alone(&scene, 4);
+}
