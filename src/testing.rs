@@ -386,7 +386,7 @@ pub const REPEATABLE_ALPHA: f64 = 1e-3;
 /// Family-wise level of the block tests ([`assert_same_expectation`]) of a comparison
 /// whose renders are a fresh draw each run (not [`repeatable`]). Every CI run re-rolls
 /// such a test, so its level is what it adds to the suite's false alarms per run: about
-/// twenty such comparisons at 10⁻³ for blocks and per channel for the means failed a
+/// forty such comparisons at 10⁻³ for blocks and per channel for the means failed a
 /// sound tree now and then (light reuse on `cornell-lights` at p = 6·10⁻⁴, 2026-11-29).
 pub const FRESH_BLOCK_ALPHA: f64 = 1e-4;
 
