@@ -361,6 +361,29 @@ pub fn assert_same_image_mean(a: &Batches, b: &Batches, alpha: f64, what: &str) 
     }
 }
 
+/// Mann–Whitney's rank-sum test ([`crate::stats::mann_whitney`]) of the whole image's
+/// mean per channel, batch against batch, at `alpha` per channel: for an estimator whose
+/// defect shows as batches that are nearly all bright and a few enormously so, which
+/// Welch's test reads as noise. `what` names the comparison in the failure message.
+pub fn assert_same_image_ranks(a: &Batches, b: &Batches, alpha: f64, what: &str) {
+    let wa = a.region_estimates(0, 0, a.width, a.height);
+    let wb = b.region_estimates(0, 0, b.width, b.height);
+    for c in 0..3 {
+        let p = crate::stats::mann_whitney(&wa[c], &wb[c]);
+        let median = |x: &[f64]| {
+            let mut v = x.to_vec();
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        assert!(
+            p > alpha,
+            "{what}: image means rank apart (channel {c}): medians {} vs {}, p = {p:.2e}",
+            median(&wa[c]),
+            median(&wb[c])
+        );
+    }
+}
+
 /// Two renders agree in expectation, block by block ([`assert_same_expectation`], family
 /// level `alpha`) and in the whole image's mean per channel ([`assert_same_image_mean`],
 /// `mean_alpha` per channel). `what` names the comparison. Returns the smallest block
