@@ -31,31 +31,54 @@ fn ris_with_light_reuse_agrees_with_pt_on_cornell_lights() {
     agree(&t, Method::Ris, 16, 16, 64);
 }
 
-/// One light candidate (M = 1) beside the direction candidate, on the sconce room (lamps
-/// on, near and inside walls and ledges, closed emissive boxes): where a direction sample
-/// hits a lamp, RIS keeps it about half the time, and the reused reservoir, at cap 64,
-/// nearly always replaces it. What was kept must go with it: the kept point is then the
-/// reused one, with its own shadow ray, emission and distance. 64 batches against 256 of
-/// `pt`, and besides Welch's tests the batches' image means by rank: seen (2026-11-29) to
-/// fail with the direction candidate's flag left set on replacement, which makes nearly
-/// every batch brighter (median +7 %) and a few of them 1.5–3,000× (light from lamps shut
-/// inside boxes, and the direction hit's 1/distance² at the reused point), so that
-/// Welch's test alone passed it (t ≈ 1).
+/// One light candidate (M = 1) beside the direction candidate: where a direction sample
+/// hits a lamp, RIS keeps it about half the time, and the reused reservoir often replaces
+/// it. What was kept must go with it, both ways: a replaced direction candidate leaves
+/// the reused point its own shadow ray, emission and distance, and a kept one is written
+/// to the grid at the point its ray hit. Against 4× the batches of `pt`, on two scenes:
+/// - the sconce room (lamps on, near and inside walls and ledges, closed emissive boxes)
+///   at cap 64, 64 batches, with Welch's tests and the batches' image means by rank. Seen
+///   (2026-11-29) to fail with the direction candidate's flag left set on replacement,
+///   which makes nearly every batch brighter (median +7 %) and a few of them
+///   1.5–3,000× (light from lamps shut inside boxes, and the direction hit's
+///   1/distance² at the reused point), so that Welch's test alone passed it (t ≈ 1) and
+///   the ranks did not (p = 10⁻⁹); twelve clean runs put every channel's rank test at
+///   p ≥ 7·10⁻³.
+/// - a plane 0.3 m under a 1 m quad at cap 4, 192 batches, Welch's tests alone: one large
+///   emitter correlates each batch's pixels so much that batch means are skewed, and the rank
+///   test rejected clean runs (p = 10⁻⁶ at cap 64, 10⁻⁵ at cap 4). Seen to fail with a
+///   kept direction candidate written with its triangle's barycentrics (0, 0) instead of
+///   its hit's (readers then take a corner of the quad: a block 12 % bright, p = 10⁻¹⁶;
+///   at 64 batches one run of two caught it), which the sconce room passed.
 #[test]
 fn ris_with_light_reuse_agrees_with_pt_where_it_replaces_the_direction_candidate() {
-    let t = testing::generated(Kind::Sconces, &Options::default());
-    let mut pt = testing::settings(Method::Pt, 24, 16);
-    pt.seed = 21;
-    let a = testing::render_batches(&t.scene, &t.camera, pt, 256, 64);
-    let mut with_reuse = testing::settings(Method::Ris, 24, 16);
-    with_reuse.seed = 24;
-    with_reuse.ris_candidates = 1;
-    reuse(&mut with_reuse);
-    let (block_alpha, mean_alpha) = testing::levels(&with_reuse);
-    let b = testing::render_batches(&t.scene, &t.camera, with_reuse, 64, 64);
-    let what = "light reuse with one light candidate against pt";
-    testing::assert_agree(&a, &b, 4, block_alpha, mean_alpha, what);
-    testing::assert_same_image_ranks(&a, &b, mean_alpha, what);
+    let plane_quad = Options {
+        size: Some(1.0),
+        height: Some(0.3),
+        ..Options::default()
+    };
+    for (kind, options, cap, ranks, batches) in [
+        (Kind::Sconces, Options::default(), 64.0, true, 64),
+        (Kind::PlaneQuad, plane_quad, 4.0, false, 192),
+    ] {
+        let t = testing::generated(kind, &options);
+        let mut pt = testing::settings(Method::Pt, 24, 16);
+        pt.seed = 21;
+        let pt_batches = testing::PT_BATCHES_PER_BATCH * batches;
+        let a = testing::render_batches(&t.scene, &t.camera, pt, pt_batches, 64);
+        let mut with_reuse = testing::settings(Method::Ris, 24, 16);
+        with_reuse.seed = 24;
+        with_reuse.ris_candidates = 1;
+        reuse(&mut with_reuse);
+        with_reuse.light_reuse.confidence_cap = cap;
+        let (block_alpha, mean_alpha) = testing::levels(&with_reuse);
+        let b = testing::render_batches(&t.scene, &t.camera, with_reuse, batches, 64);
+        let what = format!("{kind:?}: light reuse with one light candidate against pt");
+        testing::assert_agree(&a, &b, 4, block_alpha, mean_alpha, &what);
+        if ranks {
+            testing::assert_same_image_ranks(&a, &b, mean_alpha, &what);
+        }
+    }
     testing::assert_no_validation_errors();
 }
 
