@@ -454,14 +454,15 @@ pub const PT_BATCHES_PER_BATCH: u32 = 4;
 /// [`run_batches`]) converges to `pt`'s image of the same size: `batches` independent
 /// batches of `spp` against [`PT_BATCHES_PER_BATCH`] times as many of `pt` (seed 21),
 /// compared with [`assert_agree`] over 4-pixel blocks at the [`levels`] of `settings`;
-/// then no validation errors.
+/// then no validation errors. Returns both sides' batches (`pt`'s first) for further
+/// tests.
 pub fn assert_agrees_with_pt(
     t: &TestScene,
     settings: RenderSettings,
     batches: u32,
     spp: u64,
     what: &str,
-) {
+) -> (Batches, Batches) {
     let mut pt = self::settings(crate::render::Method::Pt, settings.width, settings.height);
     pt.seed = 21;
     let a = render_batches(&t.scene, &t.camera, pt, PT_BATCHES_PER_BATCH * batches, spp);
@@ -473,6 +474,7 @@ pub fn assert_agrees_with_pt(
     };
     assert_agree(&a, &b, 4, block_alpha, mean_alpha, what);
     assert_no_validation_errors();
+    (a, b)
 }
 
 /// Two renders agree in expectation: Welch's t-test per block and channel, with the

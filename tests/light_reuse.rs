@@ -62,24 +62,18 @@ fn ris_with_light_reuse_agrees_with_pt_where_it_replaces_the_direction_candidate
         (Kind::PlaneQuad, plane_quad, 4.0, false, 192),
     ] {
         let t = testing::generated(kind, &options);
-        let mut pt = testing::settings(Method::Pt, 24, 16);
-        pt.seed = 21;
-        let pt_batches = testing::PT_BATCHES_PER_BATCH * batches;
-        let a = testing::render_batches(&t.scene, &t.camera, pt, pt_batches, 64);
         let mut with_reuse = testing::settings(Method::Ris, 24, 16);
         with_reuse.seed = 24;
         with_reuse.ris_candidates = 1;
         reuse(&mut with_reuse);
         with_reuse.light_reuse.confidence_cap = cap;
-        let (block_alpha, mean_alpha) = testing::levels(&with_reuse);
-        let b = testing::render_batches(&t.scene, &t.camera, with_reuse, batches, 64);
+        let mean_alpha = testing::levels(&with_reuse).1;
         let what = format!("{kind:?}: light reuse with one light candidate against pt");
-        testing::assert_agree(&a, &b, 4, block_alpha, mean_alpha, &what);
+        let (a, b) = testing::assert_agrees_with_pt(&t, with_reuse, batches, 64, &what);
         if ranks {
             testing::assert_same_image_ranks(&a, &b, mean_alpha, &what);
         }
     }
-    testing::assert_no_validation_errors();
 }
 
 #[test]
