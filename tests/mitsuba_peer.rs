@@ -492,10 +492,14 @@ fn assert_agrees_exactly(
 ) {
     let exrs = lanterna_batches(scene, method, options, 8, spp, tmp);
     // A guided method's training makes each run a fresh draw: the fresh draws' level.
-    let alpha = if method.uses_guiding() {
-        lanterna::testing::FRESH_BLOCK_ALPHA
-    } else {
+    let settings = RenderSettings {
+        method,
+        ..RenderSettings::default()
+    };
+    let alpha = if lanterna::testing::repeatable(&settings) {
         ALPHA
+    } else {
+        lanterna::testing::FRESH_BLOCK_ALPHA
     };
     let report = compare_at(dir, &exrs, mitsuba_spp, alpha, &tmp.join("report.json"));
     assert_eq!(report["exact"], true, "{}", report["approximations"]);
