@@ -472,10 +472,6 @@ fn pixel_emitters_agree_with_mitsuba_on_the_bulbs_in_view() {
     assert_mean_and_blocks_agree(&report, "pixel emitters");
 }
 
-/// KHR_texture_transform on base colour and emissive textures: the transforms are set on
-/// the loaded scene (the loader does not read them from files yet), the exporter maps
-/// them to Mitsuba's `to_uv` and bakes the emissive one into the texture coordinates.
-/// Texels are 0 or 255 only, which every sRGB decoder maps exactly.
 /// Renders 8 batches of `spp` with `method`, compares them with 8 Mitsuba runs of
 /// `mitsuba_spp` on the export in `dir`, and asserts that the export is exact and that
 /// the image mean, the blocks and the pixels agree.
@@ -527,6 +523,11 @@ fn assert_methods_agree_exactly(
     }
 }
 
+/// KHR_texture_transform on base colour and emissive textures: the transforms are set on
+/// the loaded scene (with a rotation; `clamped_and_mirrored_textures_agree_with_mitsuba`
+/// reads them from the file), the exporter maps them to Mitsuba's `to_uv` and bakes the
+/// emissive one into the texture coordinates. Texels are 0 or 255 only, which every
+/// sRGB decoder maps exactly.
 #[test]
 fn texture_transforms_agree_with_mitsuba() {
     if !mitsuba_available() {
@@ -602,6 +603,125 @@ fn partially_mapped_and_repeated_emissive_textures_agree_with_mitsuba() {
             &what,
         );
     }
+}
+
+/// glTF's other two wrap modes, CLAMP_TO_EDGE (bilinear) and MIRRORED_REPEAT (nearest and
+/// bilinear), on `texxform.gltf` with texture transforms from the file that carry every
+/// texture's coordinates outside [0, 1] (the floor's and the panel's base colour, the
+/// panel's emission): what lanterna's samplers read there against Mitsuba's `clamp` and
+/// `mirror` bitmaps. `pt`, 8 × 32 spp, Mitsuba at 4×. The loader's reading of the modes
+/// is checked too (a mode lost there would reach both renderers alike). Seen to fail
+/// with lanterna's sampler taking MIRRORED_REPEAT as REPEAT (block p = 6·10⁻¹⁹) and
+/// CLAMP_TO_EDGE as REPEAT (2·10⁻²³).
+#[test]
+fn clamped_and_mirrored_textures_agree_with_mitsuba() {
+    use lanterna::vk::WrapMode;
+    if !mitsuba_available() {
+        println!("skipped: no Python here imports mitsuba (scripts/setup --mitsuba)");
+        return;
+    }
+    let source = std::fs::read_to_string(data("texxform.gltf")).unwrap();
+    for (mode, code, name, nearest) in [
+        (WrapMode::ClampToEdge, 33071, "clamp", false),
+        (WrapMode::MirroredRepeat, 33648, "mirror", true),
+        (WrapMode::MirroredRepeat, 33648, "mirror", false),
+    ] {
+        let tmp = tempfile::tempdir().unwrap();
+        let mut g: serde_json::Value = serde_json::from_str(&source).unwrap();
+        let mut sampler = serde_json::json!({ "wrapS": code, "wrapT": code });
+        if nearest {
+            sampler["magFilter"] = 9728.into();
+            sampler["minFilter"] = 9728.into();
+        }
+        g["samplers"] = serde_json::json!([sampler]);
+        let transform = |offset: [f64; 2], scale: [f64; 2]| serde_json::json!({ "KHR_texture_transform": { "offset": offset, "scale": scale } });
+        let materials = &mut g["materials"];
+        materials[0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] =
+            transform([-0.6, -0.3], [2.3, 1.7]);
+        materials[1]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] =
+            transform([-0.5, 0.2], [2.0, 1.5]);
+        materials[1]["emissiveTexture"]["extensions"] = transform([-0.75, -0.5], [2.5, 2.0]);
+        g["extensionsUsed"]
+            .as_array_mut()
+            .unwrap()
+            .push("KHR_texture_transform".into());
+        let path = tmp.path().join("wrap.gltf");
+        std::fs::write(&path, serde_json::to_string(&g).unwrap()).unwrap();
+
+        let loaded = session::load_scene(&path).unwrap();
+        let scene = &loaded.scene;
+        let tex = &scene.textures[0].sampler;
+        assert_eq!((tex.wrap_u, tex.wrap_v, tex.nearest), (mode, mode, nearest));
+        assert_eq!(scene.materials[1].emissive_tex.scale, [2.5, 2.0]);
+        let dir = tmp.path().join("export");
+        let options = export_loaded(scene, None, 40, 40, &dir);
+        let xml = std::fs::read_to_string(dir.join("scene.xml")).unwrap();
+        let wrap = format!("name=\"wrap_mode\" value=\"{name}\"");
+        assert_eq!(xml.matches(&wrap).count(), 3, "{xml}");
+        let spp = 32;
+        let what = format!("{name}, nearest {nearest}");
+        assert_agrees_exactly(
+            scene,
+            Method::Pt,
+            &options,
+            &dir,
+            spp,
+            4 * spp,
+            tmp.path(),
+            &what,
+        );
+    }
+}
+
+/// Orthographic cameras against Mitsuba: `hierarchy.gltf`'s second camera (xmag × ymag
+/// 1.6 × 1.2) on a square image, which glTF's view volume is stretched to (the export
+/// scales Mitsuba's to match), `pt`; and the small emissive cubes of
+/// `closed_emitters.gltf` seen through an orthographic camera at depth 1, so that the
+/// image is what pixel emitters estimate with their orthographic projection (Mitsuba's
+/// camera rays find the cubes by chance: 256× the samples, image mean and blocks only, as
+/// for the bulbs above). Seen to fail with the kernel's orthographic rays taking the
+/// extents crosswise (ymag across; block p = 4·10⁻²³) and with pixel emitters
+/// projecting so (their rays then miss the cubes: image mean 0, p = 2·10⁻¹⁰).
+#[test]
+fn orthographic_cameras_agree_with_mitsuba() {
+    use lanterna::scene::Projection;
+    if !mitsuba_available() {
+        println!("skipped: no Python here imports mitsuba (scripts/setup --mitsuba)");
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let mut loaded = session::load_scene(&data("hierarchy.gltf")).unwrap();
+    loaded.scene.cameras.swap(0, 1);
+    assert!(matches!(
+        loaded.scene.cameras[0].projection,
+        Projection::Orthographic { xmag, ymag } if xmag != ymag
+    ));
+    let dir = tmp.path().join("hierarchy");
+    let options = export_loaded(&loaded.scene, None, 40, 40, &dir);
+    let spp = 32;
+    let what = "orthographic camera";
+    assert_agrees_exactly(
+        &loaded.scene,
+        Method::Pt,
+        &options,
+        &dir,
+        spp,
+        4 * spp,
+        tmp.path(),
+        what,
+    );
+
+    let mut loaded = session::load_scene(&data("closed_emitters.gltf")).unwrap();
+    loaded.scene.cameras[0].projection = Projection::Orthographic {
+        xmag: 1.6,
+        ymag: 1.0,
+    };
+    let dir = tmp.path().join("cubes");
+    let options = export_at_depth(&loaded.scene, None, 40, 30, 1, &dir);
+    let exrs = lanterna_batches(&loaded.scene, Method::Pt, &options, 8, spp, tmp.path());
+    let report = compare(&dir, &exrs, 256 * spp, &tmp.path().join("cubes.json"));
+    assert_eq!(report["exact"], true, "{}", report["approximations"]);
+    assert_mean_and_blocks_agree(&report, "pixel emitters, orthographic");
 }
 
 /// glTF COLOR_0 multiplies the base colour: float RGB on the floor, normalised 16-bit
