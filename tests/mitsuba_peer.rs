@@ -673,6 +673,44 @@ fn clamped_and_mirrored_textures_agree_with_mitsuba() {
     }
 }
 
+/// Textures on glTF's second UV set (`uvsets.gltf`: TEXCOORD_1 for a floor's base colour
+/// and for a panel's base colour and emission, on meshes whose first set maps every
+/// vertex to one texel; a wall on the first set whose second is constant): the surface's
+/// texture lookups and the emission of light samples (their texture coordinates taken
+/// on the host) against Mitsuba, which gets the chosen set in each mesh. `pt`, 8 × 64
+/// spp, Mitsuba at 4×. Seen to fail with the base colour read at the first set (block
+/// p = 6·10⁻²⁷) and with the light samples' coordinates taken from it (block p = 2·10⁻¹⁴,
+/// image mean +2 %).
+#[test]
+fn second_uv_set_agrees_with_mitsuba() {
+    if !mitsuba_available() {
+        println!("skipped: no Python here imports mitsuba (scripts/setup --mitsuba)");
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let loaded = session::load_scene(&data("uvsets.gltf")).unwrap();
+    let sets: Vec<(u32, u32)> = loaded
+        .scene
+        .materials
+        .iter()
+        .map(|m| (m.base_color_tex.uv_set, m.emissive_tex.uv_set))
+        .collect();
+    assert_eq!(sets[..3], [(1, 0), (0, 0), (1, 1)]);
+    let dir = tmp.path().join("export");
+    let options = export_loaded(&loaded.scene, None, 40, 40, &dir);
+    let spp = 64;
+    assert_agrees_exactly(
+        &loaded.scene,
+        Method::Pt,
+        &options,
+        &dir,
+        spp,
+        4 * spp,
+        tmp.path(),
+        "second UV set",
+    );
+}
+
 /// Orthographic cameras against Mitsuba: `hierarchy.gltf`'s second camera (xmag × ymag
 /// 1.6 × 1.2) on a square image, which glTF's view volume is stretched to (the export
 /// scales Mitsuba's to match), `pt`; and the small emissive cubes of

@@ -41,6 +41,9 @@ agree up to noise.
                   point light 25 cm away, a two-sided fin under a spot), so that the light
                   their surfaces reflect is a large part of the image where emission seen
                   directly is hidden
+  uvsets.gltf     textures on the second UV set (TEXCOORD_1: a floor's base colour, a
+                  panel's base colour and emission) of meshes whose first set maps every
+                  vertex to one texel, and a wall on the first set whose second is constant
   closed_emitters.gltf  small closed emissive cubes (1, 2 and 3 cm, rotated) 1.5–2.5 m
                   above a floor, one-sided, seen from 3 m: tests/core_render.rs makes them
                   two-sided, which must not let out any of the light emitted inside
@@ -98,7 +101,7 @@ class Builder:
         return len(self.accessors) - 1
 
     def mesh(self, positions, indices, material, normals=None, uvs=None, colors=None,
-             color_format="float"):
+             color_format="float", uvs1=None):
         attrs = {}
         mn = [min(p[i] for p in positions) for i in range(3)]
         mx = [max(p[i] for p in positions) for i in range(3)]
@@ -110,6 +113,9 @@ class Builder:
         if uvs:
             attrs["TEXCOORD_0"] = self._acc(b"".join(struct.pack("<2f", *t) for t in uvs),
                                             5126, len(uvs), "VEC2")
+        if uvs1:
+            attrs["TEXCOORD_1"] = self._acc(b"".join(struct.pack("<2f", *t) for t in uvs1),
+                                            5126, len(uvs1), "VEC2")
         if colors:
             n = len(colors[0])
             typ = "VEC%d" % n
@@ -658,12 +664,55 @@ def closed_emitters_scene():
     b.write("closed_emitters.gltf")
 
 
+def uvsets_scene():
+    b = Builder()
+    W, K, R = (255, 255, 255), (0, 0, 0), (230, 40, 40)
+    checker = b.texture(png_rgb(4, 4, [[W, K, R, W], [K, W, W, K], [R, K, W, R], [W, R, K, W]]),
+                        nearest=True)
+
+    def textured(set_):
+        info = {"index": checker}
+        if set_:
+            info["texCoord"] = set_
+        return info
+
+    def quad(p, material, uv0, uv1):
+        a = [p[1][i] - p[0][i] for i in range(3)]
+        c = [p[2][i] - p[0][i] for i in range(3)]
+        n = [a[1] * c[2] - a[2] * c[1], a[2] * c[0] - a[0] * c[2], a[0] * c[1] - a[1] * c[0]]
+        ln = math.sqrt(sum(v * v for v in n))
+        return b.mesh(list(p), [0, 1, 2, 0, 2, 3], material, [[v / ln for v in n]] * 4, uv0,
+                      uvs1=uv1)
+
+    one_texel = [(0.1, 0.1)] * 4
+    floor = b.lambert((1, 1, 1))
+    b.materials[floor]["pbrMetallicRoughness"]["baseColorTexture"] = textured(1)
+    b.node(mesh=quad(((-1, 0, 1), (1, 0, 1), (1, 0, -1), (-1, 0, -1)), floor, one_texel,
+                     [(0, 0), (2, 0), (2, 1.5), (0, 1.5)]))
+    wall = b.lambert((0.9, 0.9, 0.9))
+    b.materials[wall]["pbrMetallicRoughness"]["baseColorTexture"] = textured(0)
+    b.node(mesh=quad(((-1, 0, -1), (1, 0, -1), (1, 2, -1), (-1, 2, -1)), wall,
+                     [(0, 0), (1, 0), (1, 1), (0, 1)], one_texel))
+    panel = b.lambert((0.8, 0.8, 0.8), emission=(1, 1, 1), strength=2)
+    b.materials[panel]["pbrMetallicRoughness"]["baseColorTexture"] = textured(1)
+    b.materials[panel]["emissiveTexture"] = textured(1)
+    b.node(mesh=quad(((-0.5, 0.6, -0.6), (0.5, 0.6, -0.6), (0.5, 1.4, -0.6), (-0.5, 1.4, -0.6)),
+                     panel, one_texel, [(0, 0), (1, 0), (1, 1), (0, 1)]))
+    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
+        type="directional", color=[1, 1, 1], intensity=2.0)}}, rotation=[-0.38, 0, 0, 0.925])
+    eye = (0, 1.6, 2.2)
+    b.node(camera=b.camera(yfov=0.9), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.5, -0.2)))
+    b.write("uvsets.gltf")
+
+
 if __name__ == "__main__":
     tex_scene()
     twosided_scene()
     punctual_scene()
     hierarchy_scene()
     texxform_scene()
+    uvsets_scene()
     smooth_scene()
     glossy_scene()
     lit_emitters_scene()
