@@ -1029,3 +1029,103 @@ fn normal_mapped_nee_and_direction_sampling_agree() {
     let scene = load(&path);
     assert_methods_agree_with_direction_sampling_alone(&scene, 4);
 }
+
+/// glTF's triangle strips and fans (modes 5 and 6, indexed and not) load as the
+/// triangles the spec lists, each wound as it says (its front face, which one-sided
+/// emitters and solids depend on): strip triangle i is (vᵢ, vᵢ₊₁, vᵢ₊₂) for even i and
+/// (vᵢ, vᵢ₊₂, vᵢ₊₁) for odd i, fan triangle i is (vᵢ₊₁, vᵢ₊₂, v₀). Compared as oriented
+/// triangles (up to a cyclic turn of their corners). Seen to fail with the odd strip
+/// triangles wound as the even ones and with the fan's corners reversed.
+#[test]
+fn strips_and_fans_load_as_the_triangles_the_spec_lists() {
+    use base64::Engine as _;
+    // Six corners of a bent ribbon: no two triangles coplanar.
+    let corners: [[f32; 3]; 6] = [
+        [0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.1],
+        [1.0, 0.0, 0.3],
+        [1.0, 1.0, 0.6],
+        [2.0, 0.0, 1.0],
+        [2.0, 1.2, 1.5],
+    ];
+    let mut bin: Vec<u8> = Vec::new();
+    corners
+        .iter()
+        .flatten()
+        .for_each(|x| bin.extend_from_slice(&x.to_le_bytes()));
+    for i in 0u16..6 {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bin)
+    );
+    let prim = |mode: u32, indexed: bool| {
+        let mut p = serde_json::json!({"attributes": {"POSITION": 0}, "mode": mode});
+        if indexed {
+            p["indices"] = 1.into();
+        }
+        serde_json::json!({ "primitives": [p] })
+    };
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "buffers": [{"uri": uri, "byteLength": bin.len()}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 72},
+            {"buffer": 0, "byteOffset": 72, "byteLength": 12}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 6, "type": "VEC3",
+             "min": [0, 0, 0], "max": [2, 1.2, 1.5]},
+            {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"}
+        ],
+        "meshes": [prim(5, true), prim(5, false), prim(6, true), prim(6, false)],
+        "nodes": [
+            {"mesh": 0},
+            {"mesh": 1, "translation": [0, 0, 10]},
+            {"mesh": 2, "translation": [0, 0, 20]},
+            {"mesh": 3, "translation": [0, 0, 30]}
+        ],
+        "scenes": [{"nodes": [0, 1, 2, 3]}],
+        "scene": 0
+    });
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("strips.gltf");
+    std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
+    let scene = load(&path);
+    assert_eq!(scene.instances.len(), 4);
+
+    // An oriented triangle of corner numbers, turned to start at its smallest.
+    let canonical = |t: [usize; 3]| {
+        let k = (0..3).min_by_key(|&k| t[k]).unwrap();
+        [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+    };
+    let strip: Vec<[usize; 3]> = (0..4)
+        .map(|i| {
+            canonical(if i % 2 == 0 {
+                [i, i + 1, i + 2]
+            } else {
+                [i, i + 2, i + 1]
+            })
+        })
+        .collect();
+    let fan: Vec<[usize; 3]> = (0..4).map(|i| canonical([i + 1, i + 2, 0])).collect();
+    for inst in &scene.instances {
+        let z = inst.transform.w_axis.z;
+        let corner = |p: glam::Vec3| {
+            let q = p - glam::Vec3::new(0.0, 0.0, z);
+            corners
+                .iter()
+                .position(|c| (glam::Vec3::from(*c) - q).length() < 1e-5)
+                .expect("a corner of the ribbon")
+        };
+        let count = scene.primitives[inst.primitive as usize].triangle_count;
+        let mut got: Vec<[usize; 3]> = (0..count)
+            .map(|t| canonical(scene.world_triangle(inst, t).map(corner)))
+            .collect();
+        got.sort();
+        let mut want = if z < 15.0 { strip.clone() } else { fan.clone() };
+        want.sort();
+        assert_eq!(got, want, "node at z = {z}");
+    }
+}
