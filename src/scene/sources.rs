@@ -263,4 +263,80 @@ mod tests {
         assert_eq!(open.read("../outside.bin", None).unwrap(), [2u8; 8]);
         assert!(open.read("https://example.com/x", None).is_err());
     }
+
+    /// Every PNG pixel layout (grey, grey + alpha, RGB, RGBA, at 8 and 16 bits) and
+    /// JPEG decode to the RGBA8 texels the renderer uploads: grey spread over R, G and B,
+    /// its alpha kept, 16-bit samples taken by their high byte.
+    #[test]
+    fn png_layouts_and_jpeg_decode_to_rgba8() {
+        use image::{DynamicImage as D, ImageBuffer, ImageFormat};
+        let rgba8 = |image: D, format: ImageFormat| -> Vec<u8> {
+            let mut bytes = Vec::new();
+            image
+                .write_to(&mut std::io::Cursor::new(&mut bytes), format)
+                .unwrap();
+            let data = decode_image(&bytes, 1 << 20).unwrap();
+            super::super::texture::to_rgba8(&data).unwrap()
+        };
+        let png = |image: D| rgba8(image, ImageFormat::Png);
+        let wide = |v: u8| u16::from(v) * 256 + 3; // a high byte of v, a low byte of 3
+        assert_eq!(
+            png(D::ImageLuma8(
+                ImageBuffer::from_raw(2, 1, vec![10, 200]).unwrap()
+            )),
+            [10, 10, 10, 255, 200, 200, 200, 255]
+        );
+        assert_eq!(
+            png(D::ImageLumaA8(
+                ImageBuffer::from_raw(2, 1, vec![10, 50, 200, 255]).unwrap()
+            )),
+            [10, 10, 10, 50, 200, 200, 200, 255]
+        );
+        assert_eq!(
+            png(D::ImageRgb8(
+                ImageBuffer::from_raw(2, 1, vec![1, 2, 3, 4, 5, 6]).unwrap()
+            )),
+            [1, 2, 3, 255, 4, 5, 6, 255]
+        );
+        let rgba = vec![1, 2, 3, 4, 250, 251, 252, 253];
+        assert_eq!(
+            png(D::ImageRgba8(
+                ImageBuffer::from_raw(2, 1, rgba.clone()).unwrap()
+            )),
+            rgba
+        );
+        assert_eq!(
+            png(D::ImageLuma16(
+                ImageBuffer::from_raw(2, 1, vec![wide(10), wide(200)]).unwrap()
+            )),
+            [10, 10, 10, 255, 200, 200, 200, 255]
+        );
+        let la16 = [10, 50, 200, 255].map(wide).to_vec();
+        assert_eq!(
+            png(D::ImageLumaA16(ImageBuffer::from_raw(2, 1, la16).unwrap())),
+            [10, 10, 10, 50, 200, 200, 200, 255]
+        );
+        let rgb16 = [1, 2, 3, 4, 5, 6].map(wide).to_vec();
+        assert_eq!(
+            png(D::ImageRgb16(ImageBuffer::from_raw(2, 1, rgb16).unwrap())),
+            [1, 2, 3, 255, 4, 5, 6, 255]
+        );
+        let rgba16 = rgba.iter().map(|&v| wide(v)).collect();
+        assert_eq!(
+            png(D::ImageRgba16(ImageBuffer::from_raw(2, 1, rgba16).unwrap())),
+            rgba
+        );
+        // JPEG is lossy: an even colour comes back within a few steps.
+        let even = [200u8, 100, 50].repeat(64);
+        let jpeg = rgba8(
+            D::ImageRgb8(ImageBuffer::from_raw(8, 8, even).unwrap()),
+            ImageFormat::Jpeg,
+        );
+        for texel in jpeg.chunks_exact(4) {
+            for (got, want) in texel.iter().zip([200u8, 100, 50, 255]) {
+                assert!(got.abs_diff(want) <= 4, "JPEG texel {texel:?}");
+            }
+        }
+        assert!(decode_image(b"GIF89a", 1 << 20).is_err());
+    }
 }
