@@ -83,12 +83,21 @@ Hit trace_closest(vec3 origin, vec3 dir, float tmax) { return trace_ray(origin, 
 bool visible(vec3 origin, vec3 dir, float tmax) { return !trace_ray(origin, dir, tmax, true).valid; }
 #endif
 
+// The length that offsets near the world's origin are fractions of: the scene's radius,
+// at most 1. Wächter & Binder's constants (below) are for scenes about a unit across; in
+// a scene far smaller (a box 0.2 mm wide) their 2^-16 is 7 % of it, and its image was
+// 2.3 % bright. Larger scenes keep the constants as they are.
+float offset_unit() {
+    return min(params.scene_radius, 1.0);
+}
+
 // Offset a ray origin off the surface along the geometric normal, scaled to the
 // position's magnitude (Wächter & Binder, Ray Tracing Gems ch. 6): 256 ulps of each
-// coordinate, or 2^-16 absolute near the origin. `n` picks the side to move to.
+// coordinate, or 2^-16 of offset_unit() where the coordinate is within offset_unit()/32
+// of the origin. `n` picks the side to move to.
 vec3 offset_ray(vec3 p, vec3 n) {
-    const float origin = 1.0 / 32.0;
-    const float float_scale = 1.0 / 65536.0;
+    float origin = offset_unit() / 32.0;
+    float float_scale = offset_unit() / 65536.0;
     const float int_scale = 256.0;
     ivec3 of_i = ivec3(int_scale * n);
     vec3 p_i = vec3(intBitsToFloat(floatBitsToInt(p.x) + ((p.x < 0.0) ? -of_i.x : of_i.x)),
@@ -124,16 +133,16 @@ struct Ray {
 // behind the light's face, and the light occludes itself.
 //
 // The target moves straight along its normal, by 2^-15 of its largest coordinate
-// (256 ulps of it; offset_ray's per-axis ulps would move it sideways too), and the ray
-// stops an eighth of that short of it: an absolute margin, not a fraction of the
-// length. A relative stop (pbrt's and Mitsuba's) ends a long ray a few tenths of a
-// millimetre early; near the edge of a closed emitter's face that faces away from the
+// (256 ulps of it; offset_ray's per-axis ulps would move it sideways too) plus 2^-16 of
+// offset_unit(), and the ray stops an eighth of that short of it: an absolute margin,
+// not a fraction of the length. A relative stop (pbrt's and Mitsuba's) ends a long ray
+// a few tenths of a millimetre early; near the edge of a closed emitter's face that faces away from the
 // shading point, the face toward it is crossed within that last stretch, so light
 // emitted inside a two-sided closed lamp leaked out (a 2 cm two-sided box 2–3 m away:
 // +1.1 % of its light; Mitsuba 3's relative stop of 8.9·10⁻⁴ gives +9 % there).
 Ray segment_between(vec3 origin_p, vec3 origin_n, vec3 target_p, vec3 target_n) {
     vec3 o = offset_ray(origin_p, origin_n);
-    float offset = max3(abs(target_p)) * (1.0 / 32768.0) + 1.0 / 65536.0;
+    float offset = max3(abs(target_p)) * (1.0 / 32768.0) + offset_unit() / 65536.0;
     vec3 d = target_p + target_n * offset - o;
     return Ray(o, d, 1.0 - min(SHADOW_EPSILON, 0.125 * offset / max(length(d), 1e-30)));
 }
