@@ -75,7 +75,8 @@
 #define LIGHT_TREE_FIXED_SPLIT 1u
 
 // Film accumulation is fixed point so that sums are exact and order-independent:
-// a sample value v adds round(v * FILM_FIXED_SCALE) to a 64-bit integer.
+// a sample value v adds floor(v * FILM_FIXED_SCALE + ξ) to a 64-bit integer, ξ a uniform
+// dither of the sample's own (stochastic rounding: its expectation is v * FILM_FIXED_SCALE).
 #define FILM_FIXED_SCALE 1048576.0
 // Largest sample value the film takes (1e9 · 2²⁰ < 2⁶⁴ / 2¹⁴ leaves room for 16k
 // samples of it per pixel per channel); larger ones are clamped and counted.
