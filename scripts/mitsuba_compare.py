@@ -120,8 +120,9 @@ def t_two_sided_p(t, df):
 def welch(xs, ys):
     """Welch's t-test between two sets of independent estimates, along axis 0.
 
-    Returns (mean_x, mean_y, standard error of the difference, t, p). Where both sides
-    have zero variance, p is 1 if the means are equal and 0 otherwise.
+    Returns (mean_x, mean_y, standard error of the difference, t, p). Where the
+    difference's standard error is within the renderers' storage resolution (both sides
+    constant), p is 1 if the means are equal to that resolution and 0 otherwise.
     """
     nx, ny = xs.shape[0], ys.shape[0]
     mx, my = xs.mean(0), ys.mean(0)
@@ -138,9 +139,14 @@ def welch(xs, ys):
     # samples in float32, which for a constant pixel of 1,024 samples drifts by ~1e-5
     # relative (seen: 7.111566 against 7.111465), and lanterna keeps decoded colour
     # textures as half floats, within 2.5e-4 of Mitsuba's float32 texels (an emissive
-    # sign's pixel, seen: 0.0182152 against 0.0182115).
-    degenerate = se2 <= 0
-    p = np.where(degenerate, np.where(np.isclose(mx, my, rtol=1e-3, atol=1e-9), 1.0, 0.0), p)
+    # sign's pixel, seen: 0.0182152 against 0.0182115). lanterna's film rounds each
+    # sample stochastically to units of 2^-20, so its batches of a constant pixel
+    # spread by a fraction of that unit: a standard error below one unit plus
+    # Mitsuba's drift is storage, not sampling, and such pixels count as constant.
+    unit = 2.0 ** -20
+    resolution = unit + 1e-5 * np.maximum(np.abs(mx), np.abs(my))
+    degenerate = se2 <= resolution * resolution
+    p = np.where(degenerate, np.where(np.isclose(mx, my, rtol=1e-3, atol=unit), 1.0, 0.0), p)
     return mx, my, np.sqrt(se2), t, p
 
 

@@ -824,8 +824,10 @@ fn punctual_lights_and_textures_agree_with_mitsuba() {
 /// The comparison script's Welch test where both sides are constant (a pixel that sees
 /// only an emitter): float32 accumulation differences (Mitsuba sums 1,024 samples of
 /// 7.11 to 7.111465, lanterna's fixed-point film gives 7.111566) and half-float texels
-/// (an emissive sign: lanterna 0.0182152, Mitsuba 0.0182115) are agreement, a real
-/// difference (1 %) is not, and the report stays strict JSON (the infinite t of such a pixel
+/// (an emissive sign: lanterna 0.0182152, Mitsuba 0.0182115) are agreement, and so is
+/// lanterna's side spread by a fraction of its film's unit (its samples are rounded
+/// stochastically to 2⁻²⁰; seen to fail with only zero spread counted as constant), a
+/// real difference (1 %) is not, and the report stays strict JSON (the infinite t of such a pixel
 /// once made the bench's long rows fail to parse). Pixels below 1e-6 of the image's mean
 /// on both sides are not tested (seen to fail with that floor at 0).
 #[test]
@@ -846,6 +848,13 @@ def const(v, n):
 p_same = min(mc.welch(const(7.111566, 4), const(7.111465, 4))[4].min(),
              mc.welch(const(0.018215179, 4), const(0.018211519, 4))[4].min())
 p_diff = mc.welch(const(7.111566, 4), const(7.18, 4))[4].min()
+# lanterna's batches of a constant pixel spread by a fraction of the film's unit (2^-20):
+# its samples are rounded stochastically (seen: 0.44754052, standard error 1.1e-8,
+# against Mitsuba's 0.44754031).
+rng = np.random.default_rng(2)
+dithered = 0.44754052 + rng.normal(0.0, 3e-8, (8, 1, 1, 3))
+p_dithered = mc.welch(dithered, const(0.44754031, 8))[4].min()
+p_dithered_diff = mc.welch(dithered, const(0.452, 8))[4].min()
 t = mc.welch(const(7.111566, 4), const(7.111465, 4))[3]
 text = json.dumps(mc.finite_json({{"t": float(t.flat[0]), "v": [float("nan"), 1.0]}}), allow_nan=False)
 # A 4x4 image of mean 0.08 whose last pixel lanterna sees black and Mitsuba at 1e-8 or
@@ -859,6 +868,7 @@ tiny = mc.agreement(lt, ms, 1, 1e-3)
 ms[:, 3, 3, :] *= 1e4
 small = mc.agreement(lt, ms, 1, 1e-3)
 print(json.dumps({{"p_same": float(p_same), "p_diff": float(p_diff), "json": text,
+                  "p_dithered": float(p_dithered), "p_dithered_diff": float(p_dithered_diff),
                   "tiny": [tiny["agree"], tiny["tests"]], "small": [small["agree"], small["tests"]]}}))
 "#,
         dir = script.display().to_string()
@@ -869,6 +879,11 @@ print(json.dumps({{"p_same": float(p_same), "p_diff": float(p_diff), "json": tex
         "constant pixels equal to float32 rounding: {v}"
     );
     assert_eq!(v["p_diff"], 0.0, "constant pixels that differ: {v}");
+    assert_eq!(v["p_dithered"], 1.0, "a dithered constant pixel: {v}");
+    assert_eq!(
+        v["p_dithered_diff"], 0.0,
+        "a dithered constant pixel 1 % off: {v}"
+    );
     // A black pixel against Mitsuba's 1e-8 (an index-matched pane's Fresnel) is not
     // tested; against 1e-4 of an image of mean 0.08 it is, and differs.
     assert_eq!(v["tiny"], serde_json::json!([true, 45]), "{v}");
