@@ -321,6 +321,25 @@ impl Batches {
         m
     }
 
+    /// The variance of one batch's pixel value (each channel's, from the spread of the
+    /// batches), averaged over pixels and channels: what a method's noise is at this
+    /// batch size.
+    pub fn mean_pixel_variance(&self) -> f64 {
+        let mean = self.mean();
+        let n = self.images.len() as f64;
+        mean.iter()
+            .enumerate()
+            .map(|(i, &m)| {
+                self.images
+                    .iter()
+                    .map(|img| (img[i] as f64 - m).powi(2))
+                    .sum::<f64>()
+                    / (n - 1.0)
+            })
+            .sum::<f64>()
+            / mean.len() as f64
+    }
+
     /// Estimates of the mean over a rectangle (x0, y0, w, h), one per batch, per channel.
     pub fn region_estimates(&self, x0: u32, y0: u32, w: u32, h: u32) -> [Vec<f64>; 3] {
         let mut out = [Vec::new(), Vec::new(), Vec::new()];

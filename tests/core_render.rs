@@ -449,7 +449,7 @@ fn emission_rays_keep_the_expectation_and_cut_the_coverage_noise() {
     let variance = |k| {
         let mut s = settings(Method::Pt, k, 75);
         s.max_depth = 1;
-        mean_pixel_variance(&render_batches(&t.scene, &t.camera, s, 64, 4))
+        render_batches(&t.scene, &t.camera, s, 64, 4).mean_pixel_variance()
     };
     let (v1, v4) = (variance(1), variance(4));
     eprintln!("emission seen directly, 4 spp: variance {v1:.4e} with one camera ray, {v4:.4e} with four ({:.3}×)", v4 / v1);
@@ -461,22 +461,6 @@ fn emission_rays_keep_the_expectation_and_cut_the_coverage_noise() {
 }
 
 /// The variance of a pixel's batch estimates, averaged over pixels and channels.
-fn mean_pixel_variance(b: &Batches) -> f64 {
-    let mean = b.mean();
-    let n = b.images.len() as f64;
-    mean.iter()
-        .enumerate()
-        .map(|(i, &m)| {
-            b.images
-                .iter()
-                .map(|img| (img[i] as f64 - m).powi(2))
-                .sum::<f64>()
-                / (n - 1.0)
-        })
-        .sum::<f64>()
-        / mean.len() as f64
-}
-
 /// Small emitters seen directly, sampled inside their pixels (`pixel_emitters.rs`),
 /// against the plain camera-ray estimator on `cornell-lights` at 16×16, where most of
 /// the coloured lamps are a few pixels or less and some sit behind a blocker: the same
@@ -528,7 +512,7 @@ fn pixel_emitters_keep_the_expectation_and_remove_the_coverage_noise() {
     let a = render_batches(&t.scene, &ortho, settings(Method::Pt, false, 1, 87), 12, 64);
     let b = render_batches(&t.scene, &ortho, settings(Method::Pt, true, 1, 88), 12, 64);
     assert!(
-        mean_pixel_variance(&b) < 0.5 * mean_pixel_variance(&a),
+        b.mean_pixel_variance() < 0.5 * a.mean_pixel_variance(),
         "orthographic: pixel emitters found no lamp in view"
     );
     testing::assert_agree(&a, &b, 4, ALPHA, ALPHA, "orthographic, pixel emitters");
@@ -540,13 +524,14 @@ fn pixel_emitters_keep_the_expectation_and_remove_the_coverage_noise() {
     assert!(extra > 4 * 8, "{extra} pixel-emitter rays in 4 spp");
 
     let variance = |on, seed| {
-        mean_pixel_variance(&render_batches(
+        render_batches(
             &t.scene,
             &t.camera,
             settings(Method::Pt, on, 1, seed),
             48,
             4,
-        ))
+        )
+        .mean_pixel_variance()
     };
     let (plain, pieces) = (variance(false, 85), variance(true, 86));
     eprintln!(
