@@ -340,6 +340,12 @@ impl Batches {
             / mean.len() as f64
     }
 
+    /// The whole image's mean over batches, pixels and channels.
+    pub fn image_mean(&self) -> f64 {
+        let means = self.channel_means();
+        means.iter().flatten().sum::<f64>() / (3 * means.len()) as f64
+    }
+
     /// Estimates of the mean over a rectangle (x0, y0, w, h), one per batch, per channel.
     pub fn region_estimates(&self, x0: u32, y0: u32, w: u32, h: u32) -> [Vec<f64>; 3] {
         let mut out = [Vec::new(), Vec::new(), Vec::new()];
@@ -422,6 +428,35 @@ pub fn assert_agree(
     let p = assert_same_expectation(a, b, block, alpha);
     assert_same_image_mean(a, b, mean_alpha, what);
     p
+}
+
+/// Asserts that `better` renders `t` with less noise than `base`: its per-pixel variance
+/// ([`Batches::mean_pixel_variance`], `batches` of `spp` each) below `bound` times
+/// `base`'s. For estimators whose efficiency no agreement test can see (a worse choice
+/// stays unbiased); both settings should be [`repeatable`], so that the ratio moves only
+/// when the code changes what they draw.
+pub fn assert_lowers_variance(
+    t: &TestScene,
+    base: RenderSettings,
+    better: RenderSettings,
+    batches: u32,
+    spp: u64,
+    bound: f64,
+    what: &str,
+) {
+    assert!(repeatable(&base) && repeatable(&better));
+    let variance = |s| render_batches(&t.scene, &t.camera, s, batches, spp).mean_pixel_variance();
+    let (a, b) = (variance(base), variance(better));
+    println!(
+        "{what}: per-pixel variance {b:.4e} against {a:.4e} ({:.3}×)",
+        b / a
+    );
+    assert!(
+        b < bound * a,
+        "{what}: per-pixel variance {b:.4e} is {:.3}× {a:.4e}, not below {bound}×",
+        b / a
+    );
+    assert_no_validation_errors();
 }
 
 /// Significance level of a comparison whose renders are [`repeatable`]: the same seed

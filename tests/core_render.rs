@@ -906,14 +906,10 @@ fn images_do_not_depend_on_the_scene_unit() {
     let unit = render(1.0);
     for scale in [1e-4, 1e4] {
         let scaled = render(scale);
-        let mean = |b: &Batches| -> f64 {
-            let m = b.channel_means();
-            m.iter().flatten().sum::<f64>() / (3 * m.len()) as f64
-        };
         println!(
             "scale {scale}: image mean {} against {}",
-            mean(&scaled),
-            mean(&unit)
+            scaled.image_mean(),
+            unit.image_mean()
         );
         let what = format!("cornell-lights scaled by {scale}");
         testing::assert_agree(&scaled, &unit, 8, ALPHA, ALPHA / 3.0, &what);
@@ -946,14 +942,10 @@ fn images_scale_with_the_emission_however_dim() {
     for image in dim.images.iter_mut() {
         image.iter_mut().for_each(|v| *v /= scale);
     }
-    let mean = |b: &Batches| -> f64 {
-        let m = b.channel_means();
-        m.iter().flatten().sum::<f64>() / (3 * m.len()) as f64
-    };
     println!(
         "image mean {} scaled back, against {}",
-        mean(&dim),
-        mean(&bright)
+        dim.image_mean(),
+        bright.image_mean()
     );
     let what = "cornell-lights at 10⁻⁶ of its emission, scaled back";
     testing::assert_agree(&dim, &bright, 8, ALPHA, ALPHA / 3.0, what);

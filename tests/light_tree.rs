@@ -100,18 +100,6 @@ fn the_light_tree_lowers_the_noise_of_direct_light_on_a_small_street() {
     uniform.seed = 3;
     let mut tree = uniform.clone();
     tree.source = LightSource::Tree;
-    let variance = |s: RenderSettings| {
-        testing::render_batches(&t.scene, &t.camera, s, 16, 16).mean_pixel_variance()
-    };
-    let (a, b) = (variance(uniform), variance(tree));
-    println!(
-        "per-pixel variance: uniform source {a:.4e}, light tree {b:.4e} ({:.3}×)",
-        b / a
-    );
-    assert!(
-        b < 0.045 * a,
-        "the light tree's variance {b:.4e} is {:.3}× the uniform source's {a:.4e}",
-        b / a
-    );
-    testing::assert_no_validation_errors();
+    let what = "pt with the light tree against the uniform source";
+    testing::assert_lowers_variance(&t, uniform, tree, 16, 16, 0.045, what);
 }

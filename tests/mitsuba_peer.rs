@@ -658,18 +658,8 @@ fn clamped_and_mirrored_textures_agree_with_mitsuba() {
         let xml = std::fs::read_to_string(dir.join("scene.xml")).unwrap();
         let wrap = format!("name=\"wrap_mode\" value=\"{name}\"");
         assert_eq!(xml.matches(&wrap).count(), 3, "{xml}");
-        let spp = 32;
-        let what = format!("{name}, nearest {nearest}");
-        assert_agrees_exactly(
-            scene,
-            Method::Pt,
-            &options,
-            &dir,
-            spp,
-            4 * spp,
-            tmp.path(),
-            &what,
-        );
+        println!("{name}, nearest {nearest}");
+        assert_methods_agree_exactly(scene, &[Method::Pt], &options, &dir, 32, tmp.path());
     }
 }
 
@@ -698,17 +688,7 @@ fn second_uv_set_agrees_with_mitsuba() {
     assert_eq!(sets[..3], [(1, 0), (0, 0), (1, 1)]);
     let dir = tmp.path().join("export");
     let options = export_loaded(&loaded.scene, None, 40, 40, &dir);
-    let spp = 64;
-    assert_agrees_exactly(
-        &loaded.scene,
-        Method::Pt,
-        &options,
-        &dir,
-        spp,
-        4 * spp,
-        tmp.path(),
-        "second UV set",
-    );
+    assert_methods_agree_exactly(&loaded.scene, &[Method::Pt], &options, &dir, 64, tmp.path());
 }
 
 /// Orthographic cameras against Mitsuba: `hierarchy.gltf`'s second camera (xmag × ymag
@@ -737,16 +717,13 @@ fn orthographic_cameras_agree_with_mitsuba() {
     let dir = tmp.path().join("hierarchy");
     let options = export_loaded(&loaded.scene, None, 40, 40, &dir);
     let spp = 32;
-    let what = "orthographic camera";
-    assert_agrees_exactly(
+    assert_methods_agree_exactly(
         &loaded.scene,
-        Method::Pt,
+        &[Method::Pt],
         &options,
         &dir,
         spp,
-        4 * spp,
         tmp.path(),
-        what,
     );
 
     let mut loaded = session::load_scene(&data("closed_emitters.gltf")).unwrap();

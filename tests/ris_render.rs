@@ -156,16 +156,5 @@ fn ris_lowers_the_noise_of_direct_light_on_cornell_lights() {
     pt.seed = 3;
     let mut ris = pt.clone();
     ris.method = Method::Ris;
-    let variance = |s| render_batches(&t.scene, &t.camera, s, 16, 16).mean_pixel_variance();
-    let (a, b) = (variance(pt), variance(ris));
-    println!(
-        "per-pixel variance: pt {a:.4e}, ris {b:.4e} ({:.3}×)",
-        b / a
-    );
-    assert!(
-        b < 0.15 * a,
-        "ris's variance {b:.4e} is {:.3}× pt's {a:.4e}",
-        b / a
-    );
-    testing::assert_no_validation_errors();
+    testing::assert_lowers_variance(&t, pt, ris, 16, 16, 0.15, "ris against pt");
 }
