@@ -433,9 +433,8 @@ pub fn assert_agree(
 /// Asserts that `better` renders `t` with less noise than `base`: its per-pixel variance
 /// ([`Batches::mean_pixel_variance`], `batches` of `spp` each) below `bound` times
 /// `base`'s. For estimators whose efficiency no agreement test can see (a worse choice
-/// stays unbiased). Where both settings are [`repeatable`] the ratio moves only when the
-/// code changes what they draw; a fresh draw's bound must leave room for its spread
-/// between runs.
+/// stays unbiased); both settings should be [`repeatable`], so that the ratio moves only
+/// when the code changes what they draw.
 pub fn assert_lowers_variance(
     t: &TestScene,
     base: RenderSettings,
@@ -445,6 +444,7 @@ pub fn assert_lowers_variance(
     bound: f64,
     what: &str,
 ) {
+    assert!(repeatable(&base) && repeatable(&better));
     let variance = |s| render_batches(&t.scene, &t.camera, s, batches, spp).mean_pixel_variance();
     let (a, b) = (variance(base), variance(better));
     println!(
