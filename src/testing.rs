@@ -646,6 +646,21 @@ pub fn analytic(scene: &Scene) -> serde_json::Value {
         .expect("analytic extras")
 }
 
+/// Settings for a test of direct light alone: depth 2, emission seen directly hidden
+/// (its edges would dominate the noise), seed 3.
+pub fn direct_light_settings(
+    method: crate::render::Method,
+    width: u32,
+    height: u32,
+) -> RenderSettings {
+    RenderSettings {
+        max_depth: 2,
+        hide_emitters: true,
+        seed: 3,
+        ..settings(method, width, height)
+    }
+}
+
 /// Settings for a small test render.
 pub fn settings(method: crate::render::Method, width: u32, height: u32) -> RenderSettings {
     RenderSettings {

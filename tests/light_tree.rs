@@ -94,10 +94,7 @@ fn pt_and_ris_with_the_light_tree_agree_with_pt_under_a_directional_light() {
 #[test]
 fn the_light_tree_lowers_the_noise_of_direct_light_on_a_small_street() {
     let t = testing::small_street();
-    let mut uniform = testing::settings(Method::Pt, 24, 16);
-    uniform.max_depth = 2;
-    uniform.hide_emitters = true;
-    uniform.seed = 3;
+    let uniform = testing::direct_light_settings(Method::Pt, 24, 16);
     let mut tree = uniform.clone();
     tree.source = LightSource::Tree;
     let what = "pt with the light tree against the uniform source";

@@ -150,10 +150,7 @@ fn ris_agrees_with_pt_under_a_textured_emitter() {
 #[test]
 fn ris_lowers_the_noise_of_direct_light_on_cornell_lights() {
     let t = testing::generated(Kind::CornellLights, &Options::default());
-    let mut pt = testing::settings(Method::Pt, 24, 16);
-    pt.max_depth = 2;
-    pt.hide_emitters = true;
-    pt.seed = 3;
+    let pt = testing::direct_light_settings(Method::Pt, 24, 16);
     let mut ris = pt.clone();
     ris.method = Method::Ris;
     testing::assert_lowers_variance(&t, pt, ris, 16, 16, 0.15, "ris against pt");

@@ -403,6 +403,16 @@ def hierarchy_scene():
     b.write("hierarchy.gltf")
 
 
+def sun_and_camera_over_the_panel(b):
+    """The directional light and the camera of texxform.gltf (and uvsets.gltf), which look
+    at a floor and at a panel 0.6 m behind its middle."""
+    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
+        type="directional", color=[1, 1, 1], intensity=2.0)}}, rotation=[-0.38, 0, 0, 0.925])
+    eye = (0, 1.6, 2.2)
+    b.node(camera=b.camera(yfov=0.9), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.5, -0.2)))
+
+
 def texxform_scene():
     """Textures of exact-decode texels only (0 and 255), for KHR_texture_transform
     checks: the peer test sets the transforms on the loaded scene."""
@@ -416,11 +426,7 @@ def texxform_scene():
                       emissive_tex=t)
     b.node(mesh=b.quad((-0.5, 0.6, -0.6), (0.5, 0.6, -0.6), (0.5, 1.4, -0.6), (-0.5, 1.4, -0.6),
                        panel))
-    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
-        type="directional", color=[1, 1, 1], intensity=2.0)}}, rotation=[-0.38, 0, 0, 0.925])
-    eye = (0, 1.6, 2.2)
-    b.node(camera=b.camera(yfov=0.9), translation=list(eye),
-           rotation=look_at_rotation(eye, (0, 0.5, -0.2)))
+    sun_and_camera_over_the_panel(b)
     b.write("texxform.gltf")
 
 
@@ -698,11 +704,7 @@ def uvsets_scene():
     b.materials[panel]["emissiveTexture"] = textured(1)
     b.node(mesh=quad(((-0.5, 0.6, -0.6), (0.5, 0.6, -0.6), (0.5, 1.4, -0.6), (-0.5, 1.4, -0.6)),
                      panel, one_texel, [(0, 0), (1, 0), (1, 1), (0, 1)]))
-    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
-        type="directional", color=[1, 1, 1], intensity=2.0)}}, rotation=[-0.38, 0, 0, 0.925])
-    eye = (0, 1.6, 2.2)
-    b.node(camera=b.camera(yfov=0.9), translation=list(eye),
-           rotation=look_at_rotation(eye, (0, 0.5, -0.2)))
+    sun_and_camera_over_the_panel(b)
     b.write("uvsets.gltf")
 
 
