@@ -433,8 +433,9 @@ pub fn assert_agree(
 /// Asserts that `better` renders `t` with less noise than `base`: its per-pixel variance
 /// ([`Batches::mean_pixel_variance`], `batches` of `spp` each) below `bound` times
 /// `base`'s. For estimators whose efficiency no agreement test can see (a worse choice
-/// stays unbiased); both settings should be [`repeatable`], so that the ratio moves only
-/// when the code changes what they draw.
+/// stays unbiased). Where both settings are [`repeatable`] the ratio moves only when the
+/// code changes what they draw; a fresh draw's bound must leave room for its spread
+/// between runs.
 pub fn assert_lowers_variance(
     t: &TestScene,
     base: RenderSettings,
@@ -444,7 +445,6 @@ pub fn assert_lowers_variance(
     bound: f64,
     what: &str,
 ) {
-    assert!(repeatable(&base) && repeatable(&better));
     let variance = |s| render_batches(&t.scene, &t.camera, s, batches, spp).mean_pixel_variance();
     let (a, b) = (variance(base), variance(better));
     println!(
@@ -477,7 +477,7 @@ pub const FRESH_MEAN_ALPHA: f64 = 1e-5;
 
 /// Whether a render is a function of its settings and seed alone. Not so where lanes
 /// learn from what other lanes wrote in the device's order: SD-tree training (the guided
-/// methods, float atomics), world-space light reuse (which writer a cell keeps) and
+/// methods, float atomics), world-space light reuse (two writers racing for a cell) and
 /// learned light visibility (counts shared between dispatches).
 pub fn repeatable(settings: &RenderSettings) -> bool {
     !(settings.method.uses_guiding()

@@ -239,8 +239,12 @@ struct ReuseCell {
     float weight;      // the reservoir's contribution weight W (for the writer's target)
     float confidence;  // canonical reservoirs it stands for (capped)
     uint check;        // checksum of the words above (a torn write fails it)
-    uint pad0;
-    uint pad1;
+    // The writer's ticket, a 64-bit word (low, high) at byte 56 of the 64-byte cell that
+    // inc/light_reuse.glsl raises with atomicMax: a write lands only if its ticket is
+    // the highest so far, so the cell keeps a writer drawn at random, not the device's
+    // last. Not in the checksum.
+    uint ticket_lo;
+    uint ticket_hi;
 };
 
 // The part of a small emissive triangle's image that lies in one pixel, or one triangle
@@ -274,6 +278,7 @@ struct PushConstants {
     // by earlier dispatches) and of the half it writes.
     uint reuse_read;
     uint reuse_write;
+    uint reuse_generation;  // counts the dispatches since the grid was cleared, from 1
 };
 
 #endif

@@ -37,6 +37,7 @@ impl Renderer {
             guide_light_training_address: split(g.light_training.address),
             reuse_read,
             reuse_write,
+            reuse_generation: self.reuse_ticket_generation(self.reuse_generation),
         }
     }
 
@@ -191,8 +192,9 @@ impl Renderer {
                         let mut push =
                             self.push_constants([0, y0], [w, rows], first as u32, count as u32);
                         first += count;
-                        (push.reuse_read, push.reuse_write) =
-                            self.reuse_halves_at(self.reuse_generation + g as u64);
+                        let generation = self.reuse_generation + g as u64;
+                        (push.reuse_read, push.reuse_write) = self.reuse_halves_at(generation);
+                        push.reuse_generation = self.reuse_ticket_generation(generation);
                         push
                     })
                     .collect();

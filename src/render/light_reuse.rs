@@ -73,6 +73,13 @@ impl Renderer {
         self.reuse_halves_at(self.reuse_generation)
     }
 
+    /// The high word of generation `generation`'s writers' tickets (ReuseCell.ticket_hi):
+    /// above every earlier generation's and above an empty cell's 0. Saturates, which
+    /// would take 2³² samples in one render.
+    pub(super) fn reuse_ticket_generation(&self, generation: u64) -> u32 {
+        (generation + 1).min(u32::MAX as u64) as u32
+    }
+
     /// First cells of the halves generation `generation` reads and writes.
     pub(super) fn reuse_halves_at(&self, generation: u64) -> (u32, u32) {
         let n = self.reuse_cell_count;
@@ -95,5 +102,13 @@ mod tests {
             assert!(n.is_power_of_two() && (MIN_CELLS..=MAX_CELLS).contains(&n));
         }
         assert_eq!(cell_count(80 * 45), 1 << 14);
+    }
+
+    /// The kernel reads a cell's ticket as the 64-bit word at index 8·cell + 7.
+    #[test]
+    fn the_ticket_is_the_last_64_bit_word_of_a_cell() {
+        assert_eq!(std::mem::size_of::<gpu::ReuseCell>(), 64);
+        assert_eq!(std::mem::offset_of!(gpu::ReuseCell, ticket_lo), 56);
+        assert_eq!(std::mem::offset_of!(gpu::ReuseCell, ticket_hi), 60);
     }
 }
