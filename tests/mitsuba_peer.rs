@@ -804,7 +804,9 @@ fn punctual_lights_and_textures_agree_with_mitsuba() {
 /// (an emissive sign: lanterna 0.0182152, Mitsuba 0.0182115) are agreement, and so is
 /// lanterna's side spread by a fraction of its film's unit (its samples are rounded
 /// stochastically to 2⁻²⁰; seen to fail with only zero spread counted as constant), a
-/// real difference (1 %) is not, and the report stays strict JSON (the infinite t of such a pixel
+/// real difference (1 %) is not, a pixel so dim that its standard error is below that
+/// unit is tested against the two together (seen to fail with every such pixel that
+/// differs by a unit rejected, as one was on a random scene), and the report stays strict JSON (the infinite t of such a pixel
 /// once made the bench's long rows fail to parse). Pixels below 1e-6 of the image's mean
 /// on both sides are not tested (seen to fail with that floor at 0).
 #[test]
@@ -832,6 +834,12 @@ rng = np.random.default_rng(2)
 dithered = 0.44754052 + rng.normal(0.0, 3e-8, (8, 1, 1, 3))
 p_dithered = mc.welch(dithered, const(0.44754031, 8))[4].min()
 p_dithered_diff = mc.welch(dithered, const(0.452, 8))[4].min()
+# A dim pixel whose standard error is below the film's unit is not constant: a
+# difference of about one unit is noise (seed 110 with light reuse: 1.140e-5 against
+# 1.043e-5, standard error 4.5e-7).
+dim = mc.welch(1.14e-5 + rng.normal(0.0, 1e-6, (8, 1, 1, 3)),
+               1.04e-5 + rng.normal(0.0, 1e-6, (32, 1, 1, 3)))
+p_dim = dim[4].min()
 t = mc.welch(const(7.111566, 4), const(7.111465, 4))[3]
 text = json.dumps(mc.finite_json({{"t": float(t.flat[0]), "v": [float("nan"), 1.0]}}), allow_nan=False)
 # A 4x4 image of mean 0.08 whose last pixel lanterna sees black and Mitsuba at 1e-8 or
@@ -846,6 +854,7 @@ ms[:, 3, 3, :] *= 1e4
 small = mc.agreement(lt, ms, 1, 1e-3)
 print(json.dumps({{"p_same": float(p_same), "p_diff": float(p_diff), "json": text,
                   "p_dithered": float(p_dithered), "p_dithered_diff": float(p_dithered_diff),
+                  "p_dim": float(p_dim), "se_dim": float(dim[2].max()),
                   "tiny": [tiny["agree"], tiny["tests"]], "small": [small["agree"], small["tests"]]}}))
 "#,
         dir = script.display().to_string()
@@ -860,6 +869,12 @@ print(json.dumps({{"p_same": float(p_same), "p_diff": float(p_diff), "json": tex
     assert_eq!(
         v["p_dithered_diff"], 0.0,
         "a dithered constant pixel 1 % off: {v}"
+    );
+    let se_dim = v["se_dim"].as_f64().unwrap();
+    assert!(se_dim < 2f64.powi(-20), "the dim pixel's error is below a unit: {v}");
+    assert!(
+        v["p_dim"].as_f64().unwrap() > 0.01,
+        "a dim pixel one film unit off: {v}"
     );
     // A black pixel against Mitsuba's 1e-8 (an index-matched pane's Fresnel) is not
     // tested; against 1e-4 of an image of mean 0.08 it is, and differs.
