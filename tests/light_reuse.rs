@@ -103,7 +103,9 @@ fn guided_ris_with_light_reuse_agrees_with_pt() {
 /// agreement tests above pass it; this one does not. Seen to fail (2026-11-29) with
 /// readers looking in the wrong slot of the grid (1.000: no key matches) and with cells
 /// keeping their last writer instead of the highest ticket's on one lavapipe thread
-/// (`LP_NUM_THREADS=1`: 0.967, which chains each pixel's samples to one writer).
+/// (`LP_NUM_THREADS=1`: 0.967, which chains each pixel's samples to one writer), and
+/// with tickets that lack the generation (0.971: a high ticket of an early sample keeps
+/// its cell's reservoir for good).
 #[test]
 fn light_reuse_lowers_the_noise_of_direct_light_on_a_small_street() {
     let t = testing::small_street();

@@ -871,7 +871,10 @@ print(json.dumps({{"p_same": float(p_same), "p_diff": float(p_diff), "json": tex
         "a dithered constant pixel 1 % off: {v}"
     );
     let se_dim = v["se_dim"].as_f64().unwrap();
-    assert!(se_dim < 2f64.powi(-20), "the dim pixel's error is below a unit: {v}");
+    assert!(
+        se_dim < 2f64.powi(-20),
+        "the dim pixel's error is below a unit: {v}"
+    );
     assert!(
         v["p_dim"].as_f64().unwrap() > 0.01,
         "a dim pixel one film unit off: {v}"
