@@ -37,7 +37,7 @@ impl Renderer {
             guide_light_training_address: split(g.light_training.address),
             reuse_read,
             reuse_write,
-            reuse_generation: self.reuse_ticket_generation(self.reuse_generation),
+            reuse_generation: super::light_reuse::ticket_generation(self.reuse_generation),
         }
     }
 
@@ -194,7 +194,7 @@ impl Renderer {
                         first += count;
                         let generation = self.reuse_generation + g as u64;
                         (push.reuse_read, push.reuse_write) = self.reuse_halves_at(generation);
-                        push.reuse_generation = self.reuse_ticket_generation(generation);
+                        push.reuse_generation = super::light_reuse::ticket_generation(generation);
                         push
                     })
                     .collect();

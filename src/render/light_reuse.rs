@@ -27,6 +27,13 @@ pub(super) fn cell_count(pixels: u64) -> u32 {
         .clamp(MIN_CELLS, MAX_CELLS) as u32
 }
 
+/// The high word of generation `generation`'s writers' tickets (ReuseCell.ticket_hi):
+/// above every earlier generation's and above an empty cell's 0. Saturates, which would
+/// take 2³² samples in one render.
+pub(super) fn ticket_generation(generation: u64) -> u32 {
+    (generation + 1).min(u32::MAX as u64) as u32
+}
+
 impl Renderer {
     /// Whether the next dispatches reuse light samples.
     pub(super) fn reuses_lights(&self) -> bool {
@@ -71,13 +78,6 @@ impl Renderer {
     /// First cells of the halves the current generation reads and writes.
     pub(super) fn reuse_halves(&self) -> (u32, u32) {
         self.reuse_halves_at(self.reuse_generation)
-    }
-
-    /// The high word of generation `generation`'s writers' tickets (ReuseCell.ticket_hi):
-    /// above every earlier generation's and above an empty cell's 0. Saturates, which
-    /// would take 2³² samples in one render.
-    pub(super) fn reuse_ticket_generation(&self, generation: u64) -> u32 {
-        (generation + 1).min(u32::MAX as u64) as u32
     }
 
     /// First cells of the halves generation `generation` reads and writes.
