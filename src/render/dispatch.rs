@@ -23,8 +23,7 @@ impl Renderer {
     ) -> gpu::PushConstants {
         let g = &self.guide;
         let split = super::address_words;
-        let (reuse_read, reuse_write) = self.reuse_halves();
-        gpu::PushConstants {
+        let mut push = gpu::PushConstants {
             tile_origin,
             tile_size,
             sample_begin,
@@ -35,10 +34,12 @@ impl Renderer {
             guide_training_address: split(g.training.address),
             guide_lights_address: split(g.lights.address),
             guide_light_training_address: split(g.light_training.address),
-            reuse_read,
-            reuse_write,
-            reuse_generation: super::light_reuse::ticket_generation(self.reuse_generation),
-        }
+            reuse_read: 0,
+            reuse_write: 0,
+            reuse_generation: 0,
+        };
+        self.set_reuse_generation(&mut push, self.reuse_generation);
+        push
     }
 
     /// Render samples [begin, begin + count) of pixel (x, y) alone with the debug kernel,
@@ -192,9 +193,7 @@ impl Renderer {
                         let mut push =
                             self.push_constants([0, y0], [w, rows], first as u32, count as u32);
                         first += count;
-                        let generation = self.reuse_generation + g as u64;
-                        (push.reuse_read, push.reuse_write) = self.reuse_halves_at(generation);
-                        push.reuse_generation = super::light_reuse::ticket_generation(generation);
+                        self.set_reuse_generation(&mut push, self.reuse_generation + g as u64);
                         push
                     })
                     .collect();

@@ -30,7 +30,7 @@ pub(super) fn cell_count(pixels: u64) -> u32 {
 /// The high word of generation `generation`'s writers' tickets (ReuseCell.ticket_hi):
 /// above every earlier generation's and above an empty cell's 0. Saturates, which would
 /// take 2³² samples in one render.
-pub(super) fn ticket_generation(generation: u64) -> u32 {
+fn ticket_generation(generation: u64) -> u32 {
     (generation + 1).min(u32::MAX as u64) as u32
 }
 
@@ -75,19 +75,12 @@ impl Renderer {
         Ok(())
     }
 
-    /// First cells of the halves the current generation reads and writes.
-    pub(super) fn reuse_halves(&self) -> (u32, u32) {
-        self.reuse_halves_at(self.reuse_generation)
-    }
-
-    /// First cells of the halves generation `generation` reads and writes.
-    pub(super) fn reuse_halves_at(&self, generation: u64) -> (u32, u32) {
+    /// Set `push`'s light reuse words for generation `generation`: the first cells of
+    /// the halves it reads and writes, and its writers' tickets' high word.
+    pub(super) fn set_reuse_generation(&self, push: &mut gpu::PushConstants, generation: u64) {
         let n = self.reuse_cell_count;
-        if generation % 2 == 0 {
-            (n, 0)
-        } else {
-            (0, n)
-        }
+        (push.reuse_read, push.reuse_write) = if generation % 2 == 0 { (n, 0) } else { (0, n) };
+        push.reuse_generation = ticket_generation(generation);
     }
 }
 
