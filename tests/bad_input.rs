@@ -188,6 +188,62 @@ fn zero_lights() {
     render_fails_with(&scene, dir.path(), &["scene.gltf", "no lights"]);
 }
 
+/// `lanterna info` still describes a scene without lights (so a user can see why nothing
+/// lights it), with a warning and zero light counts, while `render` refuses it above.
+#[test]
+fn info_describes_a_scene_without_lights() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), &scene_json("[0,0,0]", true, "quad.bin"));
+    let out = Command::new(env!("CARGO_BIN_EXE_lanterna"))
+        .args(["info", &scene])
+        .output()
+        .expect("run lanterna");
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("no lights"), "no warning:\n{stderr}");
+    assert!(stdout.contains("triangles           2"), "{stdout}");
+    assert!(stdout.contains("light models        0 "), "{stdout}");
+}
+
+/// A `KHR_animation_pointer` channel targets a JSON pointer and has no `node`, which the
+/// gltf crate's types require; lanterna plays no animations, so such a file renders (its
+/// animations left out, with a warning) instead of being refused as invalid glTF
+/// (Khronos's `AnimationPointer` samples were, 2026-11-29).
+#[test]
+fn animation_pointer_channels_do_not_stop_a_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = scene_json("[1,1,1]", true, "quad.bin").replacen(
+        r#"{"asset":{"version":"2.0"},"#,
+        r#"{"asset":{"version":"2.0"},"extensionsUsed":["KHR_animation_pointer"],
+        "animations":[{"samplers":[{"input":1,"output":0}],"channels":[{"sampler":0,
+        "target":{"path":"pointer","extensions":{"KHR_animation_pointer":
+        {"pointer":"/materials/0/emissiveFactor"}}}}]}],"#,
+        1,
+    );
+    assert!(json.contains("KHR_animation_pointer"));
+    let scene = write_scene(dir.path(), &json);
+    let out = dir.path().join("ok.exr");
+    let (ok, stderr) = lanterna(&[
+        "render",
+        &scene,
+        "--spp",
+        "1",
+        "--width",
+        "8",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(out.exists());
+    assert!(
+        stderr.contains("animation(s) that cannot be read"),
+        "no warning:\n{stderr}"
+    );
+}
+
 #[test]
 fn non_finite_emission() {
     let dir = tempfile::tempdir().unwrap();

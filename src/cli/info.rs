@@ -2,7 +2,7 @@
 //! needs, or a scene's statistics.
 
 use anyhow::{Context, Result};
-use lanterna::render::{session, Traversal};
+use lanterna::render::Traversal;
 use lanterna::scene::SceneStats;
 use lanterna::vk::{Device, Instance, InstanceOptions};
 use std::path::PathBuf;
@@ -28,16 +28,24 @@ pub fn run(args: Args) -> Result<()> {
 
 fn scene_info(path: &std::path::Path, json: bool, allow_outside_uris: bool) -> Result<()> {
     let options = lanterna::scene::LoadOptions { allow_outside_uris };
-    let loaded = session::load_scene_with(path, &options)?;
-    let stats = SceneStats::new(&loaded.scene, &loaded.lights);
+    // A scene without lights cannot be rendered, but its statistics can still say what
+    // it holds (and so why nothing lights it).
+    let scene = lanterna::scene::Scene::load(path, &options)?;
+    let stats = match lanterna::lights::LightTable::build(&scene) {
+        Ok(lights) => SceneStats::new(&scene, &lights),
+        Err(e @ lanterna::scene::SceneError::NoLights { .. }) => {
+            log::warn!("{e}: it cannot be rendered");
+            SceneStats::unlit(&scene)
+        }
+        Err(e) => return Err(e.into()),
+    };
     if json {
         println!("{}", serde_json::to_string_pretty(&stats)?);
     } else {
         println!("{}", path.display());
         println!("{stats}");
-        if !loaded.scene.cameras.is_empty() {
-            let names: Vec<String> = loaded
-                .scene
+        if !scene.cameras.is_empty() {
+            let names: Vec<String> = scene
                 .cameras
                 .iter()
                 .enumerate()

@@ -37,10 +37,18 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         path: path.to_path_buf(),
         message: e.to_string(),
     };
+    let mut parse_warnings = Vec::new();
     let gltf::Gltf { document, mut blob } =
-        gltf::Gltf::from_slice_without_validation(&bytes).map_err(gltf_error)?;
+        parse(&bytes, &mut parse_warnings).map_err(gltf_error)?;
     drop(bytes);
     let mut root = document.into_json();
+    if !root.animations.is_empty() {
+        parse_warnings.push(format!(
+            "has {} animation(s), which lanterna does not play: it renders the nodes' own \
+             transforms and morph weights",
+            root.animations.len()
+        ));
+    }
     gltf_check::precheck(&root).map_err(&invalid)?;
     // The crate refuses required extensions it does not read itself; lanterna reads
     // this one (load_primitive decodes the integer attributes).
@@ -205,7 +213,8 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let mut instances = Vec::new();
     let mut cameras = Vec::new();
     let mut punctual = Vec::new();
-    let mut warnings = std::mem::take(&mut registry.warnings);
+    let mut warnings = parse_warnings;
+    warnings.append(&mut registry.warnings);
     warnings.extend(unsupported_extensions(document.extensions_used()));
     let textures = std::mem::take(&mut registry.textures);
     let mut visited = vec![false; document.nodes().len()];
@@ -276,6 +285,15 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         }
         if let Some(light) = node.light() {
             punctual.push(convert_light(&light, &world, &node_name(&node)).map_err(&invalid)?);
+            if let Some(range) = light.range() {
+                // glTF's range is a cutoff hint for culling; within it the light should
+                // fall off with the inverse square, which lanterna does everywhere.
+                warnings.push(format!(
+                    "the light on node {} has a range ({range}), which is ignored: its light \
+                     falls off with the inverse square at every distance",
+                    node_name(&node)
+                ));
+            }
         }
         let Some(mesh) = node.mesh() else { continue };
         // A skinned mesh is moved by its joints, in world space; the node's own transform
@@ -582,6 +600,42 @@ fn rebase(scene: &mut Scene) {
         origin.y,
         origin.z
     );
+}
+
+/// The file's JSON as the gltf crate reads it (not yet validated), and a GLB's binary
+/// chunk. Animations are never played (see the warning `load` gives for them), so a file
+/// whose animations the crate cannot read is read again without them: a
+/// `KHR_animation_pointer` channel targets a JSON pointer instead of a node, which the
+/// crate's types require. Any other fault reports the first reading's error.
+fn parse(bytes: &[u8], warnings: &mut Vec<String>) -> Result<gltf::Gltf, gltf::Error> {
+    let first = match gltf::Gltf::from_slice_without_validation(bytes) {
+        Ok(g) => return Ok(g),
+        Err(e) => e,
+    };
+    let (json, blob) = if bytes.starts_with(b"glTF") {
+        let glb = gltf::binary::Glb::from_slice(bytes)?;
+        (glb.json, glb.bin.map(|b| b.into_owned()))
+    } else {
+        (std::borrow::Cow::Borrowed(bytes), None)
+    };
+    let Ok(mut value) = serde_json::from_slice::<serde_json::Value>(&json) else {
+        return Err(first);
+    };
+    let Some(animations) = value.as_object_mut().and_then(|o| o.remove("animations")) else {
+        return Err(first);
+    };
+    let Ok(root) = gltf::json::deserialize::from_value::<gltf::json::Root>(value) else {
+        return Err(first);
+    };
+    let count = animations.as_array().map_or(0, Vec::len);
+    warnings.push(format!(
+        "has {count} animation(s) that cannot be read ({first}); animations are not played, \
+         so they are left out"
+    ));
+    Ok(gltf::Gltf {
+        document: gltf::Document::from_json_without_validation(root),
+        blob,
+    })
 }
 
 /// glTF extensions lanterna reads. A file may use others without requiring them (a

@@ -43,6 +43,18 @@ pub struct SceneStats {
 
 impl SceneStats {
     pub fn new(scene: &Scene, lights: &LightTable) -> SceneStats {
+        Self::build(scene, Some(lights))
+    }
+
+    /// The statistics of a scene that has no lights (which `LightTable::build` refuses):
+    /// what `lanterna info` prints for it, with every light count zero.
+    pub fn unlit(scene: &Scene) -> SceneStats {
+        Self::build(scene, None)
+    }
+
+    fn build(scene: &Scene, lights: Option<&LightTable>) -> SceneStats {
+        let models = lights.map_or(&[][..], |l| &l.models[..]);
+        let light_triangles = lights.map_or(0, |l| l.triangles.len());
         let size = |n: usize, each: usize| (n * each) as u64;
         let unique_triangles: u64 = scene
             .primitives
@@ -63,12 +75,12 @@ impl SceneStats {
                 std::mem::size_of::<crate::gpu::Material>(),
             )
             + size(
-                lights.triangles.len(),
+                light_triangles,
                 std::mem::size_of::<crate::gpu::LightTriangle>()
                     + std::mem::size_of::<crate::gpu::LightCandidateTriangle>()
                     + 12,
             )
-            + size(lights.triangle_light_index.len(), 4);
+            + size(lights.map_or(0, |l| l.triangle_light_index.len()), 4);
         let textures: u64 = scene.textures.iter().map(|t| t.rgba.len() as u64).sum();
         // BVH nodes and leaves: a conservative ~64 bytes per triangle plus instances.
         let accel = unique_triangles * 64 + scene.instances.len() as u64 * 128;
@@ -91,23 +103,17 @@ impl SceneStats {
             only_lambertian: scene.only_lambertian(),
             textures: scene.textures.len() as u64,
             cameras: scene.cameras.len() as u64,
-            light_models: lights.models.len() as u64,
-            light_tree_depth_max: lights
-                .models
-                .iter()
-                .map(|m| m.tree_depth)
-                .max()
-                .unwrap_or(0),
-            light_tree_depth_mean: lights
-                .models
-                .iter()
-                .map(|m| m.tree_depth as f64)
-                .sum::<f64>()
-                / lights.models.len().max(1) as f64,
-            emissive_triangles: lights.triangles.len() as u64,
-            dropped_emissive_triangles: lights.dropped_triangles,
+            light_models: models.len() as u64,
+            light_tree_depth_max: models.iter().map(|m| m.tree_depth).max().unwrap_or(0),
+            light_tree_depth_mean: if models.is_empty() {
+                0.0
+            } else {
+                models.iter().map(|m| m.tree_depth as f64).sum::<f64>() / models.len() as f64
+            },
+            emissive_triangles: light_triangles as u64,
+            dropped_emissive_triangles: lights.map_or(0, |l| l.dropped_triangles),
             punctual_lights: scene.punctual.len() as u64,
-            total_power: lights.total_power,
+            total_power: lights.map_or(0.0, |l| l.total_power),
             bounds_min: scene.bounds_min.into(),
             bounds_max: scene.bounds_max.into(),
             device_bytes: buffers + textures + accel,
