@@ -229,6 +229,60 @@ fn an_unsupported_extension_loads_with_a_warning_naming_it() {
     assert!(!stderr.contains("does not support"), "{stderr}");
 }
 
+/// A file may *require* the material extensions lanterna reads from the JSON, which the
+/// gltf crate does not know and refused (until 2026-11-29 such a file failed with
+/// "Unsupported extension"); a required extension lanterna does not read is refused by
+/// name, first (Draco's missing accessor data used to come before it in the message).
+#[test]
+fn required_extensions_lanterna_reads_load_and_others_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = root().join("scenes/cornell-lights.gltf");
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&src).unwrap()).unwrap();
+    let read = [
+        "KHR_materials_clearcoat",
+        "KHR_materials_ior",
+        "KHR_materials_sheen",
+        "KHR_materials_specular",
+        "KHR_materials_volume",
+        "KHR_texture_transform",
+    ];
+    json["extensionsUsed"]
+        .as_array_mut()
+        .unwrap()
+        .extend(read.map(serde_json::Value::from));
+    json["extensionsRequired"] = serde_json::json!(read);
+    json["materials"][0]["extensions"]["KHR_materials_clearcoat"] =
+        serde_json::json!({ "clearcoatFactor": 1 });
+    let (path, stderr) = info_of_edited_cornell(dir.path(), &json);
+    assert!(!stderr.contains("does not support"), "{stderr}");
+    let out = Command::new(env!("CARGO_BIN_EXE_lanterna"))
+        .args(["info", "--json", path.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stats: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        stats["coated_materials"], 1,
+        "the required clearcoat was not read"
+    );
+
+    json["extensionsRequired"] = serde_json::json!([
+        "KHR_materials_ior",
+        "KHR_draco_mesh_compression",
+        "EXT_meshopt_compression"
+    ]);
+    std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
+    let (ok, stderr) = lanterna(&["info", path.to_str().unwrap()]);
+    assert!(!ok, "a file requiring Draco loaded");
+    assert!(
+        stderr.contains(
+            "cornell-lights.gltf: requires the glTF extensions KHR_draco_mesh_compression, \
+             EXT_meshopt_compression, which lanterna does not support"
+        ),
+        "{stderr}"
+    );
+}
+
 #[test]
 fn a_missing_texture_is_a_clear_error() {
     let dir = tempfile::tempdir().unwrap();

@@ -50,10 +50,25 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         ));
     }
     gltf_check::precheck(&root).map_err(&invalid)?;
-    // The crate refuses required extensions it does not read itself; lanterna reads
-    // this one (load_primitive decodes the integer attributes).
-    root.extensions_required
-        .retain(|e| e != gltf_check::QUANTIZATION);
+    // The crate refuses required extensions it does not read itself, among them several
+    // lanterna reads from the JSON (KHR_materials_volume, _specular, _ior, _clearcoat,
+    // _sheen, KHR_mesh_quantization). So lanterna decides: a required extension it does
+    // not read is refused here, by name, before the crate's validation would bury it
+    // among the errors it causes (Draco's accessors without data).
+    let unknown: Vec<&str> = root
+        .extensions_required
+        .iter()
+        .map(String::as_str)
+        .filter(|e| !SUPPORTED_EXTENSIONS.contains(e) && !INERT_EXTENSIONS.contains(e))
+        .collect();
+    if !unknown.is_empty() {
+        return Err(invalid(format!(
+            "requires the glTF extension{} {}, which lanterna does not support",
+            if unknown.len() > 1 { "s" } else { "" },
+            unknown.join(", ")
+        )));
+    }
+    root.extensions_required.clear();
     let document = gltf::Document::from_json(root).map_err(gltf_error)?;
     gltf_check::check_views(document.as_json()).map_err(&invalid)?;
     let mut uris = sources::UriReader::new(path, options.allow_outside_uris, limit);
