@@ -91,24 +91,24 @@ fn render_fails_with(scene: &str, dir: &Path, expected: &[&str]) {
     assert!(leftovers.is_empty(), "temporary files left behind");
 }
 
+/// Renders `scene` (8 pixels wide, 1 spp, with `extra` arguments) into `dir`, which must
+/// succeed and write the image; returns stderr.
+fn renders(scene: &str, dir: &Path, extra: &[&str]) -> String {
+    let out = dir.join("ok.exr");
+    let out = out.to_str().unwrap();
+    let mut args = vec!["render", scene, "--spp", "1", "--width", "8", "-o", out];
+    args.extend_from_slice(extra);
+    let (ok, stderr) = lanterna(&args);
+    assert!(ok, "{stderr}");
+    assert!(Path::new(out).exists());
+    stderr
+}
+
 #[test]
 fn the_valid_scene_renders() {
     let dir = tempfile::tempdir().unwrap();
     let scene = write_scene(dir.path(), &scene_json("[1,1,1]", true, "quad.bin"));
-    let out = dir.path().join("ok.exr");
-    let (ok, stderr) = lanterna(&[
-        "render",
-        &scene,
-        "--spp",
-        "1",
-        "--width",
-        "8",
-        "-o",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
-    assert!(ok, "{stderr}");
-    assert!(out.exists());
+    renders(&scene, dir.path(), &["--quiet"]);
 }
 
 #[test]
@@ -164,21 +164,7 @@ fn no_camera() {
 fn no_camera_but_look_at_renders() {
     let dir = tempfile::tempdir().unwrap();
     let scene = write_scene(dir.path(), &scene_json("[1,1,1]", false, "quad.bin"));
-    let out = dir.path().join("ok.exr");
-    let (ok, stderr) = lanterna(&[
-        "render",
-        &scene,
-        "--look-at",
-        "0,0,3,0,0,0",
-        "--spp",
-        "1",
-        "--width",
-        "8",
-        "-o",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
-    assert!(ok, "{stderr}");
+    renders(&scene, dir.path(), &["--look-at", "0,0,3,0,0,0", "--quiet"]);
 }
 
 #[test]
@@ -225,21 +211,43 @@ fn animation_pointer_channels_do_not_stop_a_render() {
     );
     assert!(json.contains("KHR_animation_pointer"));
     let scene = write_scene(dir.path(), &json);
-    let out = dir.path().join("ok.exr");
-    let (ok, stderr) = lanterna(&[
-        "render",
-        &scene,
-        "--spp",
-        "1",
-        "--width",
-        "8",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    assert!(ok, "{stderr}");
-    assert!(out.exists());
+    let stderr = renders(&scene, dir.path(), &[]);
     assert!(
         stderr.contains("animation(s) that cannot be read"),
+        "no warning:\n{stderr}"
+    );
+}
+
+/// A punctual light's `range` is a cutoff hint that lanterna does not apply; the user
+/// hears so once per file.
+#[test]
+fn a_light_range_is_ignored_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = scene_json("[1,1,1]", true, "quad.bin")
+        .replacen(
+            r#"{"asset":{"version":"2.0"},"#,
+            r#"{"asset":{"version":"2.0"},"extensionsUsed":["KHR_lights_punctual"],
+            "extensions":{"KHR_lights_punctual":{"lights":[{"type":"point","range":2},
+            {"type":"point","range":3},{"type":"point"}]}},"#,
+            1,
+        )
+        .replacen(
+            r#""nodes":[{"mesh":0}"#,
+            r#""nodes":[{"mesh":0,"children":[2,3,4]}"#,
+            1,
+        )
+        .replacen(
+            r#"{"camera":0,"translation":[0,0,3]}"#,
+            r#"{"camera":0,"translation":[0,0,3]},
+            {"extensions":{"KHR_lights_punctual":{"light":0}},"translation":[0,0,1]},
+            {"extensions":{"KHR_lights_punctual":{"light":1}},"translation":[0,0,1]},
+            {"extensions":{"KHR_lights_punctual":{"light":2}},"translation":[0,0,1]}"#,
+            1,
+        );
+    let scene = write_scene(dir.path(), &json);
+    let stderr = renders(&scene, dir.path(), &[]);
+    assert!(
+        stderr.contains("2 punctual light(s) have a range, which is ignored"),
         "no warning:\n{stderr}"
     );
 }

@@ -300,15 +300,6 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         }
         if let Some(light) = node.light() {
             punctual.push(convert_light(&light, &world, &node_name(&node)).map_err(&invalid)?);
-            if let Some(range) = light.range() {
-                // glTF's range is a cutoff hint for culling; within it the light should
-                // fall off with the inverse square, which lanterna does everywhere.
-                warnings.push(format!(
-                    "the light on node {} has a range ({range}), which is ignored: its light \
-                     falls off with the inverse square at every distance",
-                    node_name(&node)
-                ));
-            }
         }
         let Some(mesh) = node.mesh() else { continue };
         // A skinned mesh is moved by its joints, in world space; the node's own transform
@@ -417,6 +408,15 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         }
     }
 
+    // glTF's range is a cutoff hint for culling; within it a light should fall off with
+    // the inverse square, which lanterna's do at every distance.
+    let ranged = punctual.iter().filter(|l| l.range > 0.0).count();
+    if ranged > 0 {
+        warnings.push(format!(
+            "{ranged} punctual light(s) have a range, which is ignored: their light falls \
+             off with the inverse square at every distance"
+        ));
+    }
     for w in &warnings {
         log::warn!("{}: {w}", path.display());
     }
