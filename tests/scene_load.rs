@@ -1183,3 +1183,123 @@ fn strips_and_fans_load_as_the_triangles_the_spec_lists() {
         assert_eq!(got, want, "node at z = {z}");
     }
 }
+
+/// A normal map tilts the shading normal the way its texture says, with or without the
+/// TANGENT attribute and on mirrored instances: the map's +x is the direction of
+/// increasing u, its +y the image's up (decreasing v, glTF's texture coordinates starting
+/// at the top left), and a mirrored copy shows the mirror image of the relief. A
+/// Lambertian floor (albedo 0.5, u along +x, v along +z) with a constant map tilted 30°
+/// under a directional light of irradiance π, seen from above at depth 2: each pixel is
+/// 0.5·cos between the tilted normal and the light, worked out here from the texel's
+/// bytes, within 10⁻⁴ relative (the render is exact up to float rounding). Until
+/// 2026-11-29 tangents derived from the UVs turned the map's y upside down (a tilt toward
+/// the image's up shaded as one away from it) and a TANGENT attribute on a mirrored
+/// instance did too; both fail this test (first at a map tilted toward +x, whose green
+/// byte 128 is 0.004 off centre: 0.4111 against 0.4133, and 0.1997 against 0.2020).
+#[test]
+fn normal_maps_tilt_the_way_their_texture_says() {
+    use base64::Engine as _;
+    use glam::Vec3;
+    let b64 = |bytes: &[u8]| base64::engine::general_purpose::STANDARD.encode(bytes);
+    let light = Vec3::new(0.6, 1.0, -0.8).normalize(); // toward the light
+    let tilt = 30f32.to_radians();
+    let byte = |v: f32| ((v * 0.5 + 0.5) * 255.0).round() as u8;
+    let dir = tempfile::tempdir().unwrap();
+    let mut checked = 0;
+    for (map, texel) in [
+        ("+x", [tilt.sin(), 0.0, tilt.cos()]),
+        ("+y", [0.0, tilt.sin(), tilt.cos()]),
+    ] {
+        let rgb = texel.map(byte);
+        let mut png = Vec::new();
+        image::RgbImage::from_pixel(2, 2, image::Rgb(rgb))
+            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap();
+        for with_tangents in [false, true] {
+            // Floor corners, UVs, normals (and tangents), then indices.
+            let mut bin: Vec<u8> = Vec::new();
+            let mut put = |xs: &[f32]| xs.iter().for_each(|x| bin.extend(x.to_le_bytes()));
+            put(&[-1., 0., -1., 1., 0., -1., 1., 0., 1., -1., 0., 1.]);
+            put(&[0., 0., 1., 0., 1., 1., 0., 1.]);
+            put(&[0., 1., 0., 0., 1., 0., 0., 1., 0., 0., 1., 0.]);
+            put(&[
+                1., 0., 0., 1., 1., 0., 0., 1., 1., 0., 0., 1., 1., 0., 0., 1.,
+            ]);
+            [0u16, 2, 1, 0, 3, 2]
+                .iter()
+                .for_each(|i| bin.extend(i.to_le_bytes()));
+            let mut attributes = serde_json::json!({"POSITION": 0, "TEXCOORD_0": 1, "NORMAL": 2});
+            if with_tangents {
+                attributes["TANGENT"] = 3.into();
+            }
+            for mirror in [[1f32, 1.0, 1.0], [-1.0, 1.0, 1.0], [1.0, 1.0, -1.0]] {
+                let to_light = glam::Quat::from_rotation_arc(Vec3::NEG_Z, -light);
+                let json = serde_json::json!({
+                    "asset": {"version": "2.0"},
+                    "extensionsUsed": ["KHR_lights_punctual"],
+                    "extensions": {"KHR_lights_punctual": {"lights": [
+                        {"type": "directional", "intensity": std::f32::consts::PI}]}},
+                    "buffers": [{"uri": format!("data:application/octet-stream;base64,{}", b64(&bin)),
+                                 "byteLength": bin.len()}],
+                    "bufferViews": [
+                        {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+                        {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+                        {"buffer": 0, "byteOffset": 80, "byteLength": 48},
+                        {"buffer": 0, "byteOffset": 128, "byteLength": 64},
+                        {"buffer": 0, "byteOffset": 192, "byteLength": 12}
+                    ],
+                    "accessors": [
+                        {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                         "min": [-1, 0, -1], "max": [1, 0, 1]},
+                        {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+                        {"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC3"},
+                        {"bufferView": 3, "componentType": 5126, "count": 4, "type": "VEC4"},
+                        {"bufferView": 4, "componentType": 5123, "count": 6, "type": "SCALAR"}
+                    ],
+                    "images": [{"uri": format!("data:image/png;base64,{}", b64(&png))}],
+                    "samplers": [{"magFilter": 9728, "minFilter": 9728}],
+                    "textures": [{"source": 0, "sampler": 0}],
+                    "materials": [{
+                        "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1],
+                                                 "metallicFactor": 0},
+                        "extensions": {"KHR_materials_specular": {"specularFactor": 0}},
+                        "normalTexture": {"index": 0}
+                    }],
+                    "meshes": [{"primitives": [{"attributes": attributes, "indices": 4, "material": 0}]}],
+                    "cameras": [{"type": "orthographic", "orthographic":
+                        {"xmag": 0.5, "ymag": 0.5, "znear": 0.1, "zfar": 10}}],
+                    "nodes": [
+                        {"mesh": 0, "scale": mirror},
+                        {"camera": 0, "translation": [0, 3, 0],
+                         "rotation": [-std::f32::consts::FRAC_1_SQRT_2, 0, 0, std::f32::consts::FRAC_1_SQRT_2]},
+                        {"extensions": {"KHR_lights_punctual": {"light": 0}},
+                         "rotation": to_light.to_array()}
+                    ],
+                    "scenes": [{"nodes": [0, 1, 2]}],
+                    "scene": 0
+                });
+                let path = dir.path().join("floor.gltf");
+                std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
+                let scene = load(&path);
+                let mut s = testing::settings(Method::Pt, 8, 8);
+                s.max_depth = 2;
+                let got = render_batches(&scene, &scene.cameras[0], s, 1, 1).mean();
+                // The texel as the kernel reads it, in the floor's frame (u along +x, the
+                // image's up along −z, the normal +y), then mirrored as the node mirrors.
+                let t = rgb.map(|c| c as f32 / 255.0 * 2.0 - 1.0);
+                let m = Vec3::from(mirror);
+                let n = (Vec3::X * m * t[0] + Vec3::NEG_Z * m * t[1] + Vec3::Y * t[2]).normalize();
+                let expected = 0.5 * n.dot(light).max(0.0) as f64;
+                for (c, g) in got.iter().enumerate() {
+                    assert!(
+                        (g - expected).abs() < 1e-4 * expected,
+                        "map tilted toward {map}, tangents {with_tangents}, mirror {mirror:?}: \
+                         channel {c} is {g:.5}, expected {expected:.5}"
+                    );
+                }
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, 12);
+}

@@ -43,11 +43,18 @@ mat3 inverse_transpose3(mat3 m) {
 }
 
 // The tangent (xyz, world space) and bitangent sign (w) of a normal map read from UV set
-// `uv_set`: the TANGENT attribute, else derived from the UV parameterisation.
+// `uv_set`, for normal_mapped's bitangent cross(n, tangent)·w with n the front face's
+// normal. The map's +x is the direction of increasing u, its +y the image's up, that is
+// of decreasing v (glTF's texture coordinates start at the image's top left). From the
+// TANGENT attribute, else derived from the UV parameterisation (∂P/∂u, and w so that the
+// bitangent is −∂P/∂v, which MikkTSpace's tangents give where a file has them).
+// `flipped`: the instance's transform mirrors (INSTANCE_FLAG_FLIPPED), which turns
+// cross(n, tangent) around, so a mirrored copy shows the mirror image of the relief.
 vec4 normal_map_tangent(uint uv_set, vec3 w, Vertex v0, Vertex v1, Vertex v2, mat4x3 object_to_world,
-                        vec3 p0, vec3 p1, vec3 p2) {
+                        bool flipped, vec3 p0, vec3 p1, vec3 p2) {
+    float mirror = flipped ? -1.0 : 1.0;
     vec4 tv = w.x * v0.tangent + w.y * v1.tangent + w.z * v2.tangent;
-    if (dot(tv.xyz, tv.xyz) > 1e-12) return vec4(mat3(object_to_world) * tv.xyz, tv.w < 0.0 ? -1.0 : 1.0);
+    if (dot(tv.xyz, tv.xyz) > 1e-12) return vec4(mat3(object_to_world) * tv.xyz, (tv.w < 0.0 ? -1.0 : 1.0) * mirror);
     vec2 uva = uv_set == 1u ? v0.uv1 : v0.uv0;
     vec2 uvb = uv_set == 1u ? v1.uv1 : v1.uv0;
     vec2 uvc = uv_set == 1u ? v2.uv1 : v2.uv0;
@@ -55,7 +62,9 @@ vec4 normal_map_tangent(uint uv_set, vec3 w, Vertex v0, Vertex v1, Vertex v2, ma
     vec2 d2 = uvc - uva;
     float det = d1.x * d2.y - d1.y * d2.x;
     vec3 tangent = abs(det) > 1e-20 ? ((p1 - p0) * d2.y - (p2 - p0) * d1.y) / det : vec3(0.0);
-    return vec4(tangent, det < 0.0 ? -1.0 : 1.0);
+    // cross(∂P/∂u, ∂P/∂v) = cross(p1 − p0, p2 − p0) / det, which is the front normal's
+    // direction for det > 0 unless the instance mirrors: then cross(n, ∂P/∂u) is +∂P/∂v.
+    return vec4(tangent, (det < 0.0 ? 1.0 : -1.0) * mirror);
 }
 
 // The unit normal `n` (world space) perturbed by the tangent-space normal map `tex` at
@@ -85,7 +94,8 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     vec3 p2 = object_to_world * vec4(v2.position, 1.0);
     s.p = w.x * p0 + w.y * p1 + w.z * p2;
     vec3 ng = normalize(cross(p1 - p0, p2 - p0));
-    if ((inst.flags & INSTANCE_FLAG_FLIPPED) != 0u) ng = -ng;
+    bool flipped = (inst.flags & INSTANCE_FLAG_FLIPPED) != 0u;
+    if (flipped) ng = -ng;
     s.wo = -ray_dir;
     s.front = dot(ng, s.wo) > 0.0;
     s.instance = h.instance;
@@ -105,12 +115,12 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     vec3 coat_n = n;
     if (coated && m.clearcoat_normal_tex.index >= 0) {
         TextureRef t = m.clearcoat_normal_tex;
-        coat_n = normal_mapped(t, m.clearcoat_normal_scale, n, normal_map_tangent(t.uv_set, w, v0, v1, v2, object_to_world, p0, p1, p2),
+        coat_n = normal_mapped(t, m.clearcoat_normal_scale, n, normal_map_tangent(t.uv_set, w, v0, v1, v2, object_to_world, flipped, p0, p1, p2),
                                t.uv_set == 1u ? s.uv1 : s.uv0);
     }
     if (m.normal_tex.index >= 0) {
         TextureRef t = m.normal_tex;
-        n = normal_mapped(t, m.normal_scale, n, normal_map_tangent(t.uv_set, w, v0, v1, v2, object_to_world, p0, p1, p2),
+        n = normal_mapped(t, m.normal_scale, n, normal_map_tangent(t.uv_set, w, v0, v1, v2, object_to_world, flipped, p0, p1, p2),
                           t.uv_set == 1u ? s.uv1 : s.uv0);
     }
     // Two-sided BSDF: work on the side the ray came from.
