@@ -1184,6 +1184,103 @@ fn strips_and_fans_load_as_the_triangles_the_spec_lists() {
     }
 }
 
+/// A quad under a directional light of irradiance π, from toward `light`, seen from
+/// above by an orthographic camera over its middle (±0.5), rendered at depth 2 (8×8, 1
+/// spp: exact up to float rounding, the light being punctual) and returned as the image.
+/// `corners`: positions (y = 0, u along +x and v along +z on the unit floor), normals and
+/// tangents per corner (`None` leaves TANGENT out); `material` as glTF JSON, with
+/// `images` for its textures (sampled nearest); `scale` the mesh node's.
+fn quad_under_the_sun(
+    dir: &Path,
+    corners: [[f32; 3]; 4],
+    normals: [[f32; 3]; 4],
+    tangents: Option<[f32; 4]>,
+    material: serde_json::Value,
+    images: serde_json::Value,
+    scale: [f32; 3],
+    light: glam::Vec3,
+) -> Vec<f32> {
+    use base64::Engine as _;
+    let mut bin: Vec<u8> = Vec::new();
+    let mut put = |xs: &[f32]| xs.iter().for_each(|x| bin.extend(x.to_le_bytes()));
+    put(corners.as_flattened());
+    put(&[0., 0., 1., 0., 1., 1., 0., 1.]);
+    put(normals.as_flattened());
+    put(&[tangents.unwrap_or([1.0, 0.0, 0.0, 1.0]); 4].concat());
+    [0u16, 2, 1, 0, 3, 2]
+        .iter()
+        .for_each(|i| bin.extend(i.to_le_bytes()));
+    let mut attributes = serde_json::json!({"POSITION": 0, "TEXCOORD_0": 1, "NORMAL": 2});
+    if tangents.is_some() {
+        attributes["TANGENT"] = 3.into();
+    }
+    let (lo, hi) = corners
+        .iter()
+        .fold(([f32::MAX; 3], [f32::MIN; 3]), |(lo, hi), c| {
+            (
+                std::array::from_fn(|k| lo[k].min(c[k])),
+                std::array::from_fn(|k| hi[k].max(c[k])),
+            )
+        });
+    let half = std::f32::consts::FRAC_1_SQRT_2;
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [
+            {"type": "directional", "intensity": std::f32::consts::PI}]}},
+        "buffers": [{"uri": format!("data:application/octet-stream;base64,{}",
+                                    base64::engine::general_purpose::STANDARD.encode(&bin)),
+                     "byteLength": bin.len()}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+            {"buffer": 0, "byteOffset": 80, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 128, "byteLength": 64},
+            {"buffer": 0, "byteOffset": 192, "byteLength": 12}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": lo, "max": hi},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC3"},
+            {"bufferView": 3, "componentType": 5126, "count": 4, "type": "VEC4"},
+            {"bufferView": 4, "componentType": 5123, "count": 6, "type": "SCALAR"}
+        ],
+        "images": images,
+        "samplers": [{"magFilter": 9728, "minFilter": 9728}],
+        "textures": (0..images.as_array().map_or(0, Vec::len))
+            .map(|i| serde_json::json!({"source": i, "sampler": 0}))
+            .collect::<Vec<_>>(),
+        "materials": [material],
+        "meshes": [{"primitives": [{"attributes": attributes, "indices": 4, "material": 0}]}],
+        "cameras": [{"type": "orthographic", "orthographic":
+            {"xmag": 0.5, "ymag": 0.5, "znear": 0.1, "zfar": 10}}],
+        "nodes": [
+            {"mesh": 0, "scale": scale},
+            {"camera": 0, "translation": [0, 3, 0], "rotation": [-half, 0, 0, half]},
+            {"extensions": {"KHR_lights_punctual": {"light": 0}},
+             "rotation": glam::Quat::from_rotation_arc(glam::Vec3::NEG_Z, -light).to_array()}
+        ],
+        "scenes": [{"nodes": [0, 1, 2]}],
+        "scene": 0
+    });
+    let path = dir.join("quad.gltf");
+    std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
+    let scene = load(&path);
+    let mut s = testing::settings(Method::Pt, 8, 8);
+    s.max_depth = 2;
+    render_batches(&scene, &scene.cameras[0], s, 1, 1)
+        .images
+        .remove(0)
+}
+
+/// The unit floor's corners, counter-clockwise seen from above.
+const FLOOR: [[f32; 3]; 4] = [
+    [-1.0, 0.0, -1.0],
+    [1.0, 0.0, -1.0],
+    [1.0, 0.0, 1.0],
+    [-1.0, 0.0, 1.0],
+];
+
 /// A normal map tilts the shading normal the way its texture says, with or without the
 /// TANGENT attribute and on mirrored instances: the map's +x is the direction of
 /// increasing u, its +y the image's up (decreasing v, glTF's texture coordinates starting
@@ -1200,8 +1297,7 @@ fn strips_and_fans_load_as_the_triangles_the_spec_lists() {
 fn normal_maps_tilt_the_way_their_texture_says() {
     use base64::Engine as _;
     use glam::Vec3;
-    let b64 = |bytes: &[u8]| base64::engine::general_purpose::STANDARD.encode(bytes);
-    let light = Vec3::new(0.6, 1.0, -0.8).normalize(); // toward the light
+    let light = Vec3::new(0.6, 1.0, -0.8).normalize();
     let tilt = 30f32.to_radians();
     let byte = |v: f32| ((v * 0.5 + 0.5) * 255.0).round() as u8;
     let dir = tempfile::tempdir().unwrap();
@@ -1215,86 +1311,37 @@ fn normal_maps_tilt_the_way_their_texture_says() {
         image::RgbImage::from_pixel(2, 2, image::Rgb(rgb))
             .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
             .unwrap();
-        for with_tangents in [false, true] {
-            // Floor corners, UVs, normals (and tangents), then indices.
-            let mut bin: Vec<u8> = Vec::new();
-            let mut put = |xs: &[f32]| xs.iter().for_each(|x| bin.extend(x.to_le_bytes()));
-            put(&[-1., 0., -1., 1., 0., -1., 1., 0., 1., -1., 0., 1.]);
-            put(&[0., 0., 1., 0., 1., 1., 0., 1.]);
-            put(&[0., 1., 0., 0., 1., 0., 0., 1., 0., 0., 1., 0.]);
-            put(&[
-                1., 0., 0., 1., 1., 0., 0., 1., 1., 0., 0., 1., 1., 0., 0., 1.,
-            ]);
-            [0u16, 2, 1, 0, 3, 2]
-                .iter()
-                .for_each(|i| bin.extend(i.to_le_bytes()));
-            let mut attributes = serde_json::json!({"POSITION": 0, "TEXCOORD_0": 1, "NORMAL": 2});
-            if with_tangents {
-                attributes["TANGENT"] = 3.into();
-            }
+        let png = base64::engine::general_purpose::STANDARD.encode(&png);
+        let images = serde_json::json!([{ "uri": format!("data:image/png;base64,{png}") }]);
+        let material = serde_json::json!({
+            "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0},
+            "extensions": {"KHR_materials_specular": {"specularFactor": 0}},
+            "normalTexture": {"index": 0}
+        });
+        for tangents in [None, Some([1.0, 0.0, 0.0, 1.0])] {
             for mirror in [[1f32, 1.0, 1.0], [-1.0, 1.0, 1.0], [1.0, 1.0, -1.0]] {
-                let to_light = glam::Quat::from_rotation_arc(Vec3::NEG_Z, -light);
-                let json = serde_json::json!({
-                    "asset": {"version": "2.0"},
-                    "extensionsUsed": ["KHR_lights_punctual"],
-                    "extensions": {"KHR_lights_punctual": {"lights": [
-                        {"type": "directional", "intensity": std::f32::consts::PI}]}},
-                    "buffers": [{"uri": format!("data:application/octet-stream;base64,{}", b64(&bin)),
-                                 "byteLength": bin.len()}],
-                    "bufferViews": [
-                        {"buffer": 0, "byteOffset": 0, "byteLength": 48},
-                        {"buffer": 0, "byteOffset": 48, "byteLength": 32},
-                        {"buffer": 0, "byteOffset": 80, "byteLength": 48},
-                        {"buffer": 0, "byteOffset": 128, "byteLength": 64},
-                        {"buffer": 0, "byteOffset": 192, "byteLength": 12}
-                    ],
-                    "accessors": [
-                        {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
-                         "min": [-1, 0, -1], "max": [1, 0, 1]},
-                        {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
-                        {"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC3"},
-                        {"bufferView": 3, "componentType": 5126, "count": 4, "type": "VEC4"},
-                        {"bufferView": 4, "componentType": 5123, "count": 6, "type": "SCALAR"}
-                    ],
-                    "images": [{"uri": format!("data:image/png;base64,{}", b64(&png))}],
-                    "samplers": [{"magFilter": 9728, "minFilter": 9728}],
-                    "textures": [{"source": 0, "sampler": 0}],
-                    "materials": [{
-                        "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1],
-                                                 "metallicFactor": 0},
-                        "extensions": {"KHR_materials_specular": {"specularFactor": 0}},
-                        "normalTexture": {"index": 0}
-                    }],
-                    "meshes": [{"primitives": [{"attributes": attributes, "indices": 4, "material": 0}]}],
-                    "cameras": [{"type": "orthographic", "orthographic":
-                        {"xmag": 0.5, "ymag": 0.5, "znear": 0.1, "zfar": 10}}],
-                    "nodes": [
-                        {"mesh": 0, "scale": mirror},
-                        {"camera": 0, "translation": [0, 3, 0],
-                         "rotation": [-std::f32::consts::FRAC_1_SQRT_2, 0, 0, std::f32::consts::FRAC_1_SQRT_2]},
-                        {"extensions": {"KHR_lights_punctual": {"light": 0}},
-                         "rotation": to_light.to_array()}
-                    ],
-                    "scenes": [{"nodes": [0, 1, 2]}],
-                    "scene": 0
-                });
-                let path = dir.path().join("floor.gltf");
-                std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
-                let scene = load(&path);
-                let mut s = testing::settings(Method::Pt, 8, 8);
-                s.max_depth = 2;
-                let got = render_batches(&scene, &scene.cameras[0], s, 1, 1).mean();
+                let image = quad_under_the_sun(
+                    dir.path(),
+                    FLOOR,
+                    [[0.0, 1.0, 0.0]; 4],
+                    tangents,
+                    material.clone(),
+                    images.clone(),
+                    mirror,
+                    light,
+                );
                 // The texel as the kernel reads it, in the floor's frame (u along +x, the
                 // image's up along −z, the normal +y), then mirrored as the node mirrors.
                 let t = rgb.map(|c| c as f32 / 255.0 * 2.0 - 1.0);
                 let m = Vec3::from(mirror);
                 let n = (Vec3::X * m * t[0] + Vec3::NEG_Z * m * t[1] + Vec3::Y * t[2]).normalize();
-                let expected = 0.5 * n.dot(light).max(0.0) as f64;
-                for (c, g) in got.iter().enumerate() {
+                let expected = 0.5 * n.dot(light).max(0.0);
+                for (i, g) in image.iter().enumerate() {
                     assert!(
                         (g - expected).abs() < 1e-4 * expected,
-                        "map tilted toward {map}, tangents {with_tangents}, mirror {mirror:?}: \
-                         channel {c} is {g:.5}, expected {expected:.5}"
+                        "map tilted toward {map}, tangents {}, mirror {mirror:?}: \
+                         value {i} is {g:.5}, expected {expected:.5}",
+                        tangents.is_some()
                     );
                 }
                 checked += 1;
@@ -1302,4 +1349,63 @@ fn normal_maps_tilt_the_way_their_texture_says() {
         }
     }
     assert_eq!(checked, 12);
+}
+
+/// A node's non-uniform scale shades a mesh with vertex normals as the same scale applied
+/// to the mesh does (positions scaled, normals by the inverse transpose, each to unit
+/// length): each vertex normal goes to world space and unit length before the
+/// interpolation, as in Mitsuba 3 (whose exports have the transforms applied) and the
+/// glTF sample viewer. A floor whose corners' normals lean four ways, scaled (2.5, 1,
+/// 0.4), under a directional light at depth 2, against the baked copy, pixel by pixel
+/// within 10⁻⁴. Until 2026-11-29 the normals were interpolated in object space and
+/// transformed after, which weighs the corners differently: seen to fail, 0.3108
+/// against 0.3508 at the first pixel (a squashed smooth sphere's shading normals
+/// differed by up to 13°).
+#[test]
+fn a_node_scale_shades_like_the_same_scale_applied_to_the_mesh() {
+    use glam::Vec3;
+    let dir = tempfile::tempdir().unwrap();
+    let scale = Vec3::new(2.5, 1.0, 0.4);
+    let normals = [
+        [0.6, 1.0, 0.0],
+        [-0.4, 1.0, 0.5],
+        [0.0, 1.0, -0.7],
+        [0.5, 1.0, 0.5],
+    ]
+    .map(|n: [f32; 3]| Vec3::from(n).normalize().to_array());
+    let material = serde_json::json!({
+        "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0},
+        "extensions": {"KHR_materials_specular": {"specularFactor": 0}}
+    });
+    let light = Vec3::new(-0.3, 1.0, 0.45).normalize();
+    let render = |corners, normals, node_scale: Vec3| {
+        let none = serde_json::json!([]);
+        quad_under_the_sun(
+            dir.path(),
+            corners,
+            normals,
+            None,
+            material.clone(),
+            none,
+            node_scale.to_array(),
+            light,
+        )
+    };
+    // The node's corners scale to the unit floor.
+    let by_node = render(
+        FLOOR.map(|c| (Vec3::from(c) / scale).to_array()),
+        normals,
+        scale,
+    );
+    let baked = render(
+        FLOOR,
+        normals.map(|n| (Vec3::from(n) / scale).normalize().to_array()),
+        Vec3::ONE,
+    );
+    for (i, (a, b)) in by_node.iter().zip(&baked).enumerate() {
+        assert!(
+            (a - b).abs() < 1e-4 * b.max(1e-3),
+            "value {i}: {a:.5} with the node's scale, {b:.5} with it applied to the mesh"
+        );
+    }
 }

@@ -25,6 +25,10 @@ float luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
 float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
 float sqr(float x) { return x * x; }
 bool all_finite(vec3 v) { return !any(isnan(v)) && !any(isinf(v)); }
+vec3 normalize_or_zero(vec3 v) {
+    float l2 = dot(v, v);
+    return l2 > 1e-30 ? v * inversesqrt(l2) : vec3(0.0);
+}
 
 // floor(x) as an unsigned integer, for 0 ≤ x < 2³², by integer operations on x's bits.
 // On CPU devices (lavapipe, LLVM 15) a float-to-integer conversion is a saturating one,

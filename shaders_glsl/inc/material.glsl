@@ -106,9 +106,14 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     Material m = materials(inst.material);
 
     // Shading normal: interpolated vertex normals (zero = flat), then the normal map.
+    // Each vertex normal goes to world space and to unit length before the interpolation,
+    // as a mesh with the transform applied to it (and Mitsuba 3, and the glTF sample
+    // viewer) has them: under a non-uniform scale interpolating in object space weighs
+    // the corners differently (shading normals up to 13° apart on a squashed sphere).
     mat3 normal_to_world = inverse_transpose3(mat3(object_to_world));
-    vec3 nv = w.x * v0.normal + w.y * v1.normal + w.z * v2.normal;
-    vec3 n = dot(nv, nv) > 1e-12 ? normalize(normal_to_world * nv) : ng;
+    vec3 nv = w.x * normalize_or_zero(normal_to_world * v0.normal) + w.y * normalize_or_zero(normal_to_world * v1.normal) +
+              w.z * normalize_or_zero(normal_to_world * v2.normal);
+    vec3 n = dot(nv, nv) > 1e-12 ? normalize(nv) : ng;
     if (dot(n, ng) < 0.0) n = -n;  // authored normals agree with the winding
     // The clearcoat's normal: its own map, else the normal before the base's map.
     bool coated = CLEARCOAT && m.clearcoat > 0.0;
