@@ -269,7 +269,9 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
                 return seen;
             }
             info.albedo = ns.bsdf.base_color;
-            info.normal = ns.n;
+            // The shading normal as authored (make_surface turns it over, below the
+            // geometric normal, where the view is below it).
+            info.normal = dot(ns.n, ns.ng) < 0.0 ? -ns.n : ns.n;
             info.depth = next.t;
             info.position = ns.p;
             L = seen;

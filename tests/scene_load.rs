@@ -1185,8 +1185,9 @@ fn strips_and_fans_load_as_the_triangles_the_spec_lists() {
 }
 
 /// A quad under a directional light of irradiance π, from toward `light`, seen from
-/// above by an orthographic camera over its middle (±0.5), rendered at depth 2 (8×8, 1
-/// spp: exact up to float rounding, the light being punctual) and returned as the image.
+/// `view` (a unit direction toward the camera) by an orthographic camera over its middle
+/// (±0.25), rendered at depth 2 (8×8, 1 spp: exact up to float rounding, the light being
+/// punctual) and returned as the image.
 /// `corners`: positions (y = 0, u along +x and v along +z on the unit floor), normals and
 /// tangents per corner (`None` leaves TANGENT out); `material` as glTF JSON, with
 /// `images` for its textures (sampled nearest); `scale` the mesh node's.
@@ -1199,6 +1200,7 @@ fn quad_under_the_sun(
     images: serde_json::Value,
     scale: [f32; 3],
     light: glam::Vec3,
+    view: glam::Vec3,
 ) -> Vec<f32> {
     use base64::Engine as _;
     let mut bin: Vec<u8> = Vec::new();
@@ -1222,7 +1224,6 @@ fn quad_under_the_sun(
                 std::array::from_fn(|k| hi[k].max(c[k])),
             )
         });
-    let half = std::f32::consts::FRAC_1_SQRT_2;
     let json = serde_json::json!({
         "asset": {"version": "2.0"},
         "extensionsUsed": ["KHR_lights_punctual"],
@@ -1253,10 +1254,11 @@ fn quad_under_the_sun(
         "materials": [material],
         "meshes": [{"primitives": [{"attributes": attributes, "indices": 4, "material": 0}]}],
         "cameras": [{"type": "orthographic", "orthographic":
-            {"xmag": 0.5, "ymag": 0.5, "znear": 0.1, "zfar": 10}}],
+            {"xmag": 0.25, "ymag": 0.25, "znear": 0.1, "zfar": 10}}],
         "nodes": [
             {"mesh": 0, "scale": scale},
-            {"camera": 0, "translation": [0, 3, 0], "rotation": [-half, 0, 0, half]},
+            {"camera": 0, "translation": (view * 3.0).to_array(),
+             "rotation": glam::Quat::from_rotation_arc(glam::Vec3::NEG_Z, -view).to_array()},
             {"extensions": {"KHR_lights_punctual": {"light": 0}},
              "rotation": glam::Quat::from_rotation_arc(glam::Vec3::NEG_Z, -light).to_array()}
         ],
@@ -1329,6 +1331,7 @@ fn normal_maps_tilt_the_way_their_texture_says() {
                     images.clone(),
                     mirror,
                     light,
+                    Vec3::Y,
                 );
                 // The texel as the kernel reads it, in the floor's frame (u along +x, the
                 // image's up along −z, the normal +y), then mirrored as the node mirrors.
@@ -1389,6 +1392,7 @@ fn a_node_scale_shades_like_the_same_scale_applied_to_the_mesh() {
             none,
             node_scale.to_array(),
             light,
+            Vec3::Y,
         )
     };
     // The node's corners scale to the unit floor.
@@ -1407,5 +1411,61 @@ fn a_node_scale_shades_like_the_same_scale_applied_to_the_mesh() {
             (a - b).abs() < 1e-4 * b.max(1e-3),
             "value {i}: {a:.5} with the node's scale, {b:.5} with it applied to the mesh"
         );
+    }
+}
+
+/// A view from below the shading normal (above the geometric one: the silhouette of a
+/// coarse smooth mesh) sees the shading surface's other side, as Mitsuba 3's `twosided`
+/// and pbrt-v4 do: light between the two surfaces reflects, with the cosine to the
+/// shading normal turned over, and light above both does not; light below the geometric
+/// surface never does (no leaks). A floor whose vertex normals lean 70° toward +x, seen
+/// at 30° from the −x side, under a directional light: 0.5·cos against the turned-over
+/// normal (0.3917 for a light at (−0.9, 0.3, 0), which Mitsuba renders too, 2026-11-29),
+/// 0 for a light straight above; and seen from the +x side, 0.5·cos against the normal.
+/// Until 2026-11-29 such a view reflected nothing (the first case 0: seen to fail), and
+/// a coarse smooth sphere's silhouettes were darker than Mitsuba's.
+#[test]
+fn a_view_from_below_the_shading_normal_sees_its_other_side() {
+    use glam::Vec3;
+    let dir = tempfile::tempdir().unwrap();
+    let lean = 70f32.to_radians();
+    let n = Vec3::new(lean.sin(), lean.cos(), 0.0);
+    let material = serde_json::json!({
+        "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0},
+        "extensions": {"KHR_materials_specular": {"specularFactor": 0}}
+    });
+    let (from_left, from_right) = (Vec3::new(-0.866, 0.5, 0.0), Vec3::new(0.866, 0.5, 0.0));
+    for (view, light, expected) in [
+        (
+            from_left,
+            Vec3::new(-0.9, 0.3, 0.0).normalize(),
+            0.5 * Vec3::new(0.9, -0.3, 0.0).normalize().dot(n),
+        ),
+        (from_left, Vec3::Y, 0.0),
+        (from_left, Vec3::new(-0.9, -0.3, 0.0).normalize(), 0.0),
+        (
+            from_right,
+            Vec3::new(0.9, 0.5, 0.0).normalize(),
+            0.5 * Vec3::new(0.9, 0.5, 0.0).normalize().dot(n),
+        ),
+    ] {
+        assert!(view.dot(n) < 0.0 || view == from_right);
+        let image = quad_under_the_sun(
+            dir.path(),
+            FLOOR,
+            [n.to_array(); 4],
+            None,
+            material.clone(),
+            serde_json::json!([]),
+            [1.0; 3],
+            light,
+            view.normalize(),
+        );
+        for (i, g) in image.iter().enumerate() {
+            assert!(
+                (g - expected).abs() <= 1e-4 * expected.max(1e-2),
+                "view {view}, light from {light}: value {i} is {g:.5}, expected {expected:.5}"
+            );
+        }
     }
 }

@@ -136,6 +136,16 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     }
     if (dot(n, ng) <= 1e-4) n = ng;
     if (dot(coat_n, ng) <= 1e-4) coat_n = ng;
+    // A view from below the shading surface (the silhouette of a coarse smooth mesh, a
+    // texel tilted away at a grazing view) sees its other side, the shading frame turned
+    // over, as Mitsuba 3's `twosided` and pbrt-v4 decide sides in the shading frame: light
+    // then reflects between the two surfaces (above the geometric one, below the shading
+    // one; surface_bsdf_eval_pdf keeps directions below the geometric surface dark, so
+    // nothing leaks through it). Transmitting surfaces keep the frame of their side.
+    if (dot(n, s.wo) < 0.0 && m.transmission <= 0.0) {
+        n = -n;
+        coat_n = -coat_n;
+    }
     s.ng = ng;
     s.n = n;
     make_basis(n, s.t, s.b);
@@ -249,6 +259,8 @@ vec3 surface_side_normal(Surface s, vec3 w) { return dot(w, s.ng) < 0.0 ? -s.ng 
 // f·|cos| for world directions and the BSDF's sampling density of wi. A direction must
 // lie on the same side of the geometric and the shading surface (no light leaks through
 // shading normals): above both, or below both for a transmitting surface; zero otherwise.
+// (Where the view is below the shading normal, make_surface has turned the shading frame
+// over: "above" it is then the wedge between the two surfaces.)
 // `c` is surface_bsdf_at(s).
 vec3 surface_bsdf_eval_pdf(Surface s, BsdfWo c, vec3 wi, out float pdf) {
     pdf = 0.0;
