@@ -252,6 +252,25 @@ fn a_light_range_is_ignored_with_a_warning() {
     );
 }
 
+/// A file with several scenes and no default renders the first, and says so: a user
+/// whose objects are in another scene then knows why the image lacks them.
+#[test]
+fn several_scenes_without_a_default_warn() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = scene_json("[1,1,1]", true, "quad.bin").replacen(
+        r#""scenes":[{"nodes":[0,1]}],"scene":0"#,
+        r#""scenes":[{"nodes":[0,1]},{"nodes":[0]}]"#,
+        1,
+    );
+    assert!(!json.contains(r#""scene":0"#));
+    let scene = write_scene(dir.path(), &json);
+    let stderr = renders(&scene, dir.path(), &[]);
+    assert!(
+        stderr.contains("names no default scene; rendering the first of its 2 scenes"),
+        "no warning:\n{stderr}"
+    );
+}
+
 #[test]
 fn non_finite_emission() {
     let dir = tempfile::tempdir().unwrap();

@@ -196,6 +196,12 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     material_names.push("default".into());
 
     // Flatten the node hierarchy of the default scene.
+    if document.default_scene().is_none() && document.scenes().len() > 1 {
+        parse_warnings.push(format!(
+            "names no default scene; rendering the first of its {} scenes",
+            document.scenes().len()
+        ));
+    }
     let roots: Vec<gltf::Node<'_>> = match document
         .default_scene()
         .or_else(|| document.scenes().next())
