@@ -1187,12 +1187,12 @@ fn strips_and_fans_load_as_the_triangles_the_spec_lists() {
 /// A quad under a directional light of irradiance π, from toward `light`, seen from
 /// `view` (a unit direction toward the camera) by an orthographic camera over its middle
 /// (±0.25), rendered at depth 2 (8×8, 1 spp: exact up to float rounding, the light being
-/// punctual) and returned as the image.
-/// `corners`: positions (y = 0, u along +x and v along +z on the unit floor), normals and
-/// tangents per corner (`None` leaves TANGENT out); `material` as glTF JSON, with
-/// `images` for its textures (sampled nearest); `scale` the mesh node's.
-fn quad_under_the_sun(
-    dir: &Path,
+/// punctual) by [`quad_under_the_sun`]. `corners`: positions (y = 0, u along +x and v
+/// along +z on the unit floor), `normals` and `tangents` per corner (`None` leaves
+/// TANGENT out); `material` as glTF JSON, with `images` for its textures (sampled
+/// nearest); `scale` the mesh node's.
+#[derive(Clone)]
+struct LitQuad {
     corners: [[f32; 3]; 4],
     normals: [[f32; 3]; 4],
     tangents: Option<[f32; 4]>,
@@ -1201,7 +1201,39 @@ fn quad_under_the_sun(
     scale: [f32; 3],
     light: glam::Vec3,
     view: glam::Vec3,
-) -> Vec<f32> {
+}
+
+impl Default for LitQuad {
+    /// The unit floor, facing up, Lambertian of albedo 0.5, lit and seen from above.
+    fn default() -> Self {
+        LitQuad {
+            corners: FLOOR,
+            normals: [[0.0, 1.0, 0.0]; 4],
+            tangents: None,
+            material: serde_json::json!({
+                "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0},
+                "extensions": {"KHR_materials_specular": {"specularFactor": 0}}
+            }),
+            images: serde_json::json!([]),
+            scale: [1.0; 3],
+            light: glam::Vec3::Y,
+            view: glam::Vec3::Y,
+        }
+    }
+}
+
+/// The image (RGB, row-major) of `quad`, rendered through a glTF file written to `dir`.
+fn quad_under_the_sun(dir: &Path, quad: &LitQuad) -> Vec<f32> {
+    let LitQuad {
+        corners,
+        normals,
+        tangents,
+        material,
+        images,
+        scale,
+        light,
+        view,
+    } = quad.clone();
     use base64::Engine as _;
     let mut bin: Vec<u8> = Vec::new();
     let mut put = |xs: &[f32]| xs.iter().for_each(|x| bin.extend(x.to_le_bytes()));
@@ -1322,17 +1354,15 @@ fn normal_maps_tilt_the_way_their_texture_says() {
         });
         for tangents in [None, Some([1.0, 0.0, 0.0, 1.0])] {
             for mirror in [[1f32, 1.0, 1.0], [-1.0, 1.0, 1.0], [1.0, 1.0, -1.0]] {
-                let image = quad_under_the_sun(
-                    dir.path(),
-                    FLOOR,
-                    [[0.0, 1.0, 0.0]; 4],
+                let quad = LitQuad {
                     tangents,
-                    material.clone(),
-                    images.clone(),
-                    mirror,
+                    material: material.clone(),
+                    images: images.clone(),
+                    scale: mirror,
                     light,
-                    Vec3::Y,
-                );
+                    ..LitQuad::default()
+                };
+                let image = quad_under_the_sun(dir.path(), &quad);
                 // The texel as the kernel reads it, in the floor's frame (u along +x, the
                 // image's up along −z, the normal +y), then mirrored as the node mirrors.
                 let t = rgb.map(|c| c as f32 / 255.0 * 2.0 - 1.0);
@@ -1376,24 +1406,16 @@ fn a_node_scale_shades_like_the_same_scale_applied_to_the_mesh() {
         [0.5, 1.0, 0.5],
     ]
     .map(|n: [f32; 3]| Vec3::from(n).normalize().to_array());
-    let material = serde_json::json!({
-        "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0},
-        "extensions": {"KHR_materials_specular": {"specularFactor": 0}}
-    });
     let light = Vec3::new(-0.3, 1.0, 0.45).normalize();
     let render = |corners, normals, node_scale: Vec3| {
-        let none = serde_json::json!([]);
-        quad_under_the_sun(
-            dir.path(),
+        let quad = LitQuad {
             corners,
             normals,
-            None,
-            material.clone(),
-            none,
-            node_scale.to_array(),
+            scale: node_scale.to_array(),
             light,
-            Vec3::Y,
-        )
+            ..LitQuad::default()
+        };
+        quad_under_the_sun(dir.path(), &quad)
     };
     // The node's corners scale to the unit floor.
     let by_node = render(
@@ -1430,10 +1452,6 @@ fn a_view_from_below_the_shading_normal_sees_its_other_side() {
     let dir = tempfile::tempdir().unwrap();
     let lean = 70f32.to_radians();
     let n = Vec3::new(lean.sin(), lean.cos(), 0.0);
-    let material = serde_json::json!({
-        "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0},
-        "extensions": {"KHR_materials_specular": {"specularFactor": 0}}
-    });
     let (from_left, from_right) = (Vec3::new(-0.866, 0.5, 0.0), Vec3::new(0.866, 0.5, 0.0));
     for (view, light, expected) in [
         (
@@ -1450,17 +1468,13 @@ fn a_view_from_below_the_shading_normal_sees_its_other_side() {
         ),
     ] {
         assert!(view.dot(n) < 0.0 || view == from_right);
-        let image = quad_under_the_sun(
-            dir.path(),
-            FLOOR,
-            [n.to_array(); 4],
-            None,
-            material.clone(),
-            serde_json::json!([]),
-            [1.0; 3],
+        let quad = LitQuad {
+            normals: [n.to_array(); 4],
             light,
-            view.normalize(),
-        );
+            view: view.normalize(),
+            ..LitQuad::default()
+        };
+        let image = quad_under_the_sun(dir.path(), &quad);
         for (i, g) in image.iter().enumerate() {
             assert!(
                 (g - expected).abs() <= 1e-4 * expected.max(1e-2),
