@@ -104,6 +104,18 @@ fn renders(scene: &str, dir: &Path, extra: &[&str]) -> String {
     stderr
 }
 
+/// Writes `json` as a scene, renders it (see [`renders`]) and checks that stderr warns
+/// with `warning`.
+fn renders_with_warning(json: &str, warning: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), json);
+    let stderr = renders(&scene, dir.path(), &[]);
+    assert!(
+        stderr.contains(warning),
+        "no warning `{warning}`:\n{stderr}"
+    );
+}
+
 #[test]
 fn the_valid_scene_renders() {
     let dir = tempfile::tempdir().unwrap();
@@ -200,7 +212,6 @@ fn info_describes_a_scene_without_lights() {
 /// (Khronos's `AnimationPointer` samples were, 2026-11-29).
 #[test]
 fn animation_pointer_channels_do_not_stop_a_render() {
-    let dir = tempfile::tempdir().unwrap();
     let json = scene_json("[1,1,1]", true, "quad.bin").replacen(
         r#"{"asset":{"version":"2.0"},"#,
         r#"{"asset":{"version":"2.0"},"extensionsUsed":["KHR_animation_pointer"],
@@ -210,19 +221,13 @@ fn animation_pointer_channels_do_not_stop_a_render() {
         1,
     );
     assert!(json.contains("KHR_animation_pointer"));
-    let scene = write_scene(dir.path(), &json);
-    let stderr = renders(&scene, dir.path(), &[]);
-    assert!(
-        stderr.contains("animation(s) that cannot be read"),
-        "no warning:\n{stderr}"
-    );
+    renders_with_warning(&json, "animation(s) that cannot be read");
 }
 
 /// A punctual light's `range` is a cutoff hint that lanterna does not apply; the user
 /// hears so once per file.
 #[test]
 fn a_light_range_is_ignored_with_a_warning() {
-    let dir = tempfile::tempdir().unwrap();
     let json = scene_json("[1,1,1]", true, "quad.bin")
         .replacen(
             r#"{"asset":{"version":"2.0"},"#,
@@ -244,30 +249,22 @@ fn a_light_range_is_ignored_with_a_warning() {
             {"extensions":{"KHR_lights_punctual":{"light":2}},"translation":[0,0,1]}"#,
             1,
         );
-    let scene = write_scene(dir.path(), &json);
-    let stderr = renders(&scene, dir.path(), &[]);
-    assert!(
-        stderr.contains("2 punctual light(s) have a range, which is ignored"),
-        "no warning:\n{stderr}"
-    );
+    renders_with_warning(&json, "2 punctual light(s) have a range, which is ignored");
 }
 
 /// A file with several scenes and no default renders the first, and says so: a user
 /// whose objects are in another scene then knows why the image lacks them.
 #[test]
 fn several_scenes_without_a_default_warn() {
-    let dir = tempfile::tempdir().unwrap();
     let json = scene_json("[1,1,1]", true, "quad.bin").replacen(
         r#""scenes":[{"nodes":[0,1]}],"scene":0"#,
         r#""scenes":[{"nodes":[0,1]},{"nodes":[0]}]"#,
         1,
     );
     assert!(!json.contains(r#""scene":0"#));
-    let scene = write_scene(dir.path(), &json);
-    let stderr = renders(&scene, dir.path(), &[]);
-    assert!(
-        stderr.contains("names no default scene; rendering the first of its 2 scenes"),
-        "no warning:\n{stderr}"
+    renders_with_warning(
+        &json,
+        "names no default scene; rendering the first of its 2 scenes",
     );
 }
 
