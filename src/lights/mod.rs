@@ -61,6 +61,9 @@ impl LightTable {
         let mut triangle_light_index = Vec::new();
         let mut instance_lights = Vec::with_capacity(scene.instances.len());
         let mut dropped = 0u64;
+        // Each emissive texture's largest luminance, found once: a scan of every texel,
+        // which per instance or per triangle took minutes on a 2K emissive map.
+        let mut max_luminance: Vec<Option<f32>> = vec![None; scene.textures.len()];
 
         for (instance_index, inst) in scene.instances.iter().enumerate() {
             let prim = &scene.primitives[inst.primitive as usize];
@@ -68,7 +71,11 @@ impl LightTable {
             let factor = material.emission;
             let texture = (material.emissive_tex.index >= 0)
                 .then(|| &scene.textures[material.emissive_tex.index as usize]);
-            let texture_black = texture.is_some_and(|t| t.max_luminance() <= 0.0);
+            let texture_max = texture.map(|t| {
+                *max_luminance[material.emissive_tex.index as usize]
+                    .get_or_insert_with(|| t.max_luminance())
+            });
+            let texture_black = texture_max.is_some_and(|m| m <= 0.0);
             let coverage = uniform_coverage(material, prim.color_offset);
             if factor.iter().all(|&c| c <= 0.0) || texture_black || coverage == Some(0.0) {
                 if factor.iter().any(|&c| c > 0.0) {
@@ -100,11 +107,11 @@ impl LightTable {
                     }
                 };
                 let uvs = [uv_of(0), uv_of(1), uv_of(2)];
-                let mean_texture = texture.map_or(1.0, |tex| {
+                let mean_texture = texture.zip(texture_max).map_or(1.0, |(tex, max)| {
                     let avg = mean_texture_luminance(tex, &material.emissive_tex, uvs);
                     // Never let an estimate make a triangle unsamplable: the power
                     // source must stay positive wherever emission may be.
-                    avg.max(1e-3 * tex.max_luminance())
+                    avg.max(1e-3 * max)
                 });
                 // Where the coverage varies over the emitter, its mean over the triangle
                 // (at least 1/64, so that no estimate makes a lit part unsamplable).
