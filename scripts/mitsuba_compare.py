@@ -380,6 +380,10 @@ def main(argv=None):
                     help="also write per-pixel Welch t statistics (lanterna − Mitsuba) as an EXR")
     ap.add_argument("--keep-lanterna", metavar="DIR",
                     help="with --lanterna: keep its batch EXRs (and their mean) in DIR")
+    ap.add_argument("--gltf-bsdf", action="store_true",
+                    help="render every material with the glTF BRDF plugin of "
+                    "scripts/mitsuba_gltf_bsdf.py (exact for untextured opaque "
+                    "metallic-roughness materials) instead of the export's BSDFs")
     ap.add_argument("--fail-on-disagree", action="store_true",
                     help="exit with status 1 when the block test rejects agreement")
     args = ap.parse_args(argv)
@@ -437,6 +441,14 @@ def main(argv=None):
         lt_spp = infos[0]["spp"] or args.spp or 16
         m_spp = args.mitsuba_spp or args.spp or lt_spp
 
+        if args.gltf_bsdf:
+            sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+            import mitsuba_gltf_bsdf
+            mitsuba_gltf_bsdf.register()
+            try:
+                xml = mitsuba_gltf_bsdf.rewrite_export(args.export_dir)
+            except ValueError as e:
+                raise InputError(f"--gltf-bsdf: {e}")
         scene = mi.load_file(xml, max_depth=manifest["max_depth"])
         # lanterna's --hide-emitters leaves out emission seen directly and keeps the light
         # the emitters' surfaces reflect; Mitsuba's hide_emitters would make them

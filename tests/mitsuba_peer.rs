@@ -233,16 +233,18 @@ fn compare(
     mitsuba_spp: u64,
     json: &Path,
 ) -> serde_json::Value {
-    compare_at(export_dir, exrs, mitsuba_spp, ALPHA, json)
+    compare_at(export_dir, exrs, mitsuba_spp, ALPHA, json, &[])
 }
 
-/// [`compare`] at level `alpha` (the script's, for each of its families).
+/// [`compare`] at level `alpha` (the script's, for each of its families), with `extra`
+/// arguments for the script.
 fn compare_at(
     export_dir: &Path,
     exrs: &[PathBuf],
     mitsuba_spp: u64,
     alpha: f64,
     json: &Path,
+    extra: &[&str],
 ) -> serde_json::Value {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/mitsuba_compare.py");
     let python = lanterna::testing::mitsuba_python().expect("a Python that imports mitsuba");
@@ -253,6 +255,7 @@ fn compare_at(
         .args(["--runs", "8", "--mitsuba-spp", &mitsuba_spp.to_string()])
         .args(["--alpha", &alpha.to_string(), "--json"])
         .arg(json)
+        .args(extra)
         .output()
         .expect("run the comparison script");
     assert!(
@@ -497,7 +500,14 @@ fn assert_agrees_exactly(
     } else {
         lanterna::testing::FRESH_BLOCK_ALPHA
     };
-    let report = compare_at(dir, &exrs, mitsuba_spp, alpha, &tmp.join("report.json"));
+    let report = compare_at(
+        dir,
+        &exrs,
+        mitsuba_spp,
+        alpha,
+        &tmp.join("report.json"),
+        &[],
+    );
     assert_eq!(report["exact"], true, "{}", report["approximations"]);
     assert!(
         report["agree"].as_bool().unwrap(),
@@ -520,6 +530,52 @@ fn assert_methods_agree_exactly(
     for &method in methods {
         let what = method.name();
         assert_agrees_exactly(scene, method, options, dir, spp, 4 * spp, tmp, what);
+    }
+}
+
+/// Glossy metallic-roughness materials at the image level (`glossy.gltf`: a rough gold
+/// metal box, a glossy blue plastic one, matte walls, one area light), against Mitsuba
+/// rendering every material with `scripts/mitsuba_gltf_bsdf.py`, the glTF BRDF written
+/// again from the specification as a Mitsuba plugin (the export's own `principled` is an
+/// approximation). `pt`, `ris` and `guided-ris`, 8 × 64 spp, Mitsuba at 8 × 256: the
+/// image mean, the blocks and the pixels must agree. Seen to fail with the plugin's
+/// α = roughness instead of roughness² (`GLTF_DEFECT=alpha-roughness`: mean −0.7 % red,
+/// t = −7.2, a block at p = 6·10⁻²⁰); the separable visibility term instead of the
+/// specification's height-correlated one is within this budget's noise here (mean
+/// −0.14 %, t = −1.3).
+#[test]
+fn glossy_materials_agree_with_mitsuba_through_the_gltf_bsdf() {
+    if !mitsuba_available() {
+        println!("skipped: no Python here imports mitsuba (scripts/setup --mitsuba)");
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("export");
+    let loaded = session::load_scene(&data("glossy.gltf")).unwrap();
+    let metallic: Vec<f32> = loaded.scene.materials.iter().map(|m| m.metallic).collect();
+    assert!(metallic.contains(&1.0) && metallic.contains(&0.0));
+    let options = export_loaded(&loaded.scene, None, 40, 30, &dir);
+    for method in [Method::Pt, Method::Ris, Method::GuidedRis] {
+        let exrs = lanterna_batches(&loaded.scene, method, &options, 8, 64, tmp.path());
+        let settings = RenderSettings {
+            method,
+            ..RenderSettings::default()
+        };
+        let alpha = if lanterna::testing::repeatable(&settings) {
+            ALPHA
+        } else {
+            lanterna::testing::FRESH_BLOCK_ALPHA
+        };
+        let json = tmp.path().join(format!("{}.json", method.name()));
+        let report = compare_at(&dir, &exrs, 256, alpha, &json, &["--gltf-bsdf"]);
+        assert!(
+            report["agree"].as_bool().unwrap(),
+            "{}: lanterna and Mitsuba's glTF BRDF disagree:\nmean {}\nblocks {}\npixels {}",
+            method.name(),
+            report["mean"],
+            report["blocks"],
+            report["pixels"]
+        );
     }
 }
 

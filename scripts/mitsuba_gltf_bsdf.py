@@ -1,0 +1,265 @@
+"""The glTF 2.0 metallic-roughness BRDF (the specification's appendix B, with
+KHR_materials_specular) as a Mitsuba 3 BSDF plugin, `gltf`, so that Mitsuba can render
+lanterna's glossy materials exactly instead of approximating them by `principled`.
+
+Written from the specification's formulas, not from lanterna's kernels:
+
+    fresnel_w       = (1 - |V.H|)^5
+    D               = a^2 / (pi ((N.H)^2 (a^2 - 1) + 1)^2),  a = roughness^2 (at least 1e-4)
+    Vis             = 1 / (2 (|N.V| sqrt(a^2 + (1-a^2)(N.L)^2) + |N.L| sqrt(a^2 + (1-a^2)(N.V)^2)))
+                      (the specification's visibility formula: height-correlated Smith)
+    dielectric_f0   = min(((1 - ior)/(1 + ior))^2 * specularColor, 1) * specular
+    dielectric_f90  = specular
+    dielectric_F    = f0 + (f90 - f0) * fresnel_w
+    dielectric_brdf = dielectric_F * D * Vis + (1 - max(dielectric_F)) * baseColor / pi
+    metal_brdf      = (baseColor + (1 - baseColor) * fresnel_w) * D * Vis
+    material        = mix(dielectric_brdf, metal_brdf, metallic)
+
+Two-sided (a view from the back sees the same BRDF, both directions mirrored), reflection
+only. Sampling is a one-sample mixture of GGX visible normals (Heitz 2018) and the cosine
+hemisphere; `pdf` is the mixture's density. Only constant factors (no textures):
+`rewrite_export` refuses materials it cannot write exactly.
+
+`GLTF_DEFECT` makes the plugin differ from the specification on purpose, to show that a
+peer test notices such a BRDF (tests/mitsuba_peer.rs,
+`glossy_materials_agree_with_mitsuba_through_the_gltf_bsdf`): `separable` swaps the
+visibility term for the separable product of G1s, `alpha-roughness` takes a = roughness
+instead of roughness^2.
+"""
+
+import math
+import drjit as dr
+import mitsuba as mi
+import json
+import os
+import re
+
+_DEFECT = os.environ.get("GLTF_DEFECT", "")
+
+
+def _params(props):
+    g = lambda k, d: float(props[k]) if props.has_property(k) else d
+    p = dict(base=(g("base_r", 0.8), g("base_g", 0.8), g("base_b", 0.8)),
+             metallic=g("metallic", 1.0), roughness=g("roughness", 1.0),
+             specular=g("specular", 1.0), spec_color=(g("spec_r", 1.0), g("spec_g", 1.0), g("spec_b", 1.0)),
+             ior=g("ior", 1.5))
+    default_ps = 0.0 if (p["metallic"] == 0.0 and p["specular"] == 0.0) else 0.5 + 0.5 * p["metallic"]
+    p["spec_prob"] = g("spec_prob", default_ps)
+    return p
+
+
+class GltfBSDF(mi.BSDF):
+    def __init__(self, props):
+        mi.BSDF.__init__(self, props)
+        p = _params(props)
+        self.p = p
+        self.base = mi.Color3f(*p["base"])
+        self.metallic = p["metallic"]
+        self.alpha = max(p["roughness"] ** (1 if _DEFECT == "alpha-roughness" else 2), 1e-4)
+        self.specular = p["specular"]
+        f0_ior = ((1.0 - p["ior"]) / (1.0 + p["ior"])) ** 2
+        self.f0d = mi.Color3f(*[min(f0_ior * c, 1.0) * p["specular"] for c in p["spec_color"]])
+        self.f90d = p["specular"]
+        self.ps = p["spec_prob"]
+        flags = (mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.DiffuseReflection
+                 | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide)
+        self.m_components = [flags]
+        self.m_flags = flags
+
+    # ---- microfacet pieces -------------------------------------------------------
+    def D(self, cos_h):
+        a2 = self.alpha * self.alpha
+        c2 = cos_h * cos_h
+        # denominator c2 (a2 - 1) + 1 written as s2 + a2 c2 (no cancellation)
+        den = (1.0 - c2) + a2 * c2
+        return a2 / (dr.pi * den * den)
+
+    def Vis(self, nl, nv):
+        a2 = self.alpha * self.alpha
+        if _DEFECT == "separable":  # a defect on purpose: the product of G1s
+            return 1.0 / ((nl + dr.sqrt(a2 + (1.0 - a2) * nl * nl)) * (nv + dr.sqrt(a2 + (1.0 - a2) * nv * nv)))
+        gv = nl * dr.sqrt(a2 + (1.0 - a2) * nv * nv)
+        gl = nv * dr.sqrt(a2 + (1.0 - a2) * nl * nl)
+        return dr.select(gv + gl > 0, 0.5 / (gv + gl), 0.0)
+
+    def G1(self, c):
+        a2 = self.alpha * self.alpha
+        t2 = dr.maximum(1.0 - c * c, 0.0) / dr.maximum(c * c, 1e-12)
+        return 2.0 / (1.0 + dr.sqrt(1.0 + a2 * t2))
+
+    def brdf(self, wi, wo):
+        """f(wi, wo) for wi, wo in the upper local hemisphere (wi = view V, wo = light L)."""
+        h = dr.normalize(wi + wo)
+        vh = dr.abs(dr.dot(wi, h))
+        fw = dr.power(1.0 - vh, 5.0) if hasattr(dr, "power") else (1.0 - vh) ** 5
+        spec = self.D(h.z) * self.Vis(wo.z, wi.z)
+        Fd = self.f0d + (self.f90d - self.f0d) * fw
+        Fd_max = dr.maximum(dr.maximum(Fd.x, Fd.y), Fd.z)
+        dielectric = Fd * spec + (1.0 - Fd_max) * self.base * dr.inv_pi
+        Fm = self.base + (1.0 - self.base) * fw
+        metal = Fm * spec
+        return (1.0 - self.metallic) * dielectric + self.metallic * metal
+
+    def pdf_local(self, wi, wo):
+        h = dr.normalize(wi + wo)
+        p_spec = self.G1(wi.z) * self.D(h.z) / (4.0 * wi.z)  # visible normals, reflected
+        p_diff = wo.z * dr.inv_pi
+        return self.ps * p_spec + (1.0 - self.ps) * p_diff
+
+    def sample_vndf(self, wi, u):
+        a = self.alpha
+        vh = dr.normalize(mi.Vector3f(a * wi.x, a * wi.y, wi.z))
+        lensq = vh.x * vh.x + vh.y * vh.y
+        inv = dr.rsqrt(dr.maximum(lensq, 1e-30))
+        t1 = dr.select(lensq > 0, mi.Vector3f(-vh.y * inv, vh.x * inv, 0.0), mi.Vector3f(1.0, 0.0, 0.0))
+        t2 = dr.cross(vh, t1)
+        r = dr.sqrt(u.x)
+        phi = 2.0 * dr.pi * u.y
+        p1 = r * dr.cos(phi)
+        p2 = r * dr.sin(phi)
+        s = 0.5 * (1.0 + vh.z)
+        p2 = (1.0 - s) * dr.sqrt(dr.maximum(1.0 - p1 * p1, 0.0)) + s * p2
+        nh = p1 * t1 + p2 * t2 + dr.sqrt(dr.maximum(1.0 - p1 * p1 - p2 * p2, 0.0)) * vh
+        return dr.normalize(mi.Vector3f(a * nh.x, a * nh.y, dr.maximum(nh.z, 0.0)))
+
+    # ---- Mitsuba interface --------------------------------------------------------
+    def _side(self, si):
+        return dr.select(mi.Frame3f.cos_theta(si.wi) < 0, -1.0, 1.0)
+
+    def sample(self, ctx, si, sample1, sample2, active=True):
+        sgn = self._side(si)
+        wi = mi.Vector3f(si.wi.x, si.wi.y, si.wi.z * sgn)
+        use_spec = sample1 < self.ps
+        h = self.sample_vndf(wi, sample2)
+        wo_spec = 2.0 * dr.dot(wi, h) * h - wi
+        wo_diff = mi.warp.square_to_cosine_hemisphere(sample2)
+        wo = dr.select(use_spec, wo_spec, wo_diff)
+        valid = active & (wi.z > 0) & (wo.z > 0)
+        pdf = self.pdf_local(wi, wo)
+        f = self.brdf(wi, wo) * wo.z
+        bs = dr.zeros(mi.BSDFSample3f)
+        bs.wo = mi.Vector3f(wo.x, wo.y, wo.z * sgn)
+        bs.pdf = dr.select(valid, pdf, 0.0)
+        bs.eta = 1.0
+        bs.sampled_component = mi.UInt32(0)
+        bs.sampled_type = dr.select(use_spec, mi.UInt32(+mi.BSDFFlags.GlossyReflection),
+                                    mi.UInt32(+mi.BSDFFlags.DiffuseReflection))
+        weight = dr.select(valid & (pdf > 0), f / pdf, 0.0)
+        return (bs, mi.Color3f(weight))
+
+    def _local(self, si, wo):
+        sgn = self._side(si)
+        wi = mi.Vector3f(si.wi.x, si.wi.y, si.wi.z * sgn)
+        wl = mi.Vector3f(wo.x, wo.y, wo.z * sgn)
+        return wi, wl, (wi.z > 0) & (wl.z > 0)
+
+    def eval(self, ctx, si, wo, active=True):
+        wi, wl, valid = self._local(si, wo)
+        return dr.select(active & valid, self.brdf(wi, wl) * wl.z, 0.0)
+
+    def pdf(self, ctx, si, wo, active=True):
+        wi, wl, valid = self._local(si, wo)
+        return dr.select(active & valid, self.pdf_local(wi, wl), 0.0)
+
+    def eval_pdf(self, ctx, si, wo, active=True):
+        wi, wl, valid = self._local(si, wo)
+        ok = active & valid
+        return (dr.select(ok, self.brdf(wi, wl) * wl.z, 0.0), dr.select(ok, self.pdf_local(wi, wl), 0.0))
+
+    def traverse(self, callback):
+        pass
+
+    def parameters_changed(self, keys):
+        pass
+
+    def to_string(self):
+        return "GltfBSDF[%s]" % self.p
+
+
+def register():
+    mi.register_bsdf("gltf", lambda props: GltfBSDF(props))
+
+
+def plugin_dict(mat):
+    """Mitsuba dict for a glTF material (json dict)."""
+    pbr = mat.get("pbrMetallicRoughness", {})
+    bc = pbr.get("baseColorFactor", [1, 1, 1, 1])
+    ext = mat.get("extensions", {}).get("KHR_materials_specular", {})
+    sc = ext.get("specularColorFactor", [1, 1, 1])
+    d = {"type": "gltf", "base_r": bc[0], "base_g": bc[1], "base_b": bc[2],
+         "metallic": pbr.get("metallicFactor", 1.0), "roughness": pbr.get("roughnessFactor", 1.0),
+         "specular": ext.get("specularFactor", 1.0), "spec_r": sc[0], "spec_g": sc[1], "spec_b": sc[2]}
+    ior = mat.get("extensions", {}).get("KHR_materials_ior", {}).get("ior")
+    if ior is not None:
+        d["ior"] = ior
+    return d
+
+
+# What a material may hold for `rewrite_export` to write it exactly with the plugin.
+_TEXTURES = ("baseColorTexture", "metallicRoughnessTexture")
+_UNSUPPORTED_EXTENSIONS = ("KHR_materials_transmission", "KHR_materials_volume",
+                           "KHR_materials_clearcoat", "KHR_materials_sheen")
+
+
+def _gltf_json(path):
+    """The JSON of a .gltf or .glb file."""
+    with open(path, "rb") as f:
+        data = f.read()
+    if data[:4] == b"glTF":
+        length = int.from_bytes(data[12:16], "little")
+        return json.loads(data[20:20 + length])
+    return json.loads(data)
+
+
+def _refusal(index, mat):
+    """Why material `index` cannot be written exactly by the plugin, or None."""
+    pbr = mat.get("pbrMetallicRoughness", {})
+    for t in _TEXTURES:
+        if t in pbr:
+            return f"material {index} has a {t}"
+    if "normalTexture" in mat:
+        return f"material {index} has a normalTexture"
+    for e in _UNSUPPORTED_EXTENSIONS:
+        if e in mat.get("extensions", {}):
+            return f"material {index} uses {e}"
+    spec = mat.get("extensions", {}).get("KHR_materials_specular", {})
+    if "specularTexture" in spec or "specularColorTexture" in spec:
+        return f"material {index} has a specular texture"
+    if mat.get("alphaMode", "OPAQUE") != "OPAQUE":
+        return f"material {index} is not opaque"
+    return None
+
+
+def rewrite_export(export_dir):
+    """Writes EXPORT_DIR/scene_gltf.xml: the export's scene.xml with every material's
+    BSDF replaced by the plugin, from the glTF file the export was made of (its manifest's
+    `scene_path`). Returns the path. Raises ValueError for a material the plugin cannot
+    write exactly (textures, vertex colours, transmission, coats, sheen, alpha)."""
+    with open(os.path.join(export_dir, "lanterna_export.json")) as f:
+        manifest = json.load(f)
+    materials = _gltf_json(manifest["scene_path"]).get("materials", [])
+    with open(os.path.join(export_dir, "scene.xml")) as f:
+        xml = f.read()
+    if 'id="bsdf' in xml and "-colors\"" in xml:
+        raise ValueError("the export has vertex colours, which the plugin does not read")
+    block = re.compile(r'  <bsdf type="[^"]*" id="bsdf(\d+)">.*?\n  </bsdf>\n', re.S)
+
+    def replace(m):
+        k = int(m.group(1))
+        # One past the file's materials is lanterna's default material (the glTF one).
+        mat = materials[k] if k < len(materials) else {}
+        why = _refusal(k, mat)
+        if why:
+            raise ValueError(why)
+        params = plugin_dict(mat)
+        body = "".join(f'    <float name="{name}" value="{value!r}"/>\n'
+                       for name, value in params.items() if name != "type")
+        return f'  <bsdf type="gltf" id="bsdf{k}">\n{body}  </bsdf>\n'
+
+    out, n = block.subn(replace, xml)
+    if n == 0:
+        raise ValueError(f"{export_dir}: no material BSDFs found in scene.xml")
+    path = os.path.join(export_dir, "scene_gltf.xml")
+    with open(path, "w") as f:
+        f.write(out)
+    return path
