@@ -252,6 +252,28 @@ fn a_light_range_is_ignored_with_a_warning() {
     renders_with_warning(&json, "2 punctual light(s) have a range, which is ignored");
 }
 
+/// glTF's zfar is a rasteriser's clip plane, which lanterna's camera rays do not have: a
+/// far plane nearer than part of the scene warns (the quad lies 3 units in front of the
+/// camera), one beyond it does not. Seen to fail with the warning left out.
+#[test]
+fn a_far_clip_plane_in_front_of_the_scene_warns() {
+    let with_zfar = |zfar: &str| {
+        scene_json("[1,1,1]", true, "quad.bin").replacen(
+            r#""znear":0.1}"#,
+            &format!(r#""znear":0.1,"zfar":{zfar}}}"#),
+            1,
+        )
+    };
+    renders_with_warning(
+        &with_zfar("2"),
+        "camera 0 has zfar 2, nearer than parts of the scene",
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), &with_zfar("5"));
+    let stderr = renders(&scene, dir.path(), &[]);
+    assert!(!stderr.contains("zfar"), "{stderr}");
+}
+
 /// A file with several scenes and no default renders the first, and says so: a user
 /// whose objects are in another scene then knows why the image lacks them.
 #[test]

@@ -233,6 +233,8 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let node_worlds = node_world_matrices(&document).map_err(&invalid)?;
     let mut instances = Vec::new();
     let mut cameras = Vec::new();
+    // Cameras with a far clip plane: (camera index, camera-to-world, zfar).
+    let mut far_planes: Vec<(usize, Mat4, f32)> = Vec::new();
     let mut punctual = Vec::new();
     let mut warnings = parse_warnings;
     warnings.append(&mut registry.warnings);
@@ -266,6 +268,13 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
             stack.push((c, world, depth + 1));
         }
         if let Some(cam) = node.camera() {
+            let zfar = match cam.projection() {
+                gltf::camera::Projection::Perspective(p) => p.zfar(),
+                gltf::camera::Projection::Orthographic(o) => Some(o.zfar()),
+            };
+            if let Some(zfar) = zfar.filter(|z| z.is_finite() && *z > 0.0) {
+                far_planes.push((cam.index(), world, zfar));
+            }
             let projection = match cam.projection() {
                 gltf::camera::Projection::Perspective(p) => {
                     let yfov = p.yfov();
@@ -414,6 +423,26 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         }
     }
 
+    // glTF's znear and zfar are a rasteriser's clip planes; a path tracer's camera rays
+    // see everything in front of them (as Mitsuba's exports do). Say so where a far
+    // plane would have hidden part of the scene.
+    for (index, world, zfar) in far_planes {
+        let to_camera = world.inverse();
+        let farthest = (0..8)
+            .map(|k| {
+                let corner =
+                    Vec3::select(glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0), hi, lo);
+                -to_camera.transform_point3(corner).z
+            })
+            .fold(f32::MIN, f32::max);
+        if farthest > zfar {
+            warnings.push(format!(
+                "camera {index} has zfar {zfar}, nearer than parts of the scene (up to \
+                 {farthest:.4} along its view): lanterna does not clip, its camera rays \
+                 see everything in front of the camera"
+            ));
+        }
+    }
     // glTF's range is a cutoff hint for culling; within it a light should fall off with
     // the inverse square, which lanterna's do at every distance.
     let ranged = punctual.iter().filter(|l| l.range > 0.0).count();
