@@ -266,7 +266,8 @@ mod tests {
 
     /// Every PNG pixel layout (grey, grey + alpha, RGB, RGBA, at 8 and 16 bits) and
     /// JPEG decode to the RGBA8 texels the renderer uploads: grey spread over R, G and B,
-    /// its alpha kept, 16-bit samples taken by their high byte.
+    /// its alpha kept, 16-bit samples rounded to the nearest 8-bit code (not their high
+    /// byte, which is up to one code low).
     #[test]
     fn png_layouts_and_jpeg_decode_to_rgba8() {
         use image::{DynamicImage as D, ImageBuffer, ImageFormat};
@@ -279,7 +280,7 @@ mod tests {
             super::super::texture::to_rgba8(&data).unwrap()
         };
         let png = |image: D| rgba8(image, ImageFormat::Png);
-        let wide = |v: u8| u16::from(v) * 256 + 3; // a high byte of v, a low byte of 3
+        let wide = |v: u8| (u16::from(v) * 257).saturating_add(3); // v widened, a little more
         assert_eq!(
             png(D::ImageLuma8(
                 ImageBuffer::from_raw(2, 1, vec![10, 200]).unwrap()
@@ -310,6 +311,13 @@ mod tests {
                 ImageBuffer::from_raw(2, 1, vec![wide(10), wide(200)]).unwrap()
             )),
             [10, 10, 10, 255, 200, 200, 200, 255]
+        );
+        // Rounded, not truncated: 0x01F0 is 1.94 codes (its high byte says 1).
+        assert_eq!(
+            png(D::ImageLuma16(
+                ImageBuffer::from_raw(3, 1, vec![0x01F0, 0xFFFF, 0x0080]).unwrap()
+            )),
+            [2, 2, 2, 255, 255, 255, 255, 255, 0, 0, 0, 255]
         );
         let la16 = [10, 50, 200, 255].map(wide).to_vec();
         assert_eq!(

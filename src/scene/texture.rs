@@ -38,7 +38,13 @@ pub fn to_rgba8(data: &gltf::image::Data) -> Option<Vec<u8>> {
     use gltf::image::Format as F;
     let px = (data.width * data.height) as usize;
     let p = &data.pixels;
-    let u16_at = |i: usize| (u16::from_le_bytes([p[2 * i], p[2 * i + 1]]) >> 8) as u8;
+    // The nearest 8-bit code, round(v · 255 / 65535): exact for samples widened from 8
+    // bits (v = 257 k), where the high byte alone was up to one code off (a 16-bit
+    // texture's image 0.2 % bright against Mitsuba, which reads all 16 bits).
+    let u16_at = |i: usize| {
+        let v = u32::from(u16::from_le_bytes([p[2 * i], p[2 * i + 1]]));
+        ((v * 255 + 32767) / 65535) as u8
+    };
     let f32_at = |i: usize| {
         let v = f32::from_le_bytes([p[4 * i], p[4 * i + 1], p[4 * i + 2], p[4 * i + 3]]);
         (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
