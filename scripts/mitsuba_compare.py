@@ -449,6 +449,11 @@ def main(argv=None):
                 xml = mitsuba_gltf_bsdf.rewrite_export(args.export_dir)
             except ValueError as e:
                 raise InputError(f"--gltf-bsdf: {e}")
+        approximations = manifest.get("approximations", [])
+        if args.gltf_bsdf:
+            # The plugin is the glTF model itself: what the export approximated by
+            # `principled` is now exact (materials it cannot write were refused above).
+            approximations = [a for a in approximations if "glTF metallic-roughness" not in a]
         scene = mi.load_file(xml, max_depth=manifest["max_depth"])
         # lanterna's --hide-emitters leaves out emission seen directly and keeps the light
         # the emitters' surfaces reflect; Mitsuba's hide_emitters would make them
@@ -514,8 +519,8 @@ def main(argv=None):
             "export_dir": os.path.abspath(args.export_dir),
             "scene": manifest.get("scene_path"),
             "scene_hash": manifest.get("scene_hash"),
-            "exact": manifest.get("exact"),
-            "approximations": manifest.get("approximations", []),
+            "exact": manifest.get("exact") or (args.gltf_bsdf and not approximations),
+            "approximations": approximations,
             "width": manifest["width"],
             "height": manifest["height"],
             "max_depth": manifest["max_depth"],

@@ -489,6 +489,32 @@ fn assert_agrees_exactly(
     tmp: &Path,
     what: &str,
 ) {
+    assert_agrees_exactly_with(
+        scene,
+        method,
+        options,
+        dir,
+        spp,
+        mitsuba_spp,
+        tmp,
+        what,
+        &[],
+    );
+}
+
+/// [`assert_agrees_exactly`] with `extra` arguments for the comparison script.
+#[allow(clippy::too_many_arguments)]
+fn assert_agrees_exactly_with(
+    scene: &Scene,
+    method: Method,
+    options: &ExportOptions,
+    dir: &Path,
+    spp: u64,
+    mitsuba_spp: u64,
+    tmp: &Path,
+    what: &str,
+    extra: &[&str],
+) {
     let exrs = lanterna_batches(scene, method, options, 8, spp, tmp);
     // A guided method's training makes each run a fresh draw: the fresh draws' level.
     let settings = RenderSettings {
@@ -506,7 +532,7 @@ fn assert_agrees_exactly(
         mitsuba_spp,
         alpha,
         &tmp.join("report.json"),
-        &[],
+        extra,
     );
     assert_eq!(report["exact"], true, "{}", report["approximations"]);
     assert!(
@@ -556,25 +582,16 @@ fn glossy_materials_agree_with_mitsuba_through_the_gltf_bsdf() {
     assert!(metallic.contains(&1.0) && metallic.contains(&0.0));
     let options = export_loaded(&loaded.scene, None, 40, 30, &dir);
     for method in [Method::Pt, Method::Ris, Method::GuidedRis] {
-        let exrs = lanterna_batches(&loaded.scene, method, &options, 8, 64, tmp.path());
-        let settings = RenderSettings {
+        assert_agrees_exactly_with(
+            &loaded.scene,
             method,
-            ..RenderSettings::default()
-        };
-        let alpha = if lanterna::testing::repeatable(&settings) {
-            ALPHA
-        } else {
-            lanterna::testing::FRESH_BLOCK_ALPHA
-        };
-        let json = tmp.path().join(format!("{}.json", method.name()));
-        let report = compare_at(&dir, &exrs, 256, alpha, &json, &["--gltf-bsdf"]);
-        assert!(
-            report["agree"].as_bool().unwrap(),
-            "{}: lanterna and Mitsuba's glTF BRDF disagree:\nmean {}\nblocks {}\npixels {}",
+            &options,
+            &dir,
+            64,
+            256,
+            tmp.path(),
             method.name(),
-            report["mean"],
-            report["blocks"],
-            report["pixels"]
+            &["--gltf-bsdf"],
         );
     }
 }
