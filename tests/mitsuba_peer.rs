@@ -477,34 +477,10 @@ fn pixel_emitters_agree_with_mitsuba_on_the_bulbs_in_view() {
 
 /// Renders 8 batches of `spp` with `method`, compares them with 8 Mitsuba runs of
 /// `mitsuba_spp` on the export in `dir`, and asserts that the export is exact and that
-/// the image mean, the blocks and the pixels agree.
+/// the image mean, the blocks and the pixels agree; `extra`: more arguments for the
+/// comparison script.
 #[allow(clippy::too_many_arguments)]
 fn assert_agrees_exactly(
-    scene: &Scene,
-    method: Method,
-    options: &ExportOptions,
-    dir: &Path,
-    spp: u64,
-    mitsuba_spp: u64,
-    tmp: &Path,
-    what: &str,
-) {
-    assert_agrees_exactly_with(
-        scene,
-        method,
-        options,
-        dir,
-        spp,
-        mitsuba_spp,
-        tmp,
-        what,
-        &[],
-    );
-}
-
-/// [`assert_agrees_exactly`] with `extra` arguments for the comparison script.
-#[allow(clippy::too_many_arguments)]
-fn assert_agrees_exactly_with(
     scene: &Scene,
     method: Method,
     options: &ExportOptions,
@@ -555,7 +531,7 @@ fn assert_methods_agree_exactly(
 ) {
     for &method in methods {
         let what = method.name();
-        assert_agrees_exactly(scene, method, options, dir, spp, 4 * spp, tmp, what);
+        assert_agrees_exactly(scene, method, options, dir, spp, 4 * spp, tmp, what, &[]);
     }
 }
 
@@ -582,7 +558,7 @@ fn glossy_materials_agree_with_mitsuba_through_the_gltf_bsdf() {
     assert!(metallic.contains(&1.0) && metallic.contains(&0.0));
     let options = export_loaded(&loaded.scene, None, 40, 30, &dir);
     for method in [Method::Pt, Method::Ris, Method::GuidedRis] {
-        assert_agrees_exactly_with(
+        assert_agrees_exactly(
             &loaded.scene,
             method,
             &options,
@@ -635,6 +611,7 @@ fn texture_transforms_agree_with_mitsuba() {
         spp,
         tmp.path(),
         what,
+        &[],
     );
 }
 
@@ -674,6 +651,7 @@ fn partially_mapped_and_repeated_emissive_textures_agree_with_mitsuba() {
             4 * spp,
             tmp.path(),
             &what,
+            &[],
         );
     }
 }
@@ -867,6 +845,7 @@ fn punctual_lights_and_textures_agree_with_mitsuba() {
             4 * spp,
             tmp.path(),
             name,
+            &[],
         );
     }
 }
