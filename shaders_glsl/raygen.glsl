@@ -49,7 +49,12 @@ struct VertexRecord {
     uint light_leaf;  // SD-tree leaf of the vertex when light selection is learned
 };
 
-void camera_ray(uvec2 pixel, vec2 jitter, out vec3 origin, out vec3 dir) {
+// The camera ray through image point pixel + jitter, from the camera's near clip plane
+// to its far one (both along the view axis, glTF's znear and zfar, as a rasteriser and
+// Mitsuba's sensors clip): it starts at near / −d.z along its unit view direction d and
+// reaches tmax further. `near_t` is the distance from the eye (or the image plane of an
+// orthographic camera) to the ray's origin.
+void camera_ray(uvec2 pixel, vec2 jitter, out vec3 origin, out vec3 dir, out float tmax, out float near_t) {
     vec2 ndc = (vec2(pixel) + jitter) / vec2(params.width, params.height) * 2.0 - 1.0;
     ndc.y = -ndc.y;
     float aspect = float(params.width) / float(params.height);
@@ -61,8 +66,11 @@ void camera_ray(uvec2 pixel, vec2 jitter, out vec3 origin, out vec3 dir) {
     } else {
         d = normalize(vec3(ndc.x * params.tan_half_fov_y * aspect, ndc.y * params.tan_half_fov_y, -1.0));
     }
-    origin = (params.camera_to_world * vec4(o, 1.0)).xyz;
+    float per_depth = 1.0 / -d.z;  // ray length per unit of view depth
+    near_t = params.clip_near * per_depth;
+    tmax = params.clip_far >= FLT_MAX ? FLT_MAX : params.clip_far * per_depth - near_t;
     dir = normalize(mat3(params.camera_to_world) * d);
+    origin = (params.camera_to_world * vec4(o, 1.0)).xyz + dir * near_t;
 }
 
 // Small emitters seen directly (src/render/pixel_emitters.rs). Their emission through a
@@ -214,15 +222,17 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
     // faster than with a call per ray kind, at the same speed (bench/README.md).
     // `stay`: the step is not over (the camera step traces its K rays in turn).
     bool stay = false;
+    float camera_tmax = FLT_MAX;  // the camera ray's extent and start (camera_ray)
+    float camera_near = 0.0;
     for (uint step = 0u;; step += stay ? 0u : 1u) {
         stay = false;
         if (step == 0u) {
             if (emitter_ray) {
-                camera_ray(uvec2(0u), piece_point, origin, dir);
+                camera_ray(uvec2(0u), piece_point, origin, dir, camera_tmax, camera_near);
                 TRACE3("pixel-emitter ray: light triangle %u point %v2f d=%v3f\n", piece.light_tri, piece_point, dir);
             } else {
                 camera_ray(pixel, stratified_pixel_sample(rng.key.x, emission_rays * rng.key.y + camera_k, rng.key.z),
-                           origin, dir);
+                           origin, dir, camera_tmax, camera_near);
                 TRACE3("camera ray %u o=%v3f d=%v3f\n", camera_k, origin, dir);
             }
             rays.camera += 1u;
@@ -230,7 +240,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
         }
         bool shadow_step = step > 0u && (step & 1u) == 0u;
         uint depth = (step + 1u) / 2u;  // the vertex whose rays these are (0: the camera)
-        Ray ray = shadow_step ? nee.shadow : Ray(origin, dir, FLT_MAX);
+        Ray ray = shadow_step ? nee.shadow : Ray(origin, dir, step == 0u ? camera_tmax : FLT_MAX);
         Hit hit;
         hit.valid = false;
         hit.t = FLT_MAX;
@@ -272,7 +282,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
             // The shading normal as authored (make_surface turns it over, below the
             // geometric normal, where the view is below it).
             info.normal = dot(ns.n, ns.ng) < 0.0 ? -ns.n : ns.n;
-            info.depth = next.t;
+            info.depth = camera_near + next.t;
             info.position = ns.p;
             L = seen;
         } else if (!shadow_step) {

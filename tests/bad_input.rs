@@ -252,24 +252,35 @@ fn a_light_range_is_ignored_with_a_warning() {
     renders_with_warning(&json, "2 punctual light(s) have a range, which is ignored");
 }
 
-/// glTF's zfar is a rasteriser's clip plane, which lanterna's camera rays do not have: a
-/// far plane nearer than part of the scene warns (the quad lies 3 units in front of the
-/// camera), one beyond it does not. Seen to fail with the warning left out.
+/// glTF's zfar is a clip plane, which lanterna's camera rays honour: a far plane nearer
+/// than part of the scene warns, saying how to see past it (the quad lies 3 units in
+/// front of the camera), one beyond it does not. Clip planes the spec forbids (a far
+/// plane in front of the near one, a negative near plane) are ignored with a warning
+/// naming the camera. Seen to fail with the warnings left out.
 #[test]
 fn a_far_clip_plane_in_front_of_the_scene_warns() {
-    let with_zfar = |zfar: &str| {
+    let with_planes = |znear: &str, zfar: &str| {
         scene_json("[1,1,1]", true, "quad.bin").replacen(
             r#""znear":0.1}"#,
-            &format!(r#""znear":0.1,"zfar":{zfar}}}"#),
+            &format!(r#""znear":{znear},"zfar":{zfar}}}"#),
             1,
         )
     };
     renders_with_warning(
-        &with_zfar("2"),
+        &with_planes("0.1", "2"),
         "camera 0 has zfar 2, nearer than parts of the scene",
     );
+    renders_with_warning(&with_planes("0.1", "2"), "--no-clip-planes");
+    renders_with_warning(
+        &with_planes("0.1", "0.05"),
+        "camera 0 has znear 0.1 and zfar 0.05: zfar must lie beyond znear; its clip planes are ignored",
+    );
+    renders_with_warning(
+        &with_planes("-1", "5"),
+        "camera 0 has znear -1 and zfar 5: znear must be a finite distance ≥ 0",
+    );
     let dir = tempfile::tempdir().unwrap();
-    let scene = write_scene(dir.path(), &with_zfar("5"));
+    let scene = write_scene(dir.path(), &with_planes("0.1", "5"));
     let stderr = renders(&scene, dir.path(), &[]);
     assert!(!stderr.contains("zfar"), "{stderr}");
 }

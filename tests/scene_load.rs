@@ -1483,3 +1483,141 @@ fn a_view_from_below_the_shading_normal_sees_its_other_side() {
         }
     }
 }
+
+/// Three emissive quads facing a camera at the origin that looks down −z (glTF
+/// `znear` 0.3, `zfar` 5; a perspective camera of 90° and an orthographic one of
+/// half-extent 1): red across the whole view at depth 0.25, green over the right half at
+/// depth 4.8, blue across everything at depth 8. Written to `dir`; returns the path.
+fn clip_plane_scene(dir: &Path) -> PathBuf {
+    use base64::Engine as _;
+    // (depth, x range, colour); y spans the same range as x's widest extent.
+    let quads = [
+        (0.25f32, [-10.0f32, 10.0], [1.0f32, 0.0, 0.0]),
+        (4.8, [0.0, 20.0], [0.0, 1.0, 0.0]),
+        (8.0, [-40.0, 40.0], [0.0, 0.0, 1.0]),
+    ];
+    let mut bin = Vec::new();
+    for (z, [x0, x1], _) in quads {
+        let h = x1.abs().max(x0.abs());
+        for p in [[x0, -h, -z], [x1, -h, -z], [x1, h, -z], [x0, h, -z]] {
+            bin.extend(p.iter().flat_map(|v| v.to_le_bytes()));
+        }
+    }
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        bin.extend(i.to_le_bytes());
+    }
+    let accessor = |q: usize| {
+        let (z, [x0, x1], _) = quads[q];
+        let h = x1.abs().max(x0.abs());
+        serde_json::json!({"bufferView": 0, "byteOffset": 48 * q, "componentType": 5126,
+                           "count": 4, "type": "VEC3", "min": [x0, -h, -z], "max": [x1, h, -z]})
+    };
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "buffers": [{"uri": format!("data:application/octet-stream;base64,{}",
+                                    base64::engine::general_purpose::STANDARD.encode(&bin)),
+                     "byteLength": bin.len()}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 144},
+                        {"buffer": 0, "byteOffset": 144, "byteLength": 12}],
+        "accessors": [accessor(0), accessor(1), accessor(2),
+                      {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"}],
+        "materials": quads.iter().map(|(_, _, c)| serde_json::json!({
+            "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0]},
+            "emissiveFactor": c, "doubleSided": true})).collect::<Vec<_>>(),
+        "meshes": (0..3).map(|q| serde_json::json!({"primitives": [
+            {"attributes": {"POSITION": q}, "indices": 3, "material": q}]})).collect::<Vec<_>>(),
+        "cameras": [
+            {"type": "perspective", "perspective":
+                {"yfov": std::f32::consts::FRAC_PI_2, "aspectRatio": 1.0, "znear": 0.3, "zfar": 5.0}},
+            {"type": "orthographic", "orthographic":
+                {"xmag": 1.0, "ymag": 1.0, "znear": 0.3, "zfar": 5.0}}
+        ],
+        "nodes": [{"mesh": 0}, {"mesh": 1}, {"mesh": 2}, {"camera": 0}, {"camera": 1}],
+        "scenes": [{"nodes": [0, 1, 2, 3, 4]}],
+        "scene": 0
+    });
+    let path = dir.join("clip.gltf");
+    std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
+    path
+}
+
+/// Camera rays honour glTF's clip planes along the view axis, as rasterisers, Cycles and
+/// Mitsuba's sensors do (the export writes them; `tests/mitsuba_peer.rs` compares): in
+/// `clip_plane_scene`, at depth 1, the red quad in front of `znear` is cut away, the
+/// green one just inside `zfar` is seen over the right half and the blue one beyond
+/// `zfar` nowhere, so the left half is black. The green quad's image corners lie 8.3
+/// from the eye, beyond 5, and the red quad's 0.43, beyond 0.3: clipping by distance
+/// instead of depth would show red and lose green there. The depth AOV counts from the
+/// eye, not from the near plane. With `--no-clip-planes` the red quad covers the image.
+/// Seen to fail with no clipping, with clipping by distance along the ray, and with the
+/// depth AOV measured from the near plane.
+#[test]
+fn camera_rays_honour_the_clip_planes() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = clip_plane_scene(dir.path());
+    let n = 16u32;
+    for camera in ["0", "1"] {
+        for clip in [true, false] {
+            let out = dir.path().join(format!("clip-{camera}-{clip}.exr"));
+            let size = n.to_string();
+            let mut args = vec![
+                "render",
+                scene.to_str().unwrap(),
+                "--camera",
+                camera,
+                "--width",
+                &size,
+                "--height",
+                &size,
+                "--spp",
+                "4",
+                "--max-depth",
+                "1",
+                "--aov",
+                "depth",
+                "-o",
+                out.to_str().unwrap(),
+                "--quiet",
+            ];
+            if !clip {
+                args.push("--no-clip-planes");
+            }
+            let (ok, stderr) = lanterna(&args);
+            assert!(ok, "{stderr}");
+            let img = lanterna::image_io::read_exr(&out).unwrap();
+            let depth = &img.aovs.iter().find(|a| a.name == "depth").unwrap().data;
+            let what = format!("camera {camera}, clip planes {clip}");
+            for y in 0..n {
+                // The middle columns hold the green quad's edge.
+                for x in (0..n).filter(|x| !(n / 2 - 1..=n / 2).contains(x)) {
+                    let i = (y * n + x) as usize;
+                    let (want, z) = match (clip, x >= n / 2) {
+                        (false, _) => ([1.0, 0.0, 0.0], 0.25),
+                        (true, false) => ([0.0; 3], 0.0),
+                        (true, true) => ([0.0, 1.0, 0.0], 4.8),
+                    };
+                    let px = img.rgb[i];
+                    assert!(
+                        px.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-5),
+                        "{what}: pixel ({x}, {y}) is {px:?}, not {want:?}"
+                    );
+                    if z > 0.0 {
+                        // Distance from the eye to the quad through the pixel's samples
+                        // (their mean, for the perspective camera).
+                        let lo = if camera == "0" { z } else { z - 1e-4 };
+                        let hi = if camera == "0" {
+                            z * 3f32.sqrt()
+                        } else {
+                            z + 1e-4
+                        };
+                        assert!(
+                            (lo..=hi).contains(&depth[i]),
+                            "{what}: depth {} at ({x}, {y}), not within [{lo}, {hi}]",
+                            depth[i]
+                        );
+                    }
+                }
+            }
+        }
+    }
+}

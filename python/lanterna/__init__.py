@@ -60,6 +60,7 @@ def load_scene(
     camera: Union[str, int, None] = None,
     look_at: Optional[Sequence[float]] = None,
     fov: Optional[float] = None,
+    clip_planes: bool = True,
 ) -> Scene:
     """Load a glTF 2.0 scene (.gltf or .glb) and its light table.
 
@@ -76,6 +77,7 @@ def load_scene(
         camera=camera,
         look_at=None if look_at is None else [float(v) for v in look_at],
         fov=fov,
+        clip_planes=bool(clip_planes),
     )
 
 

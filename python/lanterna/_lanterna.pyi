@@ -39,6 +39,7 @@ def load_scene(
     camera: Union[str, int, None] = None,
     look_at: Optional[Sequence[float]] = None,
     fov: Optional[float] = None,
+    clip_planes: bool = True,
 ) -> Scene: ...
 
 class Renderer:

@@ -103,3 +103,24 @@ def test_image_shows_itself_as_png(pt):
     assert png[:8] == b"\x89PNG\r\n\x1a\n"
     assert "32×24" in repr(img)
     assert img[:, :, 0]._repr_png_() is None
+
+
+def test_clip_planes_follow_the_file_unless_turned_off(tmp_path):
+    """The file camera's znear/zfar clip camera rays (``--no-clip-planes`` as
+    ``clip_planes=False``): a far plane in front of cornell-lights' back wall leaves the
+    wall's pixels black, and turning the planes off shows it."""
+    import json
+    import shutil
+
+    gltf = json.loads(SCENE.read_text())
+    gltf["cameras"][0]["perspective"].update(znear=3.3, zfar=4.6)
+    shutil.copy(SCENE.with_suffix(".bin"), tmp_path / "cornell-lights.bin")
+    path = tmp_path / "cornell-lights.gltf"
+    path.write_text(json.dumps(gltf))
+    wall = {}
+    for clip in (True, False):
+        img = lanterna.Renderer(lanterna.load_scene(path, clip_planes=clip), W, H,
+                                method="pt").render(spp=4)
+        wall[clip] = np.asarray(img)[H // 4, W // 2]
+    assert np.all(wall[True] == 0.0), wall
+    assert np.all(wall[False] > 0.05), wall

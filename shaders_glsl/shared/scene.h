@@ -222,6 +222,10 @@ struct FrameParams {
     uint visibility_slots;
     float visibility_cell_pixels;
     float visibility_floor;
+    // The camera's clip planes (glTF znear, zfar) along the view axis; camera rays see
+    // what lies between them (0 and FLT_MAX: everything in front of the camera).
+    float clip_near;
+    float clip_far;
 };
 
 // One cell of the world-space light reuse's hash grid (inc/light_reuse.glsl): the RIS

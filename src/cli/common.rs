@@ -27,6 +27,10 @@ pub struct SceneArgs {
     /// Vertical field of view in degrees (overrides the camera's).
     #[arg(long)]
     pub fov: Option<f32>,
+    /// See everything in front of the camera: ignore the file camera's clip planes
+    /// (glTF `znear`, `zfar`), which camera rays otherwise honour.
+    #[arg(long)]
+    pub no_clip_planes: bool,
     /// Image width (default 512, or derived from --height and the camera's aspect).
     #[arg(long)]
     pub width: Option<u32>,
@@ -383,6 +387,7 @@ pub fn load(args: &SceneArgs) -> Result<(LoadedScene, Camera, u32, u32)> {
         camera: args.camera.clone(),
         look_at: args.look_at,
         fov: args.fov,
+        no_clip_planes: args.no_clip_planes,
         width: args.width,
         height: args.height,
     };

@@ -71,13 +71,14 @@ impl PyScene {
 
 /// Load a glTF scene and choose its view (see the Python package's docstring).
 #[pyfunction]
-#[pyo3(signature = (path, camera=None, look_at=None, fov=None))]
+#[pyo3(signature = (path, camera=None, look_at=None, fov=None, clip_planes=true))]
 fn load_scene(
     py: Python<'_>,
     path: PathBuf,
     camera: Option<&Bound<'_, PyAny>>,
     look_at: Option<Vec<f32>>,
     fov: Option<f32>,
+    clip_planes: bool,
 ) -> PyResult<PyScene> {
     let camera = camera
         .filter(|c| !c.is_none())
@@ -97,6 +98,7 @@ fn load_scene(
         camera,
         look_at,
         fov,
+        no_clip_planes: !clip_planes,
         width: None,
         height: None,
     };

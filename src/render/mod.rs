@@ -424,6 +424,8 @@ impl Renderer {
             },
             visibility_cell_pixels: s.light_visibility.cell_pixels,
             visibility_floor: s.light_visibility.floor,
+            clip_near: self.camera.clip.near,
+            clip_far: self.camera.clip.far.min(f32::MAX),
         }
     }
 

@@ -269,6 +269,7 @@ pub fn build(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::ClipPlanes;
     use glam::{Mat4, Vec3};
 
     /// A one-sided emissive triangle with corners `p`, facing +z (toward a camera on +z).
@@ -294,6 +295,7 @@ mod tests {
                 yfov: std::f32::consts::FRAC_PI_2,
                 aspect: None,
             },
+            clip: ClipPlanes::NONE,
         }
     }
 

@@ -145,6 +145,8 @@ pub struct ViewOptions {
     pub look_at: Option<[f32; 6]>,
     /// Vertical field of view in degrees.
     pub fov: Option<f32>,
+    /// Ignore the file's clip planes (`--no-clip-planes`).
+    pub no_clip_planes: bool,
     pub width: Option<u32>,
     pub height: Option<u32>,
 }
@@ -174,6 +176,7 @@ pub fn choose_view(scene: &Scene, options: &ViewOptions) -> Result<(Camera, u32,
         }),
         up: None,
         fov_degrees: options.fov,
+        no_clip_planes: options.no_clip_planes,
     };
     let camera = choose_camera(scene, options.camera.as_deref(), &o)?;
     let (w, h) = resolution(&camera, options.width, options.height);

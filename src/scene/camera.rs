@@ -12,12 +12,38 @@ pub enum Projection {
     Orthographic { xmag: f32, ymag: f32 },
 }
 
+/// The planes that bound what camera rays see, at distances along the view axis (glTF's
+/// `znear` and `zfar`): the ray through view direction d (unit, camera space) starts at
+/// near / −d.z and ends at far / −d.z, as a rasteriser's clip planes and Mitsuba's
+/// `near_clip`/`far_clip` cut the view. Only camera rays are clipped.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClipPlanes {
+    pub near: f32,
+    /// `f32::INFINITY`: no far plane (glTF's infinite projection).
+    pub far: f32,
+}
+
+impl ClipPlanes {
+    /// Everything in front of the camera.
+    pub const NONE: ClipPlanes = ClipPlanes {
+        near: 0.0,
+        far: f32::INFINITY,
+    };
+
+    pub fn is_none(&self) -> bool {
+        *self == Self::NONE
+    }
+}
+
 /// A camera placed in the world.
 #[derive(Clone, Debug)]
 pub struct Camera {
     pub name: String,
     pub to_world: Mat4,
     pub projection: Projection,
+    /// The file's clip planes (`ClipPlanes::NONE` for a look-at view, or when the command
+    /// line asks to ignore them).
+    pub clip: ClipPlanes,
 }
 
 /// A view given on the command line, replacing or completing the file's camera.
@@ -29,6 +55,9 @@ pub struct CameraOverride {
     pub up: Option<Vec3>,
     /// Vertical field of view in degrees.
     pub fov_degrees: Option<f32>,
+    /// See everything in front of the camera, whatever the file's clip planes
+    /// (`--no-clip-planes`).
+    pub no_clip_planes: bool,
 }
 
 impl Camera {
@@ -50,6 +79,7 @@ impl Camera {
             name: "look-at".into(),
             to_world,
             projection: Projection::Perspective { yfov, aspect: None },
+            clip: ClipPlanes::NONE,
         }
     }
 
@@ -71,6 +101,9 @@ impl Camera {
                 yfov: fov.to_radians(),
                 aspect,
             };
+        }
+        if o.no_clip_planes {
+            self.clip = ClipPlanes::NONE;
         }
         self
     }

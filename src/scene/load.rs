@@ -3,7 +3,7 @@
 //! deduplicated into one BLAS each, materials converted, cameras and punctual lights
 //! placed in world space.
 
-use super::camera::{Camera, Projection};
+use super::camera::{Camera, ClipPlanes, Projection};
 use super::gltf_check;
 use super::load_light::convert_light;
 use super::load_primitive::{load_primitive, Geometry};
@@ -268,12 +268,20 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
             stack.push((c, world, depth + 1));
         }
         if let Some(cam) = node.camera() {
-            let zfar = match cam.projection() {
-                gltf::camera::Projection::Perspective(p) => p.zfar(),
-                gltf::camera::Projection::Orthographic(o) => Some(o.zfar()),
+            let (znear, zfar) = match cam.projection() {
+                gltf::camera::Projection::Perspective(p) => (p.znear(), p.zfar()),
+                gltf::camera::Projection::Orthographic(o) => (o.znear(), Some(o.zfar())),
             };
-            if let Some(zfar) = zfar.filter(|z| z.is_finite() && *z > 0.0) {
-                far_planes.push((cam.index(), world, zfar));
+            let clip = clip_planes(znear, zfar).unwrap_or_else(|why| {
+                warnings.push(format!(
+                    "camera {} has znear {znear} and zfar {}: {why}; its clip planes are ignored",
+                    cam.index(),
+                    zfar.map_or("none".to_string(), |z| z.to_string())
+                ));
+                ClipPlanes::NONE
+            });
+            if clip.far.is_finite() {
+                far_planes.push((cam.index(), world, clip.far));
             }
             let projection = match cam.projection() {
                 gltf::camera::Projection::Perspective(p) => {
@@ -310,6 +318,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
                         .unwrap_or_else(|| format!("camera {}", cam.index())),
                     to_world: world,
                     projection,
+                    clip,
                 },
             ));
         }
@@ -423,11 +432,14 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         }
     }
 
-    // glTF's znear and zfar are a rasteriser's clip planes; a path tracer's camera rays
-    // see everything in front of them (as Mitsuba's exports do). Say so where a far
-    // plane would have hidden part of the scene.
+    // A far plane nearer than parts of the scene hides them from the camera, as in any
+    // glTF viewer and in Cycles; Blender writes its clip end (100 m by default) there, so
+    // say so, and how to see past it.
     for (index, world, zfar) in far_planes {
-        let to_camera = world.inverse();
+        // Distances along the view in world units, as the kernels clip (a camera node's
+        // scale is dropped, Camera::rigid_to_world).
+        let (_, rotation, translation) = world.to_scale_rotation_translation();
+        let to_camera = Mat4::from_rotation_translation(rotation, translation).inverse();
         let farthest = (0..8)
             .map(|k| {
                 let corner =
@@ -438,8 +450,8 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         if farthest > zfar {
             warnings.push(format!(
                 "camera {index} has zfar {zfar}, nearer than parts of the scene (up to \
-                 {farthest:.4} along its view): lanterna does not clip, its camera rays \
-                 see everything in front of the camera"
+                 {farthest:.4} along its view): its camera rays see nothing beyond that \
+                 plane (--no-clip-planes sees everything in front of the camera)"
             ));
         }
     }
@@ -785,4 +797,18 @@ fn content_hash(scene: &Scene) -> String {
         eat(&t.rgba);
     }
     format!("{h:016x}")
+}
+
+/// A glTF camera's clip planes, or why they cannot be used. The spec asks for
+/// 0 < znear < zfar (0 ≤ znear for orthographic cameras); a missing zfar is an infinite
+/// projection.
+fn clip_planes(znear: f32, zfar: Option<f32>) -> Result<ClipPlanes, &'static str> {
+    let far = zfar.unwrap_or(f32::INFINITY);
+    if !(znear.is_finite() && znear >= 0.0) {
+        return Err("znear must be a finite distance ≥ 0");
+    }
+    if far.is_nan() || far <= znear {
+        return Err("zfar must lie beyond znear");
+    }
+    Ok(ClipPlanes { near: znear, far })
 }

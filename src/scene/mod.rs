@@ -18,7 +18,7 @@ pub mod spatial_order;
 mod stats;
 mod texture;
 
-pub use camera::{Camera, CameraOverride, Projection};
+pub use camera::{Camera, CameraOverride, ClipPlanes, Projection};
 pub use load::LoadOptions;
 pub use material::{bounds_solid, is_lambertian};
 pub use stats::SceneStats;

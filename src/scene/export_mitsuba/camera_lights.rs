@@ -23,8 +23,15 @@ impl Writer<'_> {
             .abs()
             .max((eye - self.scene.bounds_max).abs())
             .length();
-        let far = (10.0 * (reach + extent)).max(1e4);
-        let near = 1e-5 * extent;
+        // The camera's clip planes where it has them (Mitsuba's sensors clip along the
+        // view axis, as lanterna's camera rays do), else planes enclosing the scene.
+        let clip = camera.clip;
+        let far = if clip.far.is_finite() {
+            clip.far
+        } else {
+            (10.0 * (reach + extent)).max(1e4)
+        };
+        let near = clip.near.max(1e-5 * extent);
         let mut s = String::new();
         let aspect = o.width as f32 / o.height as f32;
         match camera.projection {
