@@ -49,7 +49,13 @@ fn scene_info(path: &std::path::Path, json: bool, allow_outside_uris: bool) -> R
                 .cameras
                 .iter()
                 .enumerate()
-                .map(|(i, c)| format!("{i}: {}", c.name))
+                .map(|(i, c)| match (c.clip.is_none(), c.clip.far.is_finite()) {
+                    (true, _) => format!("{i}: {}", c.name),
+                    (false, true) => {
+                        format!("{i}: {} (clip {}–{})", c.name, c.clip.near, c.clip.far)
+                    }
+                    (false, false) => format!("{i}: {} (clip from {})", c.name, c.clip.near),
+                })
                 .collect();
             println!("cameras             {}", names.join(", "));
         }
