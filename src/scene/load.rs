@@ -233,7 +233,8 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let node_worlds = node_world_matrices(&document).map_err(&invalid)?;
     let mut instances = Vec::new();
     let mut cameras = Vec::new();
-    // Cameras with a far clip plane: (camera index, camera-to-world, zfar).
+    // Cameras with a far clip plane: (camera index, world-to-camera as the kernels see
+    // it, zfar).
     let mut far_planes: Vec<(usize, Mat4, f32)> = Vec::new();
     let mut punctual = Vec::new();
     let mut warnings = parse_warnings;
@@ -280,9 +281,6 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
                 ));
                 ClipPlanes::NONE
             });
-            if clip.far.is_finite() {
-                far_planes.push((cam.index(), world, clip.far));
-            }
             let projection = match cam.projection() {
                 gltf::camera::Projection::Perspective(p) => {
                     let yfov = p.yfov();
@@ -308,19 +306,20 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
                     Projection::Orthographic { xmag, ymag }
                 }
             };
-            cameras.push((
-                node.index(),
-                Camera {
-                    name: cam
-                        .name()
-                        .or(node.name())
-                        .map(str::to_string)
-                        .unwrap_or_else(|| format!("camera {}", cam.index())),
-                    to_world: world,
-                    projection,
-                    clip,
-                },
-            ));
+            let camera = Camera {
+                name: cam
+                    .name()
+                    .or(node.name())
+                    .map(str::to_string)
+                    .unwrap_or_else(|| format!("camera {}", cam.index())),
+                to_world: world,
+                projection,
+                clip,
+            };
+            if clip.far.is_finite() {
+                far_planes.push((cam.index(), camera.rigid_to_world().inverse(), clip.far));
+            }
+            cameras.push((node.index(), camera));
         }
         if let Some(light) = node.light() {
             punctual.push(convert_light(&light, &world, &node_name(&node)).map_err(&invalid)?);
@@ -435,11 +434,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     // A far plane nearer than parts of the scene hides them from the camera, as in any
     // glTF viewer and in Cycles; Blender writes its clip end (100 m by default) there, so
     // say so, and how to see past it.
-    for (index, world, zfar) in far_planes {
-        // Distances along the view in world units, as the kernels clip (a camera node's
-        // scale is dropped, Camera::rigid_to_world).
-        let (_, rotation, translation) = world.to_scale_rotation_translation();
-        let to_camera = Mat4::from_rotation_translation(rotation, translation).inverse();
+    for (index, to_camera, zfar) in far_planes {
         let farthest = (0..8)
             .map(|k| {
                 let corner =
