@@ -1486,8 +1486,10 @@ fn a_view_from_below_the_shading_normal_sees_its_other_side() {
 
 /// Three emissive quads facing a camera at the origin that looks down −z (glTF
 /// `znear` 0.3, `zfar` 5; a perspective camera of 90° and an orthographic one of
-/// half-extent 1): red across the whole view at depth 0.25, green over the right half at
-/// depth 4.8, blue across everything at depth 8. Written to `dir`; returns the path.
+/// half-extent 1, and the same two again under a parent scaled by 2, with their lengths
+/// halved): red across the whole view at depth 0.25, green over the right half at depth
+/// 4.8, blue across everything at depth 8, and yellow at depth 2 right of x = 0.6, a
+/// mark for the orthographic extents. Written to `dir`; returns the path.
 fn clip_plane_scene(dir: &Path) -> PathBuf {
     use base64::Engine as _;
     // (depth, x range, colour); y spans the same range as x's widest extent.
@@ -1495,6 +1497,7 @@ fn clip_plane_scene(dir: &Path) -> PathBuf {
         (0.25f32, [-10.0f32, 10.0], [1.0f32, 0.0, 0.0]),
         (4.8, [0.0, 20.0], [0.0, 1.0, 0.0]),
         (8.0, [-40.0, 40.0], [0.0, 0.0, 1.0]),
+        (2.0, [0.6, 20.0], [1.0, 1.0, 0.0]),
     ];
     let mut bin = Vec::new();
     for (z, [x0, x1], _) in quads {
@@ -1517,23 +1520,30 @@ fn clip_plane_scene(dir: &Path) -> PathBuf {
         "buffers": [{"uri": format!("data:application/octet-stream;base64,{}",
                                     base64::engine::general_purpose::STANDARD.encode(&bin)),
                      "byteLength": bin.len()}],
-        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 144},
-                        {"buffer": 0, "byteOffset": 144, "byteLength": 12}],
-        "accessors": [accessor(0), accessor(1), accessor(2),
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 192},
+                        {"buffer": 0, "byteOffset": 192, "byteLength": 12}],
+        "accessors": [accessor(0), accessor(1), accessor(2), accessor(3),
                       {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"}],
         "materials": quads.iter().map(|(_, _, c)| serde_json::json!({
             "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0]},
             "emissiveFactor": c, "doubleSided": true})).collect::<Vec<_>>(),
-        "meshes": (0..3).map(|q| serde_json::json!({"primitives": [
-            {"attributes": {"POSITION": q}, "indices": 3, "material": q}]})).collect::<Vec<_>>(),
+        "meshes": (0..4).map(|q| serde_json::json!({"primitives": [
+            {"attributes": {"POSITION": q}, "indices": 4, "material": q}]})).collect::<Vec<_>>(),
         "cameras": [
             {"type": "perspective", "perspective":
                 {"yfov": std::f32::consts::FRAC_PI_2, "aspectRatio": 1.0, "znear": 0.3, "zfar": 5.0}},
             {"type": "orthographic", "orthographic":
-                {"xmag": 1.0, "ymag": 1.0, "znear": 0.3, "zfar": 5.0}}
+                {"xmag": 1.0, "ymag": 1.0, "znear": 0.3, "zfar": 5.0}},
+            // The same two, in the units of a parent scaled by 2.
+            {"type": "perspective", "perspective":
+                {"yfov": std::f32::consts::FRAC_PI_2, "aspectRatio": 1.0, "znear": 0.15, "zfar": 2.5}},
+            {"type": "orthographic", "orthographic":
+                {"xmag": 0.5, "ymag": 0.5, "znear": 0.15, "zfar": 2.5}}
         ],
-        "nodes": [{"mesh": 0}, {"mesh": 1}, {"mesh": 2}, {"camera": 0}, {"camera": 1}],
-        "scenes": [{"nodes": [0, 1, 2, 3, 4]}],
+        "nodes": [{"camera": 0}, {"camera": 1},
+                  {"scale": [2.0, 2.0, 2.0], "children": [3, 4]}, {"camera": 2}, {"camera": 3},
+                  {"mesh": 0}, {"mesh": 1}, {"mesh": 2}, {"mesh": 3}],
+        "scenes": [{"nodes": [0, 1, 2, 5, 6, 7, 8]}],
         "scene": 0
     });
     let path = dir.join("clip.gltf");
@@ -1549,14 +1559,17 @@ fn clip_plane_scene(dir: &Path) -> PathBuf {
 /// from the eye, beyond 5, and the red quad's 0.43, beyond 0.3: clipping by distance
 /// instead of depth would show red and lose green there. The depth AOV counts from the
 /// eye, not from the near plane. With `--no-clip-planes` the red quad covers the image.
-/// Seen to fail with no clipping, with clipping by distance along the ray, and with the
-/// depth AOV measured from the near plane.
+/// Cameras under a scaled parent see the same: a projection's lengths are in the camera
+/// node's units, as in a rasteriser's view matrix. Seen to fail with no clipping, with
+/// clipping by distance along the ray, with the depth AOV measured from the near plane,
+/// and with the node's scale left out of the planes or of the orthographic extents.
 #[test]
 fn camera_rays_honour_the_clip_planes() {
     let dir = tempfile::tempdir().unwrap();
     let scene = clip_plane_scene(dir.path());
     let n = 16u32;
-    for camera in ["0", "1"] {
+    for camera in ["0", "1", "2", "3"] {
+        let perspective = camera == "0" || camera == "2";
         for clip in [true, false] {
             let out = dir.path().join(format!("clip-{camera}-{clip}.exr"));
             let size = n.to_string();
@@ -1587,15 +1600,26 @@ fn camera_rays_honour_the_clip_planes() {
             let img = lanterna::image_io::read_exr(&out).unwrap();
             let depth = &img.aovs.iter().find(|a| a.name == "depth").unwrap().data;
             let what = format!("camera {camera}, clip planes {clip}");
+            // Column x spans [lo, hi] in normalised image x; at depth z that is
+            // [lo, hi] · z across for the 90° cameras, [lo, hi] for the orthographic
+            // ones (half-extent 1 in world units).
+            let across = |ndc: f32, z: f32| if perspective { ndc * z } else { ndc };
             for y in 0..n {
-                // The middle columns hold the green quad's edge.
-                for x in (0..n).filter(|x| !(n / 2 - 1..=n / 2).contains(x)) {
-                    let i = (y * n + x) as usize;
-                    let (want, z) = match (clip, x >= n / 2) {
-                        (false, _) => ([1.0, 0.0, 0.0], 0.25),
-                        (true, false) => ([0.0; 3], 0.0),
-                        (true, true) => ([0.0, 1.0, 0.0], 4.8),
+                for x in 0..n {
+                    let lo = 2.0 * x as f32 / n as f32 - 1.0;
+                    let hi = 2.0 * (x + 1) as f32 / n as f32 - 1.0;
+                    let (want, z) = if !clip {
+                        ([1.0, 0.0, 0.0], 0.25)
+                    } else if hi < 0.0 {
+                        ([0.0; 3], 0.0)
+                    } else if lo > 0.0 && across(lo, 2.0) > 0.6 {
+                        ([1.0, 1.0, 0.0], 2.0)
+                    } else if lo > 0.0 && across(hi, 2.0) < 0.6 {
+                        ([0.0, 1.0, 0.0], 4.8)
+                    } else {
+                        continue; // a column holding a quad's edge
                     };
+                    let i = (y * n + x) as usize;
                     let px = img.rgb[i];
                     assert!(
                         px.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-5),
@@ -1604,8 +1628,8 @@ fn camera_rays_honour_the_clip_planes() {
                     if z > 0.0 {
                         // Distance from the eye to the quad through the pixel's samples
                         // (their mean, for the perspective camera).
-                        let lo = if camera == "0" { z } else { z - 1e-4 };
-                        let hi = if camera == "0" {
+                        let lo = if perspective { z } else { z - 1e-4 };
+                        let hi = if perspective {
                             z * 3f32.sqrt()
                         } else {
                             z + 1e-4

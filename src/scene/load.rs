@@ -273,7 +273,21 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
                 gltf::camera::Projection::Perspective(p) => (p.znear(), p.zfar()),
                 gltf::camera::Projection::Orthographic(o) => (o.znear(), Some(o.zfar())),
             };
-            let clip = clip_planes(znear, zfar).unwrap_or_else(|why| {
+            // A rasteriser's view matrix is the inverse of the node's global transform,
+            // scale included, so the projection's lengths (clip distances, orthographic
+            // extents) are in the camera node's own units: under a parent scaled by s
+            // they are s times as long in the world. (Ray directions come from the
+            // rigid part alone, Camera::rigid_to_world.)
+            let node_scale = Vec3::new(
+                world.x_axis.truncate().length(),
+                world.y_axis.truncate().length(),
+                world.z_axis.truncate().length(),
+            );
+            let clip = clip_planes(znear, zfar).map(|c| ClipPlanes {
+                near: c.near * node_scale.z,
+                far: c.far * node_scale.z,
+            });
+            let clip = clip.unwrap_or_else(|why| {
                 warnings.push(format!(
                     "camera {} has znear {znear} and zfar {}: {why}; its clip planes are ignored",
                     cam.index(),
@@ -296,7 +310,8 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
                     }
                 }
                 gltf::camera::Projection::Orthographic(o) => {
-                    let (xmag, ymag) = (o.xmag().abs(), o.ymag().abs());
+                    let (xmag, ymag) =
+                        (o.xmag().abs() * node_scale.x, o.ymag().abs() * node_scale.y);
                     if !(xmag > 0.0 && ymag > 0.0 && xmag.is_finite() && ymag.is_finite()) {
                         return Err(invalid(format!(
                             "orthographic camera {} has magnification {xmag} × {ymag}",
