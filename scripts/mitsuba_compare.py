@@ -381,9 +381,11 @@ def main(argv=None):
     ap.add_argument("--keep-lanterna", metavar="DIR",
                     help="with --lanterna: keep its batch EXRs (and their mean) in DIR")
     ap.add_argument("--gltf-bsdf", action="store_true",
-                    help="render every material with the glTF BRDF plugin of "
-                    "scripts/mitsuba_gltf_bsdf.py (exact for untextured opaque "
-                    "metallic-roughness materials) instead of the export's BSDFs")
+                    help="render every material with the glTF BRDF plugins of "
+                    "scripts/mitsuba_gltf_bsdf.py and mitsuba_gltf_layers.py (exact for "
+                    "untextured opaque metallic-roughness materials, with clearcoat, "
+                    "sheen or thin-walled transmission factors) instead of the export's "
+                    "BSDFs")
     ap.add_argument("--fail-on-disagree", action="store_true",
                     help="exit with status 1 when the block test rejects agreement")
     args = ap.parse_args(argv)
@@ -444,16 +446,21 @@ def main(argv=None):
         if args.gltf_bsdf:
             sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
             import mitsuba_gltf_bsdf
-            mitsuba_gltf_bsdf.register()
+            import mitsuba_gltf_layers
+            mitsuba_gltf_layers.register()
             try:
                 xml = mitsuba_gltf_bsdf.rewrite_export(args.export_dir)
             except ValueError as e:
                 raise InputError(f"--gltf-bsdf: {e}")
         approximations = manifest.get("approximations", [])
         if args.gltf_bsdf:
-            # The plugin is the glTF model itself: what the export approximated by
-            # `principled` is now exact (materials it cannot write were refused above).
-            approximations = [a for a in approximations if "glTF metallic-roughness" not in a]
+            # The plugins are the glTF model itself: what the export approximated by
+            # `principled` (coats and sheens included) or by a smooth `thindielectric` is
+            # now exact (materials they cannot write were refused above).
+            exact_now = ("glTF metallic-roughness", "its clearcoat", "its sheen",
+                         "KHR_materials_transmission (roughness")
+            approximations = [a for a in approximations
+                              if not any(e in a for e in exact_now)]
         scene = mi.load_file(xml, max_depth=manifest["max_depth"])
         # lanterna's --hide-emitters leaves out emission seen directly and keeps the light
         # the emitters' surfaces reflect; Mitsuba's hide_emitters would make them

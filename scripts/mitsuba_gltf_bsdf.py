@@ -197,8 +197,11 @@ def plugin_dict(mat):
 
 # What a material may hold for `rewrite_export` to write it exactly with the plugin.
 _TEXTURES = ("baseColorTexture", "metallicRoughnessTexture")
-_UNSUPPORTED_EXTENSIONS = ("KHR_materials_transmission", "KHR_materials_volume",
-                           "KHR_materials_clearcoat", "KHR_materials_sheen")
+_UNSUPPORTED_EXTENSIONS = ("KHR_materials_volume",)
+# Coats and sheens are written by mitsuba_gltf_layers (factors only), as is thin-walled
+# transmission.
+_LAYER_TEXTURES = ("clearcoatTexture", "clearcoatRoughnessTexture", "clearcoatNormalTexture",
+                   "sheenColorTexture", "sheenRoughnessTexture")
 
 
 def _gltf_json(path):
@@ -225,6 +228,10 @@ def _refusal(index, mat):
     spec = mat.get("extensions", {}).get("KHR_materials_specular", {})
     if "specularTexture" in spec or "specularColorTexture" in spec:
         return f"material {index} has a specular texture"
+    for e in ("KHR_materials_clearcoat", "KHR_materials_sheen"):
+        for t in _LAYER_TEXTURES:
+            if t in mat.get("extensions", {}).get(e, {}):
+                return f"material {index} has a {t}"
     if mat.get("alphaMode", "OPAQUE") != "OPAQUE":
         return f"material {index} is not opaque"
     return None
@@ -234,7 +241,9 @@ def rewrite_export(export_dir):
     """Writes EXPORT_DIR/scene_gltf.xml: the export's scene.xml with every material's
     BSDF replaced by the plugin, from the glTF file the export was made of (its manifest's
     `scene_path`). Returns the path. Raises ValueError for a material the plugin cannot
-    write exactly (textures, vertex colours, transmission, coats, sheen, alpha)."""
+    write exactly (textures, vertex colours, solid glass, alpha). Coats, sheens and
+    thin-walled transmission are written by mitsuba_gltf_layers."""
+    import mitsuba_gltf_layers
     with open(os.path.join(export_dir, "lanterna_export.json")) as f:
         manifest = json.load(f)
     materials = _gltf_json(manifest["scene_path"]).get("materials", [])
@@ -242,7 +251,11 @@ def rewrite_export(export_dir):
         xml = f.read()
     if 'id="bsdf' in xml and "-colors\"" in xml:
         raise ValueError("the export has vertex colours, which the plugin does not read")
-    block = re.compile(r'  <bsdf type="[^"]*" id="bsdf(\d+)">.*?\n  </bsdf>\n', re.S)
+    # A top-level BSDF block ends at the first "  </bsdf>" followed by a top-level
+    # element (a blendbsdf, thin glass, nests a child at the same indentation).
+    block = re.compile(r'  <bsdf type="[^"]*" id="bsdf(\d+)">.*?\n  </bsdf>\n'
+                       r'(?=\s*(?:<!--|<shape|<bsdf type="[^"]*" id=|<emitter|</scene>|<sensor'
+                       r'|<integrator|<texture))', re.S)
 
     def replace(m):
         k = int(m.group(1))
@@ -251,10 +264,10 @@ def rewrite_export(export_dir):
         why = _refusal(k, mat)
         if why:
             raise ValueError(why)
-        params = plugin_dict(mat)
+        params = mitsuba_gltf_layers.plugin_dict(mat)
         body = "".join(f'    <float name="{name}" value="{value!r}"/>\n'
                        for name, value in params.items() if name != "type")
-        return f'  <bsdf type="gltf" id="bsdf{k}">\n{body}  </bsdf>\n'
+        return f'  <bsdf type="{params["type"]}" id="bsdf{k}">\n{body}  </bsdf>\n'
 
     out, n = block.subn(replace, xml)
     if n == 0:

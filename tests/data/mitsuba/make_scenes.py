@@ -708,6 +708,55 @@ def uvsets_scene():
     b.write("uvsets.gltf")
 
 
+def layered(b, rgb, roughness, coat=None, sheen=None, specular=None):
+    """A dielectric with KHR_materials_clearcoat (factor, roughness) and/or
+    KHR_materials_sheen (colour, roughness) factors, and KHR_materials_specular."""
+    m = {"pbrMetallicRoughness": {"baseColorFactor": list(rgb) + [1], "metallicFactor": 0.0,
+                                  "roughnessFactor": roughness}, "extensions": {}}
+    for ext, value in (("KHR_materials_specular", None if specular is None else
+                        {"specularFactor": specular}),
+                       ("KHR_materials_clearcoat", coat and
+                        {"clearcoatFactor": coat[0], "clearcoatRoughnessFactor": coat[1]}),
+                       ("KHR_materials_sheen", sheen and
+                        {"sheenColorFactor": list(sheen[0]), "sheenRoughnessFactor": sheen[1]})):
+        if value is not None:
+            m["extensions"][ext] = value
+            if ext not in b.used and ext != "KHR_materials_specular":  # write() lists that
+                b.used.append(ext)
+    b.materials.append(m)
+    return len(b.materials) - 1
+
+
+def coat_sheen_scene():
+    """Clearcoats and sheens in a closed room under an area light and a point light: a
+    white matte floor under a thin coat (no specular layer of its own), a blue wall under
+    a white sheen and a full coat, an amber wall and box under a green sheen and a sharp
+    coat."""
+    b = Builder()
+    white_coat = layered(b, (1, 1, 1), 1.0, coat=(0.5, 0.1), specular=0.0)
+    blue = layered(b, (0.2, 0.4, 0.8), 0.7, coat=(1.0, 0.2), sheen=((0.9, 0.9, 0.9), 0.5))
+    amber = layered(b, (0.7, 0.5, 0.2), 0.4, coat=(0.8, 0.05), sheen=((0.2, 0.8, 0.3), 0.3))
+    grey = b.lambert((0.6, 0.6, 0.6))
+    s = 1.5
+    for corners, m in (([(-s, 0, s), (s, 0, s), (s, 0, -s), (-s, 0, -s)], white_coat),
+                       ([(-s, 0, -s), (s, 0, -s), (s, 2 * s, -s), (-s, 2 * s, -s)], blue),
+                       ([(-s, 0, s), (-s, 0, -s), (-s, 2 * s, -s), (-s, 2 * s, s)], grey),
+                       ([(s, 0, -s), (s, 0, s), (s, 2 * s, s), (s, 2 * s, -s)], amber),
+                       ([(-s, 2 * s, -s), (s, 2 * s, -s), (s, 2 * s, s), (-s, 2 * s, s)], grey)):
+        b.node(mesh=b.quad(*corners, m))
+    lamp = b.lambert((0.5, 0.5, 0.5), emission=(1, 0.95, 0.85), strength=6.0)
+    y = 2 * s - 0.01
+    b.node(mesh=b.quad((-0.4, y, 0.4), (0.4, y, 0.4), (0.4, y, -0.4), (-0.4, y, -0.4), lamp))
+    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
+        type="point", color=[1, 0.9, 0.8], intensity=3.0)}}, translation=[0.8, 1.2, 0.9])
+    b.node(mesh=b.box(amber), translation=[-0.4, 0.35, -0.2], scale=[0.7, 0.7, 0.7],
+           rotation=[0, 0.3826834, 0, 0.9238795])
+    eye = (0.3, 1.1, 3.2)
+    b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
+           rotation=look_at_rotation(eye, (0.0, 0.6, -0.5)))
+    b.write("coat_sheen.gltf")
+
+
 if __name__ == "__main__":
     tex_scene()
     twosided_scene()
@@ -724,3 +773,4 @@ if __name__ == "__main__":
     glass_scene()
     solid_scene()
     solid_pane_scene()
+    coat_sheen_scene()
