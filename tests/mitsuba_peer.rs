@@ -557,16 +557,35 @@ fn glossy_materials_agree_with_mitsuba_through_the_gltf_bsdf() {
     let metallic: Vec<f32> = loaded.scene.materials.iter().map(|m| m.metallic).collect();
     assert!(metallic.contains(&1.0) && metallic.contains(&0.0));
     let options = export_loaded(&loaded.scene, None, 40, 30, &dir);
-    for method in [Method::Pt, Method::Ris, Method::GuidedRis] {
+    assert_agree_through_the_gltf_plugins(
+        &loaded.scene,
+        &[Method::Pt, Method::Ris, Method::GuidedRis],
+        &options,
+        &dir,
+        tmp.path(),
+    );
+}
+
+/// [`assert_agrees_exactly`] for each of `methods`, 8 × 64 spp against Mitsuba's 8 × 256
+/// rendering every material through the glTF plugins (`--gltf-bsdf`).
+fn assert_agree_through_the_gltf_plugins(
+    scene: &Scene,
+    methods: &[Method],
+    options: &ExportOptions,
+    dir: &Path,
+    tmp: &Path,
+) {
+    for &method in methods {
+        let what = method.name();
         assert_agrees_exactly(
-            &loaded.scene,
+            scene,
             method,
-            &options,
-            &dir,
+            options,
+            dir,
             64,
             256,
-            tmp.path(),
-            method.name(),
+            tmp,
+            what,
             &["--gltf-bsdf"],
         );
     }
@@ -816,19 +835,8 @@ fn coats_and_sheens_agree_with_mitsuba_through_the_gltf_layers() {
     let m = &loaded.scene.materials;
     assert!(m.iter().any(|m| m.clearcoat > 0.0) && m.iter().any(|m| m.sheen_color[1] > 0.0));
     let options = export_at_depth(&loaded.scene, None, 40, 30, 2, &dir);
-    for method in [Method::Pt, Method::GuidedRis] {
-        assert_agrees_exactly(
-            &loaded.scene,
-            method,
-            &options,
-            &dir,
-            64,
-            256,
-            tmp.path(),
-            method.name(),
-            &["--gltf-bsdf"],
-        );
-    }
+    let methods = [Method::Pt, Method::GuidedRis];
+    assert_agree_through_the_gltf_plugins(&loaded.scene, &methods, &options, &dir, tmp.path());
 }
 
 /// Clip planes against Mitsuba's `near_clip` and `far_clip`, which the export writes
