@@ -35,13 +35,17 @@ import mitsuba_gltf_bsdf as base_mod
 
 # ---------------------------------------------------------------- float64 numpy spec ---
 
-def np_l(x, ag):
+def l_coefficients(ag):
+    """Estevez & Kulla's fitted curve l(x) = a/(1 + b x^c) + d x + e: its coefficients,
+    mixed between their two fits by (1 - alpha_g)^2 (KHR_materials_sheen)."""
     t = (1.0 - ag) ** 2
-    a = 21.5473 + (25.3245 - 21.5473) * t
-    b = 3.82987 + (3.32435 - 3.82987) * t
-    c = 0.19823 + (0.16801 - 0.19823) * t
-    d = -1.97760 + (-1.27393 + 1.97760) * t
-    e = -4.32054 + (-4.85967 + 4.32054) * t
+    fits = ((21.5473, 25.3245), (3.82987, 3.32435), (0.19823, 0.16801),
+            (-1.97760, -1.27393), (-4.32054, -4.85967))
+    return tuple(lo + (hi - lo) * t for lo, hi in fits)
+
+
+def np_l(x, ag):
+    a, b, c, d, e = l_coefficients(ag)
     return a / (1.0 + b * np.power(x, c)) + d * x + e
 
 
@@ -174,7 +178,7 @@ class GltfLayered(base_mod.GltfBSDF):
         p = params(props)
         self.p = p
         self.cc = p["clearcoat"]
-        self.alpha_c = max(p["cc_rough"] ** (1 if os.environ.get("GLTF_DEFECT") == "coat-alpha" else 2), 1e-4)
+        self.alpha_c = max(p["cc_rough"] ** (1 if base_mod._DEFECT == "coat-alpha" else 2), 1e-4)
         self.C = mi.Color3f(*p["sheen"])
         self.Cmax = max(p["sheen"])
         self.has_sheen = self.Cmax > 0
@@ -209,12 +213,7 @@ class GltfLayered(base_mod.GltfBSDF):
 
     # sheen pieces (spec)
     def _l(self, x):
-        t = (1.0 - self.ag) ** 2
-        a = 21.5473 + (25.3245 - 21.5473) * t
-        b = 3.82987 + (3.32435 - 3.82987) * t
-        c = 0.19823 + (0.16801 - 0.19823) * t
-        d = -1.97760 + (-1.27393 + 1.97760) * t
-        e = -4.32054 + (-4.85967 + 4.32054) * t
+        a, b, c, d, e = l_coefficients(self.ag)
         return a / (1.0 + b * dr.power(x, c)) + d * x + e
 
     def _lambda(self, ct):
@@ -245,14 +244,14 @@ class GltfLayered(base_mod.GltfBSDF):
         if self.has_sheen:
             fs = self.sheenD(h.z) * self.sheenV(wi.z, wo.z)
             sc = dr.minimum(1.0 - self.Cmax * self.Eval(wi.z), 1.0 - self.Cmax * self.Eval(wo.z))
-            if os.environ.get("GLTF_DEFECT") == "sheen-v-only":  # the spec's simplified scaling
+            if base_mod._DEFECT == "sheen-v-only":  # the spec's simplified scaling
                 sc = 1.0 - self.Cmax * self.Eval(wi.z)
             if self.floor:
                 sc = dr.maximum(sc, 0.0)
             f = self.C * fs + f * sc
         if self.cc > 0:
             fc = self.Dg(h.z, self.alpha_c) * self.Visg(wo.z, wi.z, self.alpha_c)
-            cw = dr.abs(dr.dot(wi, h)) if os.environ.get("GLTF_DEFECT") == "coat-vdoth" else dr.abs(wi.z)
+            cw = dr.abs(dr.dot(wi, h)) if base_mod._DEFECT == "coat-vdoth" else dr.abs(wi.z)
             w = self.cc * (0.04 + 0.96 * dr.power(1.0 - cw, 5.0))
             f = (1.0 - w) * f + w * fc
         return f
