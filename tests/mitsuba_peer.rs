@@ -924,19 +924,47 @@ fn vertex_colours_agree_with_mitsuba() {
 
 /// Punctual lights (point, spot with a penumbra, hard spot, directional) and textured
 /// surfaces (sRGB PNG, nearest and bilinear, an emissive texture at strength 3 going out
-/// as linear PFM) against Mitsuba: `pt`, 8 × 32 spp, Mitsuba at 4×. Seen to fail with
-/// the spot's falloff left unsquared (t instead of t²).
+/// as linear PFM; in `tex16.gltf` 16-bit sRGB PNGs whose samples lie between 8-bit
+/// codes, which Mitsuba decodes from the exported 16-bit PNGs) against Mitsuba: `pt`,
+/// 8 × 32 spp, Mitsuba at 4×. Seen to fail with the spot's falloff left unsquared (t
+/// instead of t²), and with 16-bit samples rounded to 8 bits, as lanterna read them
+/// until 2026-11-29: the exported PNGs then lack the file's samples, and with the
+/// file's own PNGs given to Mitsuba the dark floor's blocks differ at t = −10.
 #[test]
 fn punctual_lights_and_textures_agree_with_mitsuba() {
     if !mitsuba_available() {
         println!("skipped: no Python here imports mitsuba (scripts/setup --mitsuba)");
         return;
     }
-    for name in ["punctual.gltf", "tex.gltf"] {
+    for name in ["punctual.gltf", "tex.gltf", "tex16.gltf"] {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path().join("export");
         let loaded = session::load_scene(&data(name)).unwrap();
         let options = export_loaded(&loaded.scene, None, 40, 30, &dir);
+        if name == "tex16.gltf" {
+            // The export writes what lanterna read: Mitsuba must find the file's own
+            // 16-bit samples in it, or both sides would agree on rounded ones.
+            let code = format!(
+                r#"
+import base64, glob, io, json, os, numpy as np, mitsuba as mi
+mi.set_variant("scalar_rgb")
+def samples(data):
+    path = "probe.png"
+    open(path, "wb").write(data)
+    return np.array(mi.Bitmap(path))
+g = json.load(open({:?}))
+originals = [samples(base64.b64decode(i["uri"].split(",", 1)[1])) for i in g["images"]]
+exported = [samples(open(f, "rb").read()) for f in sorted(glob.glob("export/textures/*.png"))]
+print(json.dumps({{"dtypes": sorted({{str(e.dtype) for e in exported}}),
+                   "found": [any(o.shape == e.shape and (o == e).all() for o in originals)
+                             for e in exported]}}))
+"#,
+                data(name)
+            );
+            let r = python_json(&code, tmp.path());
+            assert_eq!(r["dtypes"], serde_json::json!(["uint16"]), "{r}");
+            assert_eq!(r["found"], serde_json::json!([true, true, true]), "{r}");
+        }
         let spp = 32;
         assert_agrees_exactly(
             &loaded.scene,

@@ -16,7 +16,7 @@ use lanterna::render::{LightSource, Method};
 use lanterna::scene::generate::{Kind, Options};
 use lanterna::scene::TextureData;
 use lanterna::testing::{self, render_batches};
-use lanterna::vk::{SamplerDesc, TextureFormat, WrapMode};
+use lanterna::vk::{SamplerDesc, Texels, TextureFormat, WrapMode};
 
 const ALPHA: f64 = 1e-3;
 
@@ -119,7 +119,7 @@ fn ris_agrees_with_pt_under_a_textured_emitter() {
         name: "checker".into(),
         width: n,
         height: n,
-        rgba,
+        texels: Texels::Rgba8(rgba),
         format: TextureFormat::Srgb,
         sampler: SamplerDesc {
             wrap_u: WrapMode::Repeat,

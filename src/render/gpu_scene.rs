@@ -179,7 +179,7 @@ impl GpuScene {
         let mut texture_samplers = Vec::with_capacity(scene.textures.len());
         for t in &scene.textures {
             textures.push(Texture::new(
-                device, t.width, t.height, &t.rgba, t.format, &t.name,
+                device, t.width, t.height, &t.texels, t.format, &t.name,
             )?);
             let id = match sampler_ids.get(&t.sampler) {
                 Some(&id) => id,
@@ -246,7 +246,7 @@ impl GpuScene {
             + scene
                 .textures
                 .iter()
-                .map(|t| t.rgba.len() as u64)
+                .map(|t| t.texels.device_bytes(t.format))
                 .sum::<u64>()
             + blases.iter().map(|b| b.size).sum::<u64>()
             + tlas.as_ref().map_or(0, |t| t.size)

@@ -804,7 +804,7 @@ fn content_hash(scene: &Scene) -> String {
     }
     eat(bytemuck::cast_slice(&scene.punctual));
     for t in &scene.textures {
-        eat(&t.rgba);
+        eat(&t.texels.bytes());
     }
     format!("{h:016x}")
 }

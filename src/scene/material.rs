@@ -3,7 +3,7 @@
 //! volume / clearcoat / sheen, and KHR_materials_pbrSpecularGlossiness converted to
 //! metallic-roughness.
 
-use super::texture::{to_rgba8, TextureData, TextureKey};
+use super::texture::{to_texels, TextureData, TextureKey};
 use crate::gpu;
 use crate::vk::{SamplerDesc, TextureFormat, WrapMode};
 use std::collections::HashMap;
@@ -52,9 +52,9 @@ impl TextureRegistry<'_> {
                 .images
                 .get(image)
                 .and_then(|d| d.as_ref())
-                .and_then(|d| to_rgba8(d).map(|p| (d, p)))
+                .and_then(|d| to_texels(d).map(|p| (d, p)))
             {
-                Some((data, rgba)) => {
+                Some((data, texels)) => {
                     let slot = self.textures.len() as u32;
                     self.textures.push(TextureData {
                         name: texture
@@ -64,7 +64,7 @@ impl TextureRegistry<'_> {
                             .unwrap_or_else(|| format!("image {image}")),
                         width: data.width,
                         height: data.height,
-                        rgba,
+                        texels,
                         format,
                         sampler: key.sampler,
                     });

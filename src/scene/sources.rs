@@ -265,81 +265,92 @@ mod tests {
     }
 
     /// Every PNG pixel layout (grey, grey + alpha, RGB, RGBA, at 8 and 16 bits) and
-    /// JPEG decode to the RGBA8 texels the renderer uploads: grey spread over R, G and B,
-    /// its alpha kept, 16-bit samples rounded to the nearest 8-bit code (not their high
-    /// byte, which is up to one code low).
+    /// JPEG decode to the RGBA texels the renderer uploads: grey spread over R, G and B,
+    /// its alpha kept, 8-bit images as 8-bit texels and 16-bit ones with all 16 bits
+    /// (until 2026-11-29 they were rounded to 8).
     #[test]
-    fn png_layouts_and_jpeg_decode_to_rgba8() {
+    fn png_layouts_and_jpeg_decode_to_rgba_texels() {
+        use crate::vk::Texels;
         use image::{DynamicImage as D, ImageBuffer, ImageFormat};
-        let rgba8 = |image: D, format: ImageFormat| -> Vec<u8> {
+        let texels = |image: D, format: ImageFormat| -> Texels {
             let mut bytes = Vec::new();
             image
                 .write_to(&mut std::io::Cursor::new(&mut bytes), format)
                 .unwrap();
             let data = decode_image(&bytes, 1 << 20).unwrap();
-            super::super::texture::to_rgba8(&data).unwrap()
+            super::super::texture::to_texels(&data).unwrap()
         };
-        let png = |image: D| rgba8(image, ImageFormat::Png);
-        let wide = |v: u8| (u16::from(v) * 257).saturating_add(3); // v widened, a little more
+        let png = |image: D| texels(image, ImageFormat::Png);
+        let rgba8 = |image: D| match png(image) {
+            Texels::Rgba8(v) => v,
+            other => panic!("8-bit image decoded to {other:?}"),
+        };
+        let rgba16 = |image: D| match png(image) {
+            Texels::Rgba16(v) => v,
+            other => panic!("16-bit image decoded to {other:?}"),
+        };
         assert_eq!(
-            png(D::ImageLuma8(
+            rgba8(D::ImageLuma8(
                 ImageBuffer::from_raw(2, 1, vec![10, 200]).unwrap()
             )),
             [10, 10, 10, 255, 200, 200, 200, 255]
         );
         assert_eq!(
-            png(D::ImageLumaA8(
+            rgba8(D::ImageLumaA8(
                 ImageBuffer::from_raw(2, 1, vec![10, 50, 200, 255]).unwrap()
             )),
             [10, 10, 10, 50, 200, 200, 200, 255]
         );
         assert_eq!(
-            png(D::ImageRgb8(
+            rgba8(D::ImageRgb8(
                 ImageBuffer::from_raw(2, 1, vec![1, 2, 3, 4, 5, 6]).unwrap()
             )),
             [1, 2, 3, 255, 4, 5, 6, 255]
         );
         let rgba = vec![1, 2, 3, 4, 250, 251, 252, 253];
         assert_eq!(
-            png(D::ImageRgba8(
+            rgba8(D::ImageRgba8(
                 ImageBuffer::from_raw(2, 1, rgba.clone()).unwrap()
             )),
             rgba
         );
+        // 16-bit samples whose low bytes matter: 0x01F0 is 1.94 8-bit codes.
         assert_eq!(
-            png(D::ImageLuma16(
-                ImageBuffer::from_raw(2, 1, vec![wide(10), wide(200)]).unwrap()
-            )),
-            [10, 10, 10, 255, 200, 200, 200, 255]
-        );
-        // Rounded, not truncated: 0x01F0 is 1.94 codes (its high byte says 1).
-        assert_eq!(
-            png(D::ImageLuma16(
+            rgba16(D::ImageLuma16(
                 ImageBuffer::from_raw(3, 1, vec![0x01F0, 0xFFFF, 0x0080]).unwrap()
             )),
-            [2, 2, 2, 255, 255, 255, 255, 255, 0, 0, 0, 255]
+            [
+                0x01F0, 0x01F0, 0x01F0, 0xFFFF, 0xFFFF, 0xFFFF, 0xFFFF, 0xFFFF, 0x80, 0x80, 0x80,
+                0xFFFF
+            ]
         );
-        let la16 = [10, 50, 200, 255].map(wide).to_vec();
         assert_eq!(
-            png(D::ImageLumaA16(ImageBuffer::from_raw(2, 1, la16).unwrap())),
-            [10, 10, 10, 50, 200, 200, 200, 255]
+            rgba16(D::ImageLumaA16(
+                ImageBuffer::from_raw(2, 1, vec![10, 5000, 60000, 7]).unwrap()
+            )),
+            [10, 10, 10, 5000, 60000, 60000, 60000, 7]
         );
-        let rgb16 = [1, 2, 3, 4, 5, 6].map(wide).to_vec();
         assert_eq!(
-            png(D::ImageRgb16(ImageBuffer::from_raw(2, 1, rgb16).unwrap())),
-            [1, 2, 3, 255, 4, 5, 6, 255]
+            rgba16(D::ImageRgb16(
+                ImageBuffer::from_raw(2, 1, vec![1, 2, 3, 40000, 50000, 60000]).unwrap()
+            )),
+            [1, 2, 3, 0xFFFF, 40000, 50000, 60000, 0xFFFF]
         );
-        let rgba16 = rgba.iter().map(|&v| wide(v)).collect();
+        let rgba_wide = vec![1, 2, 3, 4, 65530, 65531, 65532, 65533];
         assert_eq!(
-            png(D::ImageRgba16(ImageBuffer::from_raw(2, 1, rgba16).unwrap())),
-            rgba
+            rgba16(D::ImageRgba16(
+                ImageBuffer::from_raw(2, 1, rgba_wide.clone()).unwrap()
+            )),
+            rgba_wide
         );
         // JPEG is lossy: an even colour comes back within a few steps.
         let even = [200u8, 100, 50].repeat(64);
-        let jpeg = rgba8(
+        let Texels::Rgba8(jpeg) = texels(
             D::ImageRgb8(ImageBuffer::from_raw(8, 8, even).unwrap()),
             ImageFormat::Jpeg,
-        );
+        ) else {
+            panic!("JPEG decoded to 16-bit texels")
+        };
         for texel in jpeg.chunks_exact(4) {
             for (got, want) in texel.iter().zip([200u8, 100, 50, 255]) {
                 assert!(got.abs_diff(want) <= 4, "JPEG texel {texel:?}");

@@ -81,7 +81,11 @@ impl SceneStats {
                     + 12,
             )
             + size(lights.map_or(0, |l| l.triangle_light_index.len()), 4);
-        let textures: u64 = scene.textures.iter().map(|t| t.rgba.len() as u64).sum();
+        let textures: u64 = scene
+            .textures
+            .iter()
+            .map(|t| t.texels.device_bytes(t.format))
+            .sum();
         // BVH nodes and leaves: a conservative ~64 bytes per triangle plus instances.
         let accel = unique_triangles * 64 + scene.instances.len() as u64 * 128;
         let transmitting = || scene.materials.iter().filter(|m| m.transmission > 0.0);

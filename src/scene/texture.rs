@@ -1,7 +1,7 @@
-//! Decoded textures: RGBA8 pixels with their colour encoding and sampler, plus a CPU
+//! Decoded textures: RGBA texels with their colour encoding and sampler, plus a CPU
 //! lookup used to estimate the power of emissive-textured triangles.
 
-use crate::vk::{srgb_decode, SamplerDesc, TextureFormat, WrapMode};
+use crate::vk::{SamplerDesc, Texels, TextureFormat, WrapMode};
 
 /// Identifies one GPU texture: the same glTF image used as colour and as data, or with
 /// two samplers, becomes two textures.
@@ -18,7 +18,7 @@ pub struct TextureData {
     pub name: String,
     pub width: u32,
     pub height: u32,
-    pub rgba: Vec<u8>,
+    pub texels: Texels,
     pub format: TextureFormat,
     pub sampler: SamplerDesc,
 }
@@ -33,57 +33,69 @@ impl std::fmt::Debug for TextureData {
     }
 }
 
-/// Convert decoded glTF image data to RGBA8.
-pub fn to_rgba8(data: &gltf::image::Data) -> Option<Vec<u8>> {
+/// Convert decoded glTF image data to RGBA texels: 8-bit images stay 8 bits per channel,
+/// 16-bit ones keep all 16 (until 2026-11-29 they were rounded to 8, which an independent
+/// glTF reader saw: a 16-bit texture's image 0.2 % bright against Mitsuba, which reads all
+/// 16 bits, when the high byte was taken, and one block off at t = 14 when rounded).
+/// Grey spreads over R, G and B; a missing alpha is opaque.
+pub fn to_texels(data: &gltf::image::Data) -> Option<Texels> {
     use gltf::image::Format as F;
-    let px = (data.width * data.height) as usize;
+    let px = (data.width as usize).checked_mul(data.height as usize)?;
     let p = &data.pixels;
-    // The nearest 8-bit code, round(v · 255 / 65535): exact for samples widened from 8
-    // bits (v = 257 k), where the high byte alone was up to one code off (a 16-bit
-    // texture's image 0.2 % bright against Mitsuba, which reads all 16 bits).
-    let u16_at = |i: usize| {
-        let v = u32::from(u16::from_le_bytes([p[2 * i], p[2 * i + 1]]));
-        ((v * 255 + 32767) / 65535) as u8
-    };
+    let u16_at = |i: usize| u16::from_le_bytes([p[2 * i], p[2 * i + 1]]);
+    // Float images (not from PNG or JPEG) to the nearest 16-bit code.
     let f32_at = |i: usize| {
         let v = f32::from_le_bytes([p[4 * i], p[4 * i + 1], p[4 * i + 2], p[4 * i + 3]]);
-        (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
+        (v.clamp(0.0, 1.0) * 65535.0 + 0.5) as u16
     };
-    let mut out = Vec::with_capacity(px * 4);
-    for i in 0..px {
-        let rgba = match data.format {
-            F::R8 => [p[i], p[i], p[i], 255],
-            F::R8G8 => [p[2 * i], p[2 * i], p[2 * i], p[2 * i + 1]],
-            F::R8G8B8 => [p[3 * i], p[3 * i + 1], p[3 * i + 2], 255],
-            F::R8G8B8A8 => [p[4 * i], p[4 * i + 1], p[4 * i + 2], p[4 * i + 3]],
-            F::R16 => {
-                let v = u16_at(i);
-                [v, v, v, 255]
-            }
-            F::R16G16 => [
-                u16_at(2 * i),
-                u16_at(2 * i),
-                u16_at(2 * i),
-                u16_at(2 * i + 1),
-            ],
-            F::R16G16B16 => [u16_at(3 * i), u16_at(3 * i + 1), u16_at(3 * i + 2), 255],
-            F::R16G16B16A16 => [
-                u16_at(4 * i),
-                u16_at(4 * i + 1),
-                u16_at(4 * i + 2),
-                u16_at(4 * i + 3),
-            ],
-            F::R32G32B32FLOAT => [f32_at(3 * i), f32_at(3 * i + 1), f32_at(3 * i + 2), 255],
-            F::R32G32B32A32FLOAT => [
-                f32_at(4 * i),
-                f32_at(4 * i + 1),
-                f32_at(4 * i + 2),
-                f32_at(4 * i + 3),
-            ],
-        };
-        out.extend_from_slice(&rgba);
+    let (channels, wide) = match data.format {
+        F::R8 => (1, false),
+        F::R8G8 => (2, false),
+        F::R8G8B8 => (3, false),
+        F::R8G8B8A8 => (4, false),
+        F::R16 => (1, true),
+        F::R16G16 => (2, true),
+        F::R16G16B16 => (3, true),
+        F::R16G16B16A16 => (4, true),
+        F::R32G32B32FLOAT => (3, true),
+        F::R32G32B32A32FLOAT => (4, true),
+    };
+    let bytes_per_value = match data.format {
+        F::R32G32B32FLOAT | F::R32G32B32A32FLOAT => 4,
+        _ if wide => 2,
+        _ => 1,
+    };
+    if p.len() != px * channels * bytes_per_value {
+        return None;
     }
-    (out.len() == px * 4).then_some(out)
+    // RGBA from a pixel's channels: grey → (g, g, g), grey + alpha → (g, g, g, a).
+    fn rgba<T: Copy>(c: &[T], opaque: T) -> [T; 4] {
+        match c.len() {
+            1 => [c[0], c[0], c[0], opaque],
+            2 => [c[0], c[0], c[0], c[1]],
+            3 => [c[0], c[1], c[2], opaque],
+            _ => [c[0], c[1], c[2], c[3]],
+        }
+    }
+    Some(if !wide {
+        Texels::Rgba8(
+            p.chunks_exact(channels)
+                .flat_map(|c| rgba(c, 255))
+                .collect(),
+        )
+    } else {
+        let values: Vec<u16> = if bytes_per_value == 4 {
+            (0..px * channels).map(f32_at).collect()
+        } else {
+            (0..px * channels).map(u16_at).collect()
+        };
+        Texels::Rgba16(
+            values
+                .chunks_exact(channels)
+                .flat_map(|c| rgba(c, u16::MAX))
+                .collect(),
+        )
+    })
 }
 
 fn wrap(t: f32, mode: WrapMode) -> f32 {
@@ -109,8 +121,8 @@ impl TextureData {
         let x = ((u * self.width as f32) as u32).min(self.width - 1);
         let y = ((v * self.height as f32) as u32).min(self.height - 1);
         let i = ((y * self.width + x) * 4) as usize;
-        let c = |k: usize| self.rgba[i + k] as f32 / 255.0;
-        let s = |k: usize| srgb_decode(self.rgba[i + k]);
+        let c = |k: usize| self.texels.unorm(i + k);
+        let s = |k: usize| self.texels.srgb(i + k);
         match self.format {
             TextureFormat::Srgb => [s(0), s(1), s(2), c(3)],
             TextureFormat::Linear => [c(0), c(1), c(2), c(3)],
@@ -119,18 +131,13 @@ impl TextureData {
 
     /// Largest linear luminance over all texels (0 means the texture is black).
     pub fn max_luminance(&self) -> f32 {
-        let lut: Vec<f32> = (0..=255u8)
-            .map(|v| match self.format {
-                TextureFormat::Srgb => srgb_decode(v),
-                TextureFormat::Linear => v as f32 / 255.0,
-            })
-            .collect();
-        self.rgba
-            .chunks_exact(4)
+        let decode = |i: usize| match self.format {
+            TextureFormat::Srgb => self.texels.srgb(i),
+            TextureFormat::Linear => self.texels.unorm(i),
+        };
+        (0..self.texels.len() / 4)
             .map(|p| {
-                0.2126 * lut[p[0] as usize]
-                    + 0.7152 * lut[p[1] as usize]
-                    + 0.0722 * lut[p[2] as usize]
+                0.2126 * decode(4 * p) + 0.7152 * decode(4 * p + 1) + 0.0722 * decode(4 * p + 2)
             })
             .fold(0.0, f32::max)
     }

@@ -1,4 +1,4 @@
-//! Sampled 2D textures (RGBA8, sRGB or linear) and samplers.
+//! Sampled 2D textures (RGBA at 8 or 16 bits, sRGB or linear) and samplers.
 
 use super::buffer::Buffer;
 use super::device::Device;
@@ -8,7 +8,7 @@ use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
-/// Texel encoding of an RGBA8 texture.
+/// Texel encoding of a texture.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum TextureFormat {
     /// Colour data (base colour, emission), sRGB-encoded: decoded on the CPU with the
@@ -16,8 +16,62 @@ pub enum TextureFormat {
     /// decode approximately: lavapipe's is off by up to 2.6 % for dark codes, which a
     /// comparison with Mitsuba showed.)
     Srgb,
-    /// Non-colour data (normals, metallic-roughness): used as stored (RGBA8 UNORM).
+    /// Non-colour data (normals, metallic-roughness): used as stored (RGBA8 UNORM, or
+    /// half floats for 16-bit images).
     Linear,
+}
+
+/// A texture's texels as its image stores them, RGBA, top row first: 8 bits per channel
+/// (8-bit PNG, JPEG), or 16 (16-bit PNG), which are kept instead of being rounded to 8:
+/// a dark sRGB code of an 8-bit image is a step of several per cent.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Texels {
+    Rgba8(Vec<u8>),
+    Rgba16(Vec<u16>),
+}
+
+impl Texels {
+    /// Number of channel values (four per texel).
+    pub fn len(&self) -> usize {
+        match self {
+            Texels::Rgba8(v) => v.len(),
+            Texels::Rgba16(v) => v.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The values' bytes (16-bit values little-endian), e.g. to hash them.
+    pub fn bytes(&self) -> std::borrow::Cow<'_, [u8]> {
+        match self {
+            Texels::Rgba8(v) => v.as_slice().into(),
+            Texels::Rgba16(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+        }
+    }
+
+    /// Channel value `i` in [0, 1].
+    pub fn unorm(&self, i: usize) -> f32 {
+        match self {
+            Texels::Rgba8(v) => v[i] as f32 / 255.0,
+            Texels::Rgba16(v) => v[i] as f32 / 65535.0,
+        }
+    }
+
+    /// Channel value `i` decoded from sRGB to linear, exactly.
+    pub fn srgb(&self, i: usize) -> f32 {
+        match self {
+            Texels::Rgba8(v) => srgb_decode(v[i]),
+            Texels::Rgba16(v) => srgb_decode16(v[i]),
+        }
+    }
+
+    /// Bytes the device holds for them in `format` (see [`Texture::new`]).
+    pub fn device_bytes(&self, format: TextureFormat) -> u64 {
+        let wide = format == TextureFormat::Srgb || matches!(self, Texels::Rgba16(_));
+        self.len() as u64 * if wide { 2 } else { 1 }
+    }
 }
 
 /// The exact sRGB decode of an 8-bit code, from a table made once: the light table
@@ -28,6 +82,16 @@ pub fn srgb_decode(code: u8) -> f32 {
     TABLE.get_or_init(|| std::array::from_fn(|k| srgb_curve(k as f32 / 255.0)))[code as usize]
 }
 
+/// The exact sRGB decode of a 16-bit code, from a table made once (as [`srgb_decode`]).
+pub fn srgb_decode16(code: u16) -> f32 {
+    static TABLE: std::sync::OnceLock<Vec<f32>> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        (0..=u16::MAX)
+            .map(|k| srgb_curve(k as f32 / 65535.0))
+            .collect()
+    })[code as usize]
+}
+
 fn srgb_curve(c: f32) -> f32 {
     if c <= 0.04045 {
         c / 12.92
@@ -36,7 +100,7 @@ fn srgb_curve(c: f32) -> f32 {
     }
 }
 
-/// A sampled RGBA8 image with one mip level.
+/// A sampled RGBA image with one mip level.
 pub struct Texture {
     device: Arc<Device>,
     pub image: vk::Image,
@@ -47,22 +111,29 @@ pub struct Texture {
 }
 
 impl Texture {
-    /// Upload `rgba` (width × height × 4 bytes) into a new texture.
+    /// Upload `texels` (width × height × 4 values) into a new texture: sRGB colour as
+    /// linear half floats, linear data as RGBA8 UNORM from 8-bit images and as half
+    /// floats (11 significant bits) from 16-bit ones.
     pub fn new(
         device: &Arc<Device>,
         width: u32,
         height: u32,
-        rgba: &[u8],
+        texels: &Texels,
         format: TextureFormat,
         name: &str,
     ) -> Result<Texture> {
         assert_eq!(
-            rgba.len(),
+            texels.len(),
             (width * height * 4) as usize,
-            "texture {name}: wrong byte count"
+            "texture {name}: wrong texel count"
         );
-        let (vk_format, texels): (vk::Format, std::borrow::Cow<'_, [u8]>) = match format {
-            TextureFormat::Srgb => {
+        let halves = |value: &dyn Fn(usize) -> f32| -> Vec<u8> {
+            (0..texels.len())
+                .flat_map(|i| half::f16::from_f32(value(i)).to_le_bytes())
+                .collect()
+        };
+        let (vk_format, texels): (vk::Format, std::borrow::Cow<'_, [u8]>) = match (format, texels) {
+            (TextureFormat::Srgb, Texels::Rgba8(rgba)) => {
                 let lut: Vec<half::f16> = (0..=255u8)
                     .map(|c| half::f16::from_f32(srgb_decode(c)))
                     .collect();
@@ -81,7 +152,17 @@ impl Texture {
                     .collect();
                 (vk::Format::R16G16B16A16_SFLOAT, bytes.into())
             }
-            TextureFormat::Linear => (vk::Format::R8G8B8A8_UNORM, rgba.into()),
+            (TextureFormat::Srgb, t @ Texels::Rgba16(_)) => {
+                let bytes = halves(&|i| if i % 4 == 3 { t.unorm(i) } else { t.srgb(i) });
+                (vk::Format::R16G16B16A16_SFLOAT, bytes.into())
+            }
+            (TextureFormat::Linear, Texels::Rgba8(rgba)) => {
+                (vk::Format::R8G8B8A8_UNORM, rgba.as_slice().into())
+            }
+            (TextureFormat::Linear, t @ Texels::Rgba16(_)) => (
+                vk::Format::R16G16B16A16_SFLOAT,
+                halves(&|i| t.unorm(i)).into(),
+            ),
         };
         let rgba: &[u8] = &texels;
         let info = vk::ImageCreateInfo::default()

@@ -22,7 +22,9 @@ pub use buffer::Buffer;
 pub use descriptor::DescriptorSet;
 pub use device::Device;
 pub use device_info::{DeviceInfo, DeviceSelector, FeatureReport};
-pub use image::{srgb_decode, Sampler, SamplerDesc, Texture, TextureFormat, WrapMode};
+pub use image::{
+    srgb_decode, srgb_decode16, Sampler, SamplerDesc, Texels, Texture, TextureFormat, WrapMode,
+};
 pub use instance::{take_debug_printf_messages, validation_error_count, Instance, InstanceOptions};
 pub use pipeline::{BindingKind, BindingSpec, ComputePipeline};
 pub use staging::Staging;

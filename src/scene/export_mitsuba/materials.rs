@@ -3,7 +3,7 @@
 //! `thindielectric`, exact for smooth glass without Fresnel reflection; with
 //! KHR_materials_volume as `roughdielectric`, exact for glass through and through, its
 //! absorption as an interior `homogeneous` medium), base colour and
-//! emission as constants or bitmaps (8-bit sRGB PNG as lanterna decodes it, or linear PFM
+//! emission as constants or bitmaps (8- or 16-bit sRGB PNG, or linear PFM
 //! with the factor baked in).
 
 use super::files::{self, PlyMesh};
@@ -15,7 +15,7 @@ use super::xml::{bitmap_xml, bsdf_id, is_identity, is_solid, rgb_xml, uv_matrix,
 use super::ExportError;
 use crate::gpu;
 use crate::scene::TextureData;
-use crate::vk::TextureFormat;
+use crate::vk::{Texels, TextureFormat};
 use glam::Mat3;
 use std::fmt::Write as _;
 
@@ -372,9 +372,10 @@ impl Writer<'_> {
         Ok(xml)
     }
 
-    /// Write texture `slot` scaled by `factor`: the 8-bit sRGB texels as PNG when the
-    /// factor is one (Mitsuba decodes sRGB as lanterna's sampler does), else linear
-    /// float texels × factor as PFM. Returns the file and whether it is raw (linear).
+    /// Write texture `slot` scaled by `factor`: sRGB texels as PNG (8 or 16 bits, as the
+    /// image has them) when the factor is one (Mitsuba decodes sRGB as lanterna does),
+    /// else linear float texels × factor as PFM. Returns the file and whether it is raw
+    /// (linear).
     pub(super) fn texture_file(
         &mut self,
         slot: i32,
@@ -387,22 +388,31 @@ impl Writer<'_> {
         }
         let (w, h) = (tex.width, tex.height);
         let result = if factor == [1.0; 3] && tex.format == TextureFormat::Srgb {
-            let rgb: Vec<u8> = tex
-                .rgba
-                .chunks_exact(4)
-                .flat_map(|p| [p[0], p[1], p[2]])
-                .collect();
-            let mut bytes = Vec::new();
+            // The image's own sRGB codes at its own depth, for Mitsuba to decode.
+            let (bytes, colour) = match &tex.texels {
+                Texels::Rgba8(v) => (
+                    v.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect(),
+                    image::ExtendedColorType::Rgb8,
+                ),
+                Texels::Rgba16(v) => (
+                    v.chunks_exact(4)
+                        .flat_map(|p| [p[0], p[1], p[2]])
+                        .flat_map(u16::to_ne_bytes)
+                        .collect::<Vec<u8>>(),
+                    image::ExtendedColorType::Rgb16,
+                ),
+            };
+            let mut png = Vec::new();
             image::ImageEncoder::write_image(
-                image::codecs::png::PngEncoder::new(&mut bytes),
-                &rgb,
+                image::codecs::png::PngEncoder::new(&mut png),
+                &bytes,
                 w,
                 h,
-                image::ExtendedColorType::Rgb8,
+                colour,
             )
             .map_err(|e| ExportError::Invalid(format!("texture `{}`: {e}", tex.name)))?;
             let file = format!("textures/t{slot}.png");
-            self.write(&file, &bytes)?;
+            self.write(&file, &png)?;
             (file, false)
         } else {
             let texels = linear_texels(tex);

@@ -7,6 +7,8 @@ agree up to noise.
   tex.gltf        textured diffuse floor (sRGB PNG, 4 coloured quadrants, nearest and
                   bilinear), an emissive-textured panel (emissive strength 3, so its
                   texture goes out as linear PFM), a 4:3 camera (vertical fov)
+  tex16.gltf      tex.gltf's layout with 16-bit sRGB PNGs (floor, wall, emitter) whose
+                  samples lie between 8-bit codes, plus a point light
   twosided.gltf   a double-sided emitter standing in a room seen edge-on, and a
                   one-sided emitter facing away from the camera
   punctual.gltf   point, spot (penumbra), hard spot and directional lights on a floor
@@ -70,6 +72,18 @@ def png_rgb(w, h, pixels):
         return c + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
 
     return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+def png_rgb16(w, h, pixels):
+    """A minimal 16-bit RGB PNG (pixels: rows of (r, g, b) tuples of 0-65535, top row first)."""
+    raw = b"".join(b"\x00" + b"".join(struct.pack(">3H", *px) for px in row) for row in pixels)
+
+    def chunk(tag, data):
+        c = struct.pack(">I", len(data)) + tag + data
+        return c + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
+
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 16, 2, 0, 0, 0))
             + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
 
 
@@ -324,6 +338,37 @@ def tex_scene():
     b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
            rotation=look_at_rotation(eye, (0, 0.6, 0)))
     b.write("tex.gltf")
+
+
+def tex16_scene():
+    """16-bit sRGB textures whose samples lie 0.45-0.49 of an 8-bit code above a code, so
+    that rounding them to 8 bits darkens every texel (dark ones by up to 20 %)."""
+    b = Builder()
+
+    def between_codes(code):
+        return round((code + 0.45 + 0.04 * ((code * 7) % 5) / 4) * 257)
+
+    dark = [[tuple(between_codes(2 + (3 * x + 5 * y + k) % 14) for k in range(3)) for x in range(4)]
+            for y in range(4)]
+    mid = [[tuple(between_codes(40 + 23 * ((x + 2 * y + k) % 8)) for k in range(3)) for x in range(8)]
+           for y in range(8)]
+    floor = b.lambert((1, 1, 1), base_tex=b.texture(png_rgb16(4, 4, dark), nearest=True))
+    wall = b.lambert((1, 1, 1), base_tex=b.texture(png_rgb16(8, 8, mid)))
+    b.node(mesh=b.quad((-1, 0, 1), (1, 0, 1), (1, 0, -1), (-1, 0, -1), floor))
+    b.node(mesh=b.quad((-1, 0, -1), (1, 0, -1), (1, 2, -1), (-1, 2, -1), wall))
+    # An emitter whose radiance is its 16-bit texture (factor and strength 1).
+    glow = b.texture(png_rgb16(2, 2, [[(65535, 30000, 2000), (between_codes(20), 65535, 9000)],
+                                      [(between_codes(9), 20000, 65535), (50000, 50000, 50000)]]),
+                     nearest=True)
+    panel = b.lambert((0.5, 0.5, 0.5), emission=(1, 1, 1), emissive_tex=glow)
+    b.node(mesh=b.quad((-0.6, 1.3, 0.2), (0.6, 1.3, 0.2), (0.6, 1.6, 0.9), (-0.6, 1.6, 0.9),
+                       panel))
+    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
+        type="point", color=[1, 0.95, 0.9], intensity=4.0)}}, translation=[0.5, 1.0, 0.6])
+    eye = (0.3, 1.2, 2.6)
+    b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.6, 0)))
+    b.write("tex16.gltf")
 
 
 def twosided_scene():
@@ -759,6 +804,7 @@ def coat_sheen_scene():
 
 if __name__ == "__main__":
     tex_scene()
+    tex16_scene()
     twosided_scene()
     punctual_scene()
     hierarchy_scene()
