@@ -5,10 +5,12 @@
 //! axis and vertical field of view, one-sided front-face emission (double-sided emitters
 //! become two one-sided sheets a hair apart, since Mitsuba's `area` emitter is one-sided),
 //! two-sided BSDFs, the box pixel filter, segment-counted `max_depth`, sRGB textures and
-//! the glTF spot falloff (baked into the spot's projection texture). Anything that has
-//! no exact Mitsuba counterpart (glossy glTF materials → `principled`, alpha, normal
-//! maps, …) is approximated and listed in [`MitsubaExport::approximations`]: the peer
-//! check is exact only when that list is empty. The directory is written under a
+//! the glTF spot falloff (baked into the spot's projection texture), normal maps (as
+//! `normalmap`, the frame's handedness per triangle). Anything that has no exact
+//! Mitsuba counterpart (glossy glTF materials → `principled`, alpha, a normal-mapped
+//! texel seen from below, …) is approximated and listed in
+//! [`MitsubaExport::approximations`]: the peer check is exact only when that list is
+//! empty. The directory is written under a
 //! temporary name and renamed into place, so a failed export leaves nothing behind.
 
 mod camera_lights;
@@ -146,6 +148,7 @@ pub fn export(
         scene,
         dir: tmp.0.clone(),
         textures: HashMap::new(),
+        normal_maps: HashMap::new(),
         approximations: Vec::new(),
         warnings: Vec::new(),
         sampled_emitters: 0,

@@ -56,6 +56,8 @@ pub(super) struct UvPlan {
     /// Transform baked into the written coordinates (the emissive texture's, because
     /// Mitsuba's emitter sampling needs its bitmap's own `to_uv` to be the identity).
     pub(super) bake: Option<gpu::TextureRef>,
+    /// The material's normal map goes out (`set` is its UV set, nothing baked).
+    pub(super) normal: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -66,6 +68,38 @@ pub(super) struct GroupKey {
     /// The base colour is the material's factor × the vertex colours, written into the
     /// PLY (Mitsuba's `vertex_color` attribute).
     pub(super) colored: bool,
+    /// Normal-mapped triangles on whose front the texture's image appears mirrored
+    /// (det(Δuv) > 0 in the PLY's winding, glTF's v pointing down the image): there
+    /// lanterna's bitangent is −cross(n, ∂P/∂u), while Mitsuba's is always
+    /// +cross(n, ∂P/∂u), so they use the map with its green channel negated.
+    pub(super) mirrored_uvs: bool,
+}
+
+/// Whether the image mapped by a triangle's UVs (a, b, c, in the PLY's winding) appears
+/// mirrored on its front: det(b − a, c − a) > 0, glTF's v pointing down the image (an
+/// upright image has det < 0); `None` when the UVs are degenerate.
+pub(super) fn uvs_mirrored(uv: [[f32; 2]; 3]) -> Option<bool> {
+    let d1 = [uv[1][0] - uv[0][0], uv[1][1] - uv[0][1]];
+    let d2 = [uv[2][0] - uv[0][0], uv[2][1] - uv[0][1]];
+    let det = d1[0] * d2[1] - d1[1] * d2[0];
+    (det.abs() > 1e-20).then_some(det > 0.0)
+}
+
+/// Whether some triangle of `p` has no UV parameterisation in the set `plan` writes.
+pub(super) fn degenerate_uvs(scene: &Scene, p: &MeshPrimitive, plan: UvPlan) -> bool {
+    let verts = &scene.vertices[p.vertex_offset as usize..][..p.vertex_count as usize];
+    let indices = &scene.indices[p.index_offset as usize..][..3 * p.triangle_count as usize];
+    indices.chunks_exact(3).any(|t| {
+        let uv = [0, 1, 2].map(|k| {
+            let v = &verts[t[k] as usize];
+            if plan.set == Some(1) {
+                v.uv1
+            } else {
+                v.uv0
+            }
+        });
+        uvs_mirrored(uv).is_none()
+    })
 }
 
 /// Append an instance's triangles in world space. Negative-determinant transforms flip
@@ -118,7 +152,14 @@ pub(super) fn append_instance(
     for t in 0..p.triangle_count as usize {
         let i = p.index_offset as usize + 3 * t;
         let [a, b, c] = [0, 1, 2].map(|k| base + scene.indices[i + k]);
-        mesh.faces.push(if flipped { [a, c, b] } else { [a, b, c] });
+        let face = if flipped { [a, c, b] } else { [a, b, c] };
+        if plan.normal {
+            let uv = face.map(|v| mesh.uvs[v as usize]);
+            if uvs_mirrored(uv).unwrap_or(false) != key.mirrored_uvs {
+                continue;
+            }
+        }
+        mesh.faces.push(face);
     }
 }
 

@@ -20,38 +20,88 @@ use glam::Mat3;
 use std::fmt::Write as _;
 
 impl Writer<'_> {
-    /// Which UV set the PLY of a material carries, and which transform is baked in.
+    /// Which UV set the PLY of a material carries, which transform is baked in, and
+    /// whether its normal map goes out (see [`Self::normal_map_exportable`]).
     pub(super) fn uv_plan(&mut self, m: u32) -> UvPlan {
         let mat = &self.scene.materials[m as usize];
         let emissive = mat.emissive_tex.index >= 0 && mat.emission.iter().any(|&c| c > 0.0);
         let base = mat.base_color_tex.index >= 0;
-        if emissive {
+        let mut plan = if emissive {
             let bake = (!is_identity(&mat.emissive_tex)).then_some(mat.emissive_tex);
             UvPlan {
                 set: Some(mat.emissive_tex.uv_set),
                 bake,
+                normal: false,
             }
         } else if base {
             UvPlan {
                 set: Some(mat.base_color_tex.uv_set),
                 bake: None,
+                normal: false,
             }
         } else {
             UvPlan {
                 set: None,
                 bake: None,
+                normal: false,
+            }
+        };
+        if mat.normal_tex.index >= 0 {
+            match self.normal_map_exportable(m, plan) {
+                Ok(()) => {
+                    plan.set = Some(mat.normal_tex.uv_set);
+                    plan.normal = true;
+                }
+                Err(why) => self.approximations.push(format!(
+                    "material `{}`: its normal texture is not exported ({why})",
+                    self.material_name(m)
+                )),
             }
         }
+        plan
+    }
+
+    /// Whether material `m`'s normal map can go out as Mitsuba's `normalmap` around the
+    /// opaque BSDF, given the UVs `plan` already writes: Mitsuba takes the map's frame
+    /// from the PLY's coordinates (∂P/∂u, its bitangent cross(n, ∂P/∂u)), so they must
+    /// be the normal texture's own set, untransformed; the frame from a TANGENT
+    /// attribute is lanterna's alone.
+    fn normal_map_exportable(&self, m: u32, plan: UvPlan) -> Result<(), &'static str> {
+        let mat = &self.scene.materials[m as usize];
+        if mat.transmission > 0.0 && mat.metallic < 1.0 {
+            return Err("transmitting materials keep their geometric frame in the export");
+        }
+        if plan.set.is_some_and(|s| s != mat.normal_tex.uv_set) {
+            return Err("another texture of the material uses another UV set");
+        }
+        if plan.bake.is_some() {
+            return Err("the PLY's coordinates carry the emissive texture's transform");
+        }
+        let tangents = self.scene.primitives.iter().any(|p| {
+            p.material == m
+                && self.scene.vertices[p.vertex_offset as usize..][..p.vertex_count as usize]
+                    .iter()
+                    .any(|v| v.tangent[..3] != [0.0; 3])
+        });
+        if tangents {
+            return Err(
+                "its meshes have TANGENT attributes; Mitsuba derives tangents from the UVs",
+            );
+        }
+        Ok(())
     }
 
     /// The BSDF of material `m`; with `vertex_colors`, its base colour is the meshes'
-    /// `vertex_color` attribute (the factor baked in, see `append_instance`).
+    /// `vertex_color` attribute (the factor baked in, see `append_instance`); with
+    /// `mirrored_uvs`, for triangles whose UVs are mirrored (see `GroupKey`).
     pub(super) fn bsdf_xml(
         &mut self,
         m: u32,
         plan: UvPlan,
         vertex_colors: bool,
+        mirrored_uvs: bool,
     ) -> Result<String, ExportError> {
+        let id = bsdf_id(m, vertex_colors, mirrored_uvs);
         let mat =
             *self.scene.materials.get(m as usize).ok_or_else(|| {
                 ExportError::Invalid(format!("material index {m} is out of range"))
@@ -72,11 +122,6 @@ impl Writer<'_> {
                 }
             ));
         }
-        if mat.normal_tex.index >= 0 {
-            self.approximations.push(format!(
-                "material `{name}`: its normal texture is not exported"
-            ));
-        }
         let mut s = String::new();
         let _ = writeln!(s, "  <!-- material `{}` -->", xml_escape(&name));
         let transmits = mat.transmission > 0.0 && mat.metallic < 1.0;
@@ -84,18 +129,13 @@ impl Writer<'_> {
         let share = (1.0 - mat.metallic) * mat.transmission.min(1.0);
         if solid && share >= 1.0 {
             // Clear or tinted glass through and through: exactly `roughdielectric`.
-            let id = bsdf_id(m, vertex_colors);
             s.push_str(&self.solid_glass_xml(m, &mat, &colour, Some(&id)));
             return Ok(s);
         }
         if transmits {
             // The reflecting part stays two-sided inside the blend (Mitsuba's `twosided`
             // refuses transmitting BSDFs; `thindielectric` is symmetric already).
-            let _ = writeln!(
-                s,
-                "  <bsdf type=\"blendbsdf\" id=\"{}\">",
-                bsdf_id(m, vertex_colors)
-            );
+            let _ = writeln!(s, "  <bsdf type=\"blendbsdf\" id=\"{id}\">");
             let _ = writeln!(
                 s,
                 "    <float name=\"weight\" value=\"{}\"/>",
@@ -106,12 +146,17 @@ impl Writer<'_> {
                 }
             );
             s.push_str("  <bsdf type=\"twosided\">\n");
+        } else if plan.normal {
+            // Mitsuba's `normalmap` around the two-sided BSDF, so that a view from below
+            // the mapped normal sees its other side, as in lanterna; without its flip of
+            // such normals and its shadowing term, which lanterna does not have.
+            let _ = writeln!(s, "  <bsdf type=\"normalmap\" id=\"{id}\">");
+            s.push_str("  <boolean name=\"flip_invalid_normals\" value=\"false\"/>\n");
+            s.push_str("  <boolean name=\"use_shadowing_function\" value=\"false\"/>\n");
+            s.push_str(&self.normal_map_xml(&mat, mirrored_uvs)?);
+            s.push_str("  <bsdf type=\"twosided\">\n");
         } else {
-            let _ = writeln!(
-                s,
-                "  <bsdf type=\"twosided\" id=\"{}\">",
-                bsdf_id(m, vertex_colors)
-            );
+            let _ = writeln!(s, "  <bsdf type=\"twosided\" id=\"{id}\">");
         }
         // glTF with specularFactor 0 and metallic 0 is exactly Lambertian (albedo/π).
         let sheen = mat.sheen_color.iter().cloned().fold(0.0, f32::max);
@@ -177,6 +222,9 @@ impl Writer<'_> {
             s.push_str("    </bsdf>\n");
         }
         s.push_str("  </bsdf>\n");
+        if plan.normal && !transmits {
+            s.push_str("  </bsdf>\n");
+        }
         if transmits {
             if solid {
                 self.approximations.push(format!(
@@ -370,6 +418,54 @@ impl Writer<'_> {
             "      ",
         ));
         Ok(xml)
+    }
+
+    /// The `normalmap` plugin's texture: the normal texture's texels as m = 2c − 1 with
+    /// lanterna's arithmetic baked in (x and y times the scale, z at least 10⁻⁴, y
+    /// negated for mirrored UVs) and stored back as (m + 1) / 2 in a linear PFM, which
+    /// Mitsuba interpolates, maps to 2c − 1 and normalises as lanterna does.
+    fn normal_map_xml(
+        &mut self,
+        mat: &gpu::Material,
+        mirrored_uvs: bool,
+    ) -> Result<String, ExportError> {
+        let tref = mat.normal_tex;
+        let tex = &self.scene.textures[tref.index as usize];
+        let key = (tref.index, mat.normal_scale.to_bits(), mirrored_uvs);
+        let file = match self.normal_maps.get(&key) {
+            Some(f) => f.clone(),
+            None => {
+                let y = if mirrored_uvs { -1.0 } else { 1.0 };
+                let rgb: Vec<[f32; 3]> = linear_texels(tex)
+                    .iter()
+                    .map(|c| {
+                        let m = c.map(|v| 2.0 * v - 1.0);
+                        [
+                            m[0] * mat.normal_scale,
+                            m[1] * mat.normal_scale * y,
+                            m[2].max(1e-4),
+                        ]
+                        .map(|v| (v + 1.0) / 2.0)
+                    })
+                    .collect();
+                let file = format!(
+                    "textures/normal{}-{}.pfm",
+                    tref.index,
+                    self.normal_maps.len()
+                );
+                self.write(&file, &files::pfm_bytes(tex.width, tex.height, &rgb))?;
+                self.normal_maps.insert(key, file.clone());
+                file
+            }
+        };
+        Ok(bitmap_xml(
+            "normalmap",
+            &file,
+            true,
+            tex,
+            &uv_matrix(&tref),
+            "  ",
+        ))
     }
 
     /// Write texture `slot` scaled by `factor`: sRGB texels as PNG (8 or 16 bits, as the

@@ -3,7 +3,9 @@
 //! double-sided), then the punctual lights.
 
 use super::files::PlyMesh;
-use super::geometry::{append_instance, back_sheet, shading, GroupKey, Shading, UvPlan};
+use super::geometry::{
+    append_instance, back_sheet, degenerate_uvs, shading, GroupKey, Shading, UvPlan,
+};
 use super::xml::{bsdf_id, integrator_xml, interior_medium_xml, medium_id, xml_escape};
 use super::{io_err, ExportError, ExportOptions};
 use crate::gpu;
@@ -25,6 +27,8 @@ pub(super) struct Writer<'a> {
     pub(super) dir: PathBuf,
     /// (texture slot, factor bits) → file name relative to the export directory.
     pub(super) textures: HashMap<(i32, [u32; 3]), (String, bool)>,
+    /// (texture slot, scale bits, green negated) → the normal map written for Mitsuba.
+    pub(super) normal_maps: HashMap<(i32, u32, bool), String>,
     pub(super) approximations: Vec<String>,
     pub(super) warnings: Vec<String>,
     /// Emitters Mitsuba may sample (area emitters of nonzero sampling weight; punctual
@@ -122,15 +126,37 @@ impl Writer<'_> {
                     ));
                 }
             }
-            let key = GroupKey {
-                material: prim.material,
-                emitter,
-                smooth: curved && !emitter,
-                colored: colored && m.base_color_tex.index < 0,
-            };
-            let mesh = groups.entry(key).or_default();
-            append_instance(mesh, scene, inst, key, plan);
+            if plan.normal && degenerate_uvs(scene, prim, plan) {
+                self.approximations.push(format!(
+                    "mesh {}: triangles without a UV parameterisation under material `{}`'s normal map (lanterna leaves them unmapped, Mitsuba maps them in an arbitrary frame)",
+                    prim.name,
+                    self.material_name(prim.material)
+                ));
+            }
+            // Normal-mapped meshes go out in two groups by the orientation of their UVs.
+            for mirrored_uvs in [false, true] {
+                if mirrored_uvs && !plan.normal {
+                    continue;
+                }
+                let key = GroupKey {
+                    material: prim.material,
+                    emitter,
+                    smooth: curved && !emitter,
+                    colored: colored && m.base_color_tex.index < 0,
+                    mirrored_uvs,
+                };
+                let mesh = groups.entry(key).or_default();
+                append_instance(mesh, scene, inst, key, plan);
+            }
             triangles += prim.triangle_count as u64;
+        }
+        groups.retain(|_, mesh| !mesh.faces.is_empty());
+        if plans.values().any(|p| p.normal) {
+            // lanterna turns a shading frame seen from below over (its other side
+            // reflects), Mitsuba's `normalmap` without its flip reflects nothing there.
+            self.approximations.push(
+                "normal maps: a texel seen from below its mapped normal (grazing views of tilted texels, from the camera or along a path) reflects in lanterna, not in Mitsuba".into(),
+            );
         }
         if groups.keys().any(|k| k.smooth) {
             // Same interpolation, but lanterna also flips shading normals to the
@@ -142,17 +168,20 @@ impl Writer<'_> {
         }
 
         // BSDFs, one per material used (with and without vertex colours).
-        let mut used: Vec<(u32, bool)> = groups.keys().map(|k| (k.material, k.colored)).collect();
+        let mut used: Vec<(u32, bool, bool)> = groups
+            .keys()
+            .map(|k| (k.material, k.colored, k.mirrored_uvs))
+            .collect();
         used.sort_unstable();
         used.dedup();
-        for &(m, colored) in &used {
+        for &(m, colored, mirrored_uvs) in &used {
             let plan = plans[&m];
-            xml.push_str(&self.bsdf_xml(m, plan, colored)?);
+            xml.push_str(&self.bsdf_xml(m, plan, colored, mirrored_uvs)?);
         }
 
         // The absorbing interiors of solids (KHR_materials_volume).
         let mut media = Vec::new();
-        for &(m, _) in &used {
+        for &(m, _, _) in &used {
             if let Some(medium) = interior_medium_xml(m, &scene.materials[m as usize]) {
                 if !media.contains(&m) {
                     xml.push_str(&medium);
@@ -196,11 +225,16 @@ impl Writer<'_> {
             }
             for (sheet, suffix) in sheets {
                 let file = format!(
-                    "meshes/m{}{}{}{}{}.ply",
+                    "meshes/m{}{}{}{}{}{}.ply",
                     key.material,
                     if key.emitter { "-emitter" } else { "" },
                     if key.smooth { "-smooth" } else { "" },
                     if key.colored { "-colors" } else { "" },
+                    if key.mirrored_uvs {
+                        "-mirrored-uvs"
+                    } else {
+                        ""
+                    },
                     suffix
                 );
                 self.write(&file, &sheet.to_bytes())?;
@@ -222,7 +256,7 @@ impl Writer<'_> {
                 let _ = writeln!(
                     xml,
                     "    <ref id=\"{}\"/>",
-                    bsdf_id(key.material, key.colored)
+                    bsdf_id(key.material, key.colored, key.mirrored_uvs)
                 );
                 if media.contains(&key.material) {
                     let _ = writeln!(

@@ -109,13 +109,14 @@ pub(super) fn xml_escape(s: &str) -> String {
         .replace("--", "- -")
 }
 
-/// The XML id of material `m`'s BSDF, with or without vertex colours.
-pub(super) fn bsdf_id(m: u32, vertex_colors: bool) -> String {
-    if vertex_colors {
-        format!("bsdf{m}-colors")
-    } else {
-        format!("bsdf{m}")
-    }
+/// The XML id of material `m`'s BSDF, with or without vertex colours, and with its
+/// normal map's green channel negated for triangles whose UVs are mirrored.
+pub(super) fn bsdf_id(m: u32, vertex_colors: bool, mirrored_uvs: bool) -> String {
+    format!(
+        "bsdf{m}{}{}",
+        if vertex_colors { "-colors" } else { "" },
+        if mirrored_uvs { "-mirrored-uvs" } else { "" }
+    )
 }
 
 /// Whether the export writes a material as a solid: it bounds one and is not wholly

@@ -9,6 +9,11 @@ agree up to noise.
                   texture goes out as linear PFM), a 4:3 camera (vertical fov)
   tex16.gltf      tex.gltf's layout with 16-bit sRGB PNGs (floor, wall, emitter) whose
                   samples lie between 8-bit codes, plus a point light
+  normal_map.gltf  Lambertian floor and wall with tangent-space normal maps (tilts up
+                  to 25°, bilinear and nearest, scale 0.5), the floor under a mirroring
+                  node, the wall's right half with its u running backward; an area light
+                  and two point lights; the camera sees every texel from well above its
+                  mapped normal
   twosided.gltf   a double-sided emitter standing in a room seen edge-on, and a
                   one-sided emitter facing away from the camera
   punctual.gltf   point, spot (penumbra), hard spot and directional lights on a floor
@@ -369,6 +374,50 @@ def tex16_scene():
     b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
            rotation=look_at_rotation(eye, (0, 0.6, 0)))
     b.write("tex16.gltf")
+
+
+def normal_map_png(w, h, max_tilt_deg, seed):
+    """A tangent-space normal map of w × h texels tilted by up to max_tilt_deg in turning
+    directions (8-bit, linear: (n + 1) / 2)."""
+    rows = []
+    for y in range(h):
+        row = []
+        for x in range(w):
+            tilt = math.radians(max_tilt_deg) * ((3 * x + 5 * y + seed) % 7) / 6
+            phi = 2 * math.pi * ((5 * x + 3 * y + 2 * seed) % 8) / 8
+            n = (math.sin(tilt) * math.cos(phi), math.sin(tilt) * math.sin(phi), math.cos(tilt))
+            row.append(tuple(round((c + 1) / 2 * 255) for c in n))
+        rows.append(row)
+    return png_rgb(w, h, rows)
+
+
+def normal_map_scene():
+    b = Builder()
+    floor_map = b.texture(normal_map_png(8, 8, 25, 0))
+    wall_map = b.texture(normal_map_png(4, 4, 25, 3), nearest=True)
+    floor = b.lambert((0.7, 0.7, 0.7))
+    b.materials[floor]["normalTexture"] = {"index": floor_map, "scale": 0.5}
+    wall = b.lambert((0.8, 0.6, 0.4))
+    b.materials[wall]["normalTexture"] = {"index": wall_map}
+    up, front = [0, 1, 0], [0, 0, 1]
+    # The floor under a node mirrored in x.
+    b.node(mesh=b.mesh([(-1, 0, 1), (1, 0, 1), (1, 0, -1), (-1, 0, -1)], [0, 1, 2, 0, 2, 3], floor,
+                       [up] * 4, [(0, 0), (1, 0), (1, 1), (0, 1)]), scale=[-1, 1, 1])
+    # The wall in two halves, the right half's u running backward (a mirror seam).
+    b.node(mesh=b.mesh([(-1, 0, -1), (0, 0, -1), (0, 2, -1), (-1, 2, -1),
+                        (0, 0, -1), (1, 0, -1), (1, 2, -1), (0, 2, -1)],
+                       [0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7], wall, [front] * 8,
+                       [(0, 1), (1, 1), (1, 0), (0, 0), (1, 1), (0, 1), (0, 0), (1, 0)]))
+    lamp = b.lambert((0, 0, 0), emission=(1, 0.9, 0.8), strength=4)
+    b.node(mesh=b.quad((-0.4, 2.2, 0.1), (-0.4, 2.0, 0.7), (0.4, 2.0, 0.7), (0.4, 2.2, 0.1), lamp))
+    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
+        type="point", color=[1, 0.9, 0.7], intensity=1.5)}}, translation=[0.6, 1.4, -0.65])
+    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
+        type="point", color=[0.7, 0.8, 1], intensity=0.8)}}, translation=[-0.5, 0.35, 0.3])
+    eye = (0.0, 2.6, 2.2)
+    b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.4, -0.4)))
+    b.write("normal_map.gltf")
 
 
 def twosided_scene():
@@ -820,3 +869,4 @@ if __name__ == "__main__":
     solid_scene()
     solid_pane_scene()
     coat_sheen_scene()
+    normal_map_scene()
