@@ -30,6 +30,13 @@ scene with panes gets no point or spot lights: seen through smooth thin glass th
 differ by design (lanterna's smooth glass is a GGX lobe of α = 10⁻⁴, Mitsuba's a
 delta), and the export would say it is approximate.
 
+`--normal-maps` puts random tangent-space normal maps (tilts up to 35°, scales 0.3-1) on
+about half of the opaque Lambertian materials with texture coordinates (walls and the
+box group then carry UVs; the scene is otherwise the seed's). The export writes them as
+Mitsuba's `normalmap` and marks the scene approximate for one reason only: a texel seen
+from below its mapped normal reflects in lanterna and not in Mitsuba (README, shading
+normals).
+
 Emissive boxes are closed and one-sided unless `--two-sided-boxes`: Mitsuba 3 stops
 shadow rays 8.9e-4 of their length short of the light, which lets light emitted inside
 a small two-sided box out near its edges (a 2 cm box 2-3 m away: +9 %), so its
@@ -91,7 +98,44 @@ def solid_glass(r, s, absorbing):
     return s.solid_glass(rgb_of(r, 0.6, 1.0), rough, r.uniform(1.1, 2.0), attenuation=att)
 
 
-def generate(seed, two_sided_boxes, materials=False):
+def random_normal_map(r, s, max_tilt):
+    """A random tangent-space normal map of 2-8 texels a side (8-bit, linear), its texels
+    tilted by up to max_tilt radians in random directions, nearest or bilinear."""
+    w, h = r.randint(2, 8), r.randint(2, 8)
+
+    def texel():
+        tilt, phi = r.uniform(0, max_tilt), r.uniform(0, 2 * math.pi)
+        n = (math.sin(tilt) * math.cos(phi), math.sin(tilt) * math.sin(phi), math.cos(tilt))
+        return tuple(round((c + 1) / 2 * 255) for c in n)
+
+    return s.texture(png_rgb(w, h, [[texel() for _ in range(w)] for _ in range(h)]),
+                     nearest=r.random() < 0.5)
+
+
+def add_normal_maps(s, seed):
+    """Normal maps (tilts up to 35°, scales 0.3-1) on about half of the opaque Lambertian
+    materials of meshes with texture coordinates, drawn from a generator of their own so
+    that the scene is otherwise the one the seed gives without them."""
+    r = random.Random(seed + 1_000_003)
+    mapped = set()
+    for mesh in s.meshes:
+        for prim in mesh["primitives"]:
+            m = s.materials[prim["material"]]
+            lambertian = (m.get("extensions", {}).get("KHR_materials_specular", {})
+                          .get("specularFactor") == 0 and "emissiveFactor" not in m
+                          and "KHR_materials_transmission" not in m.get("extensions", {}))
+            if "TEXCOORD_0" in prim["attributes"] and lambertian:
+                mapped.add(prim["material"])
+    count = 0
+    for index in sorted(mapped):
+        if r.random() < 0.5:
+            s.materials[index]["normalTexture"] = {"index": random_normal_map(r, s, math.radians(35)),
+                                                   "scale": r.uniform(0.3, 1.0)}
+            count += 1
+    return count
+
+
+def generate(seed, two_sided_boxes, materials=False, normal_maps=False):
     r = random.Random(seed)
     s = Builder()
     rgb = lambda lo, hi: [r.uniform(lo, hi) for _ in range(3)]  # noqa: E731
@@ -99,7 +143,7 @@ def generate(seed, two_sided_boxes, materials=False):
     absorbing = materials and r.random() < 0.5
     wall_material = (lambda: textured(r, s, 0.4, 1.0) if materials and r.random() < 0.5
                      else material(s, rgb(0.2, 0.9)))
-    walls = [s.quad(*UNIT_QUAD, wall_material(), uv=materials) for _ in range(3)]
+    walls = [s.quad(*UNIT_QUAD, wall_material(), uv=materials or normal_maps) for _ in range(3)]
     for k, (t, q) in enumerate([
             ([0, 0, 0], quat([1, 0, 0], -math.pi / 2)),  # floor, facing +y
             ([0, room, 0], quat([1, 0, 0], math.pi / 2)),  # ceiling, facing −y
@@ -117,7 +161,7 @@ def generate(seed, two_sided_boxes, materials=False):
         if materials:
             m = r.choice([m, solid_glass(r, s, absorbing), solid_glass(r, s, absorbing),
                           textured(r, s, 0.3, 1.0)])
-        boxes.append(s.node(root=False, mesh=box(s, m, textured=materials),
+        boxes.append(s.node(root=False, mesh=box(s, m, textured=materials or normal_maps),
                             translation=[r.uniform(-1.5, 1.5), r.uniform(0.2, 1.2), r.uniform(-1.5, 1.0)],
                             rotation=quat(rgb(-1, 1), r.uniform(0, 2 * math.pi)), scale=scale))
     s.node(children=boxes, rotation=quat([0, 1, 0], r.uniform(0, 2 * math.pi)),
@@ -182,6 +226,8 @@ def generate(seed, two_sided_boxes, materials=False):
     target = [r.uniform(-0.5, 0.5), r.uniform(0.3, 1.0), -0.5]
     s.node(camera=s.camera(yfov=r.uniform(0.6, 1.3), aspect=4 / 3), translation=eye,
            rotation=look_at_rotation(eye, target))
+    if normal_maps:
+        kinds.append(f"{add_normal_maps(s, seed)} normal-mapped materials")
     return s, kinds
 
 
@@ -204,10 +250,12 @@ def main():
     ap.add_argument("-o", "--output", required=True, help="the .gltf to write")
     ap.add_argument("--materials", action="store_true",
                     help="textures, vertex colours, solid glass boxes and thin panes too")
+    ap.add_argument("--normal-maps", action="store_true",
+                    help="normal maps on about half of the opaque Lambertian materials with UVs")
     ap.add_argument("--two-sided-boxes", action="store_true",
                     help="let emissive boxes be two-sided too (Mitsuba's references leak there)")
     a = ap.parse_args()
-    scene, kinds = generate(a.seed, a.two_sided_boxes, a.materials)
+    scene, kinds = generate(a.seed, a.two_sided_boxes, a.materials, a.normal_maps)
     scene.write(os.path.abspath(a.output))  # an absolute name: not next to make_scenes.py
     print(f"{a.output}: {', '.join(kinds)}")
     return 0
