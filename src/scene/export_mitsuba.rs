@@ -149,6 +149,8 @@ pub fn export(
         dir: tmp.0.clone(),
         textures: HashMap::new(),
         normal_maps: HashMap::new(),
+        opacity_maps: HashMap::new(),
+        masks: false,
         approximations: Vec::new(),
         warnings: Vec::new(),
         sampled_emitters: 0,

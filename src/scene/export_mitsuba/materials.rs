@@ -93,8 +93,38 @@ impl Writer<'_> {
 
     /// The BSDF of material `m`; with `vertex_colors`, its base colour is the meshes'
     /// `vertex_color` attribute (the factor baked in, see `append_instance`); with
-    /// `mirrored_uvs`, for triangles whose UVs are mirrored (see `GroupKey`).
+    /// `mirrored_uvs`, for triangles whose UVs are mirrored (see `GroupKey`). A material
+    /// with alpha goes out inside Mitsuba's `mask` (see [`Self::opacity_xml`]): a hit
+    /// reflects with probability `opacity` and passes straight on otherwise, as
+    /// lanterna's alpha test keeps or skips it, and shadow rays (through `volpath`) pass
+    /// with 1 − opacity, as lanterna's do.
     pub(super) fn bsdf_xml(
+        &mut self,
+        m: u32,
+        plan: UvPlan,
+        vertex_colors: bool,
+        mirrored_uvs: bool,
+    ) -> Result<String, ExportError> {
+        let mat =
+            *self.scene.materials.get(m as usize).ok_or_else(|| {
+                ExportError::Invalid(format!("material index {m} is out of range"))
+            })?;
+        let opacity = self.opacity_xml(m, &mat, plan, vertex_colors)?;
+        let bsdf = self.opaque_bsdf_xml(m, plan, vertex_colors, mirrored_uvs)?;
+        let Some(opacity) = opacity else {
+            return Ok(bsdf);
+        };
+        // The material's comment line, then the BSDF inside the mask, without its id.
+        let id = bsdf_id(m, vertex_colors, mirrored_uvs);
+        let (comment, inner) = bsdf.split_once('\n').unwrap_or(("", &bsdf));
+        let inner = inner.replacen(&format!(" id=\"{id}\""), "", 1);
+        Ok(format!(
+            "{comment}\n  <bsdf type=\"mask\" id=\"{id}\">\n{opacity}{inner}  </bsdf>\n"
+        ))
+    }
+
+    /// [`Self::bsdf_xml`] without the material's alpha.
+    fn opaque_bsdf_xml(
         &mut self,
         m: u32,
         plan: UvPlan,
@@ -112,16 +142,6 @@ impl Writer<'_> {
         } else {
             self.base_colour_xml(m, &mat, plan, "reflectance")?
         };
-        if mat.alpha_mode != gpu::ALPHA_MODE_OPAQUE {
-            self.approximations.push(format!(
-                "material `{name}`: alpha mode {} is not exported (Mitsuba sees it opaque)",
-                if mat.alpha_mode == gpu::ALPHA_MODE_MASK {
-                    "MASK"
-                } else {
-                    "BLEND"
-                }
-            ));
-        }
         let mut s = String::new();
         let _ = writeln!(s, "  <!-- material `{}` -->", xml_escape(&name));
         let transmits = mat.transmission > 0.0 && mat.metallic < 1.0;
@@ -327,6 +347,115 @@ impl Writer<'_> {
         s.push_str(&colour.replace("\"reflectance\"", "\"specular_transmittance\""));
         s.push_str("    </bsdf>\n");
         s
+    }
+
+    /// Mitsuba `mask`'s opacity for a material whose alpha mode is MASK or BLEND, as
+    /// lanterna's alpha test takes it (`geometry_coverage`): BLEND the alpha (factor ×
+    /// the base colour texture's alpha, filtered as lanterna filters it); MASK 1 where
+    /// that reaches the cutoff, else 0 (exact for a constant alpha and for a nearest-
+    /// filtered texture, whose texels can be cut out one by one). `None` for opaque
+    /// materials, and where the export cannot match lanterna (the reason goes to the
+    /// approximations; the material then goes out opaque): an emitter (Mitsuba's `area`
+    /// emitter would also emit in the holes), a transmitting material, vertex colours
+    /// with alpha, a MASK cut from a bilinear texture, a texture on another UV set than
+    /// the PLY's. Sets `self.masks` when it returns one (the integrator must be `volpath`,
+    /// whose shadow rays pass through null interfaces).
+    fn opacity_xml(
+        &mut self,
+        m: u32,
+        mat: &gpu::Material,
+        plan: UvPlan,
+        vertex_colors: bool,
+    ) -> Result<Option<String>, ExportError> {
+        if mat.alpha_mode == gpu::ALPHA_MODE_OPAQUE {
+            return Ok(None);
+        }
+        let mask = mat.alpha_mode == gpu::ALPHA_MODE_MASK;
+        let name = self.material_name(m).to_string();
+        let why = if mat.emission.iter().any(|&c| c > 0.0) {
+            Some("an emitter (Mitsuba's area emitter also emits in the holes)")
+        } else if mat.transmission > 0.0 && mat.metallic < 1.0 {
+            Some("a transmitting material")
+        } else if vertex_colors && self.vertex_alpha_below_one(m) {
+            Some("vertex colours with alpha")
+        } else if mat.base_color_tex.index >= 0 && plan.set != Some(mat.base_color_tex.uv_set) {
+            Some("its texture is on another UV set than the exported one")
+        } else if mask
+            && mat.base_color_tex.index >= 0
+            && !self.scene.textures[mat.base_color_tex.index as usize]
+                .sampler
+                .nearest
+        {
+            Some("a MASK cut from a bilinear texture (lanterna cuts the filtered alpha)")
+        } else {
+            None
+        };
+        if let Some(why) = why {
+            self.approximations.push(format!(
+                "material `{name}`: alpha mode {} not exported, {why}: Mitsuba sees it opaque",
+                if mask { "MASK" } else { "BLEND" }
+            ));
+            return Ok(None);
+        }
+        self.masks = true;
+        let factor = mat.base_color[3];
+        let cut = |alpha: f32| -> f32 {
+            if !mask {
+                alpha.clamp(0.0, 1.0)
+            } else if alpha >= mat.alpha_cutoff {
+                1.0
+            } else {
+                0.0
+            }
+        };
+        let tref = mat.base_color_tex;
+        if tref.index < 0 {
+            return Ok(Some(format!(
+                "  <float name=\"opacity\" value=\"{}\"/>\n",
+                cut(factor)
+            )));
+        }
+        let tex = &self.scene.textures[tref.index as usize];
+        let key = (
+            tref.index,
+            [
+                factor.to_bits(),
+                mat.alpha_cutoff.to_bits(),
+                u32::from(mask),
+            ],
+        );
+        let file = match self.opacity_maps.get(&key) {
+            Some(f) => f.clone(),
+            None => {
+                let opacity: Vec<[f32; 3]> = (0..tex.texels.len() / 4)
+                    .map(|p| [cut(factor * tex.texels.unorm(4 * p + 3)); 3])
+                    .collect();
+                let file = format!(
+                    "textures/opacity{}-{}.pfm",
+                    tref.index,
+                    self.opacity_maps.len()
+                );
+                self.write(&file, &files::pfm_bytes(tex.width, tex.height, &opacity))?;
+                self.opacity_maps.insert(key, file.clone());
+                file
+            }
+        };
+        let to_uv = match plan.bake {
+            Some(b) => uv_matrix(&tref) * uv_matrix(&b).inverse(),
+            None => uv_matrix(&tref),
+        };
+        Ok(Some(bitmap_xml("opacity", &file, true, tex, &to_uv, "  ")))
+    }
+
+    /// Whether some vertex colour of a mesh of material `m` has alpha below one.
+    fn vertex_alpha_below_one(&self, m: u32) -> bool {
+        self.scene.primitives.iter().any(|p| {
+            p.material == m
+                && p.color_offset != gpu::INVALID_INDEX
+                && self.scene.colors[p.color_offset as usize..][..p.vertex_count as usize]
+                    .iter()
+                    .any(|c| c[3] < 1.0)
+        })
     }
 
     /// `<rgb name=…>` or `<texture type="bitmap" name=…>` for the base colour.

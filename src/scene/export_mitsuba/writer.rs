@@ -29,6 +29,11 @@ pub(super) struct Writer<'a> {
     pub(super) textures: HashMap<(i32, [u32; 3]), (String, bool)>,
     /// (texture slot, scale bits, green negated) → the normal map written for Mitsuba.
     pub(super) normal_maps: HashMap<(i32, u32, bool), String>,
+    /// (texture slot, [alpha factor, cutoff, MASK] bits) → the opacity map written for
+    /// Mitsuba's `mask`.
+    pub(super) opacity_maps: HashMap<(i32, [u32; 3]), String>,
+    /// Whether some BSDF went out inside a `mask` (the integrator must be `volpath`).
+    pub(super) masks: bool,
     pub(super) approximations: Vec<String>,
     pub(super) warnings: Vec<String>,
     /// Emitters Mitsuba may sample (area emitters of nonzero sampling weight; punctual
@@ -189,11 +194,14 @@ impl Writer<'_> {
                 }
             }
         }
-        if !media.is_empty() {
-            // Mitsuba's `path` ignores media; `volpath` is `path` plus them, except that
-            // it takes a straight pass through `thindielectric` (a null event) without
-            // counting a bounce, where `path` and lanterna count one (thin glass that
-            // does not reflect goes out as a `dielectric`, which it counts).
+        if !media.is_empty() || self.masks {
+            // Mitsuba's `path` ignores media and stops shadow rays at `mask`s; `volpath`
+            // is `path` plus them (a shadow ray passes a null interface with its null
+            // transmission, as lanterna's pass alpha), except that it takes a straight
+            // pass through `thindielectric` (a null event) without counting a bounce,
+            // where `path` and lanterna count one (thin glass that does not reflect goes
+            // out as a `dielectric`, which it counts). A pass through a mask's hole is no
+            // bounce in either.
             xml = xml.replacen(
                 "<integrator type=\"path\">",
                 "<integrator type=\"volpath\">",
@@ -201,7 +209,7 @@ impl Writer<'_> {
             );
             if self.thin_walls {
                 self.approximations.push(
-                    "absorbing solids need Mitsuba's `volpath`, which does not count a pass through thin transmitting glass (`thindielectric`) as a bounce, as lanterna does: paths through thin glass reach one bounce further there".into(),
+                    "absorbing solids and alpha need Mitsuba's `volpath`, which does not count a pass through thin transmitting glass (`thindielectric`) as a bounce, as lanterna does: paths through thin glass reach one bounce further there".into(),
                 );
             }
         }

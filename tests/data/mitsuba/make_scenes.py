@@ -14,6 +14,9 @@ agree up to noise.
                   node, the wall's right half with its u running backward; an area light
                   and two point lights; the camera sees every texel from well above its
                   mapped normal
+  alpha.gltf      alpha between a lamp and a floor: a fence cut out (MASK) by a
+                  nearest RGBA texture, a BLEND panel whose alpha runs across a bilinear
+                  texture (times 0.8), a constant BLEND of 0.4 and a MASK under its cutoff
   twosided.gltf   a double-sided emitter standing in a room seen edge-on, and a
                   one-sided emitter facing away from the camera
   punctual.gltf   point, spot (penumbra), hard spot and directional lights on a floor
@@ -77,6 +80,18 @@ def png_rgb(w, h, pixels):
         return c + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
 
     return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+def png_rgba(w, h, pixels):
+    """A minimal RGBA8 PNG (pixels: rows of (r, g, b, a) tuples, top row first)."""
+    raw = b"".join(b"\x00" + bytes(c for px in row for c in px) for row in pixels)
+
+    def chunk(tag, data):
+        c = struct.pack(">I", len(data)) + tag + data
+        return c + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
+
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0))
             + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
 
 
@@ -418,6 +433,46 @@ def normal_map_scene():
     b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
            rotation=look_at_rotation(eye, (0, 0.4, -0.4)))
     b.write("normal_map.gltf")
+
+
+def alpha_scene():
+    """Alpha MASK and BLEND between a lamp and a floor, seen by the camera."""
+    b = Builder()
+    floor = b.lambert((0.8, 0.8, 0.8))
+    floor_and_wall(b, floor, size=1.5)
+    # A fence cut out by a nearest-filtered texture (alpha 0, 255, and values either
+    # side of the cutoff 0.4), its colour from the same texture.
+    fence_px = [[((60 + 40 * x) % 256, 180, (200 - 30 * y) % 256,
+                  [0, 255, 90, 120, 255, 0][(x + 2 * y) % 6]) for x in range(6)] for y in range(4)]
+    fence = b.lambert((1, 0.9, 0.8), base_tex=b.texture(png_rgba(6, 4, fence_px), nearest=True))
+    b.materials[fence].update(alphaMode="MASK", alphaCutoff=0.4, doubleSided=True)
+    b.node(mesh=b.quad((-1.0, 0.2, 0.3), (0.1, 0.2, 0.3), (0.1, 1.0, -0.1), (-1.0, 1.0, -0.1),
+                       fence))
+    # A BLEND panel whose alpha runs across a bilinear texture, times a factor 0.8.
+    blend_px = [[(200, 90 + 20 * x, 60, round(255 * (x + y) / 6)) for x in range(4)]
+                for y in range(4)]
+    glassy = b.lambert((0.9, 0.9, 1.0), base_tex=b.texture(png_rgba(4, 4, blend_px)))
+    b.materials[glassy]["pbrMetallicRoughness"]["baseColorFactor"][3] = 0.8
+    b.materials[glassy]["alphaMode"] = "BLEND"
+    b.node(mesh=b.quad((0.2, 0.1, 0.2), (1.1, 0.1, 0.2), (1.1, 1.1, -0.3), (0.2, 1.1, -0.3), glassy))
+    # A constant BLEND of 0.4 and a MASK whose constant alpha is under its cutoff (not
+    # there at all).
+    veil = b.lambert((0.3, 0.7, 0.4))
+    b.materials[veil]["pbrMetallicRoughness"]["baseColorFactor"][3] = 0.4
+    b.materials[veil]["alphaMode"] = "BLEND"
+    b.node(mesh=b.quad((-0.6, 1.2, 0.6), (0.6, 1.2, 0.6), (0.6, 1.5, 0.0), (-0.6, 1.5, 0.0), veil))
+    ghost = b.lambert((0.9, 0.1, 0.1))
+    b.materials[ghost]["pbrMetallicRoughness"]["baseColorFactor"][3] = 0.3
+    b.materials[ghost].update(alphaMode="MASK", alphaCutoff=0.5)
+    b.node(mesh=b.quad((-0.5, 0.05, 0.9), (0.5, 0.05, 0.9), (0.5, 0.7, 0.9), (-0.5, 0.7, 0.9), ghost))
+    lamp = b.lambert((0, 0, 0), emission=(1, 0.95, 0.9), strength=6)
+    b.node(mesh=b.quad((-0.5, 2.3, -0.2), (-0.5, 2.2, 0.5), (0.5, 2.2, 0.5), (0.5, 2.3, -0.2), lamp))
+    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
+        type="point", color=[1, 0.8, 0.6], intensity=2.0)}}, translation=[-0.3, 1.4, 0.6])
+    eye = (0.2, 1.6, 2.8)
+    b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.5, -0.2)))
+    b.write("alpha.gltf")
 
 
 def twosided_scene():
@@ -870,3 +925,4 @@ if __name__ == "__main__":
     solid_pane_scene()
     coat_sheen_scene()
     normal_map_scene()
+    alpha_scene()
