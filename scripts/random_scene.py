@@ -37,6 +37,11 @@ Mitsuba's `normalmap` and marks the scene approximate for one reason only: a tex
 from below its mapped normal reflects in lanterna and not in Mitsuba (README, shading
 normals).
 
+`--alpha` makes about half of the opaque non-emissive Lambertian materials BLEND (alpha
+0.2-0.9) or MASK (a nearest RGBA texture where the mesh has UVs, else a constant alpha
+either side of the cutoff), which the export writes exactly as Mitsuba's `mask` under
+`volpath`.
+
 Emissive boxes are closed and one-sided unless `--two-sided-boxes`: Mitsuba 3 stops
 shadow rays 8.9e-4 of their length short of the light, which lets light emitted inside
 a small two-sided box out near its edges (a 2 cm box 2-3 m away: +9 %), so its
@@ -55,7 +60,7 @@ import sys
 # The glTF writer of the Mitsuba peer scenes (tests/data/mitsuba/make_scenes.py).
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests",
                                 "data", "mitsuba"))
-from make_scenes import Builder, look_at_rotation, png_rgb  # noqa: E402
+from make_scenes import Builder, look_at_rotation, png_rgb, png_rgba  # noqa: E402
 
 UNIT_QUAD = ((-0.5, -0.5, 0.0), (0.5, -0.5, 0.0), (0.5, 0.5, 0.0), (-0.5, 0.5, 0.0))  # faces +z
 
@@ -135,7 +140,47 @@ def add_normal_maps(s, seed):
     return count
 
 
-def generate(seed, two_sided_boxes, materials=False, normal_maps=False):
+def add_alpha(s, seed):
+    """Alpha on about half of the opaque non-emissive Lambertian materials: BLEND with an
+    alpha factor of 0.2-0.9, or MASK cut by a nearest RGBA texture of 2-6 texels a side
+    (alphas 0-255, cutoff 0.2-0.8; the texture replaces the base colour's) where the mesh
+    has UVs, else a constant MASK above or below its cutoff. Drawn from a generator of
+    their own, so that the scene is otherwise the one the seed gives without them."""
+    r = random.Random(seed + 2_000_003)
+    uv_of = {}
+    for mesh in s.meshes:
+        for prim in mesh["primitives"]:
+            m = s.materials[prim["material"]]
+            lambertian = (m.get("extensions", {}).get("KHR_materials_specular", {})
+                          .get("specularFactor") == 0 and "emissiveFactor" not in m
+                          and "KHR_materials_transmission" not in m.get("extensions", {}))
+            if lambertian:
+                has_uv = "TEXCOORD_0" in prim["attributes"]
+                uv_of[prim["material"]] = uv_of.get(prim["material"], True) and has_uv
+    kinds = []
+    for index in sorted(uv_of):
+        if r.random() >= 0.5:
+            continue
+        m = s.materials[index]
+        pbr = m.setdefault("pbrMetallicRoughness", {})
+        factor = pbr.setdefault("baseColorFactor", [1.0, 1.0, 1.0, 1.0])
+        kind = r.choice(["BLEND", "MASK"])
+        m["alphaMode"] = kind
+        if kind == "BLEND":
+            factor[3] = r.uniform(0.2, 0.9)
+        elif uv_of[index]:
+            m["alphaCutoff"] = r.uniform(0.2, 0.8)
+            w, h = r.randint(2, 6), r.randint(2, 6)
+            px = [[tuple(r.randrange(256) for _ in range(4)) for _ in range(w)] for _ in range(h)]
+            pbr["baseColorTexture"] = {"index": s.texture(png_rgba(w, h, px), nearest=True)}
+        else:
+            m["alphaCutoff"] = r.uniform(0.2, 0.8)
+            factor[3] = r.choice([0.1, 0.95])
+        kinds.append(kind)
+    return kinds
+
+
+def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=False):
     r = random.Random(seed)
     s = Builder()
     rgb = lambda lo, hi: [r.uniform(lo, hi) for _ in range(3)]  # noqa: E731
@@ -228,6 +273,9 @@ def generate(seed, two_sided_boxes, materials=False, normal_maps=False):
            rotation=look_at_rotation(eye, target))
     if normal_maps:
         kinds.append(f"{add_normal_maps(s, seed)} normal-mapped materials")
+    if alpha:
+        alphas = add_alpha(s, seed)
+        kinds.append(f"alpha: {', '.join(alphas) or 'none'}")
     return s, kinds
 
 
@@ -252,10 +300,12 @@ def main():
                     help="textures, vertex colours, solid glass boxes and thin panes too")
     ap.add_argument("--normal-maps", action="store_true",
                     help="normal maps on about half of the opaque Lambertian materials with UVs")
+    ap.add_argument("--alpha", action="store_true",
+                    help="alpha BLEND or MASK on about half of the opaque Lambertian materials")
     ap.add_argument("--two-sided-boxes", action="store_true",
                     help="let emissive boxes be two-sided too (Mitsuba's references leak there)")
     a = ap.parse_args()
-    scene, kinds = generate(a.seed, a.two_sided_boxes, a.materials, a.normal_maps)
+    scene, kinds = generate(a.seed, a.two_sided_boxes, a.materials, a.normal_maps, a.alpha)
     scene.write(os.path.abspath(a.output))  # an absolute name: not next to make_scenes.py
     print(f"{a.output}: {', '.join(kinds)}")
     return 0
