@@ -214,14 +214,16 @@ def _gltf_json(path):
     return json.loads(data)
 
 
-def _refusal(index, mat):
-    """Why material `index` cannot be written exactly by the plugin, or None."""
+def _refusal(index, mat, wrappers=()):
+    """Why material `index` cannot be written exactly by the plugin, or None. `wrappers`:
+    the export's BSDFs around the material's own (`normalmap`, `mask`), which carry its
+    normal map and alpha."""
     pbr = mat.get("pbrMetallicRoughness", {})
     for t in _TEXTURES:
         if t in pbr:
             return f"material {index} has a {t}"
-    if "normalTexture" in mat:
-        return f"material {index} has a normalTexture"
+    if "normalTexture" in mat and "normalmap" not in wrappers:
+        return f"material {index} has a normalTexture the export left out"
     for e in _UNSUPPORTED_EXTENSIONS:
         if e in mat.get("extensions", {}):
             return f"material {index} uses {e}"
@@ -232,8 +234,8 @@ def _refusal(index, mat):
         for t in _LAYER_TEXTURES:
             if t in mat.get("extensions", {}).get(e, {}):
                 return f"material {index} has a {t}"
-    if mat.get("alphaMode", "OPAQUE") != "OPAQUE":
-        return f"material {index} is not opaque"
+    if mat.get("alphaMode", "OPAQUE") != "OPAQUE" and "mask" not in wrappers:
+        return f"material {index} is not opaque and the export left its alpha out"
     return None
 
 
@@ -241,8 +243,10 @@ def rewrite_export(export_dir):
     """Writes EXPORT_DIR/scene_gltf.xml: the export's scene.xml with every material's
     BSDF replaced by the plugin, from the glTF file the export was made of (its manifest's
     `scene_path`). Returns the path. Raises ValueError for a material the plugin cannot
-    write exactly (textures, vertex colours, solid glass, alpha). Coats, sheens and
-    thin-walled transmission are written by mitsuba_gltf_layers."""
+    write exactly (textures, vertex colours, solid glass, a normal map or alpha the
+    export left out). A BSDF the export wrapped in `normalmap` or `mask` keeps its
+    wrappers around the plugin. Coats, sheens and thin-walled transmission are written
+    by mitsuba_gltf_layers."""
     import mitsuba_gltf_layers
     with open(os.path.join(export_dir, "lanterna_export.json")) as f:
         manifest = json.load(f)
@@ -252,22 +256,36 @@ def rewrite_export(export_dir):
     if 'id="bsdf' in xml and "-colors\"" in xml:
         raise ValueError("the export has vertex colours, which the plugin does not read")
     # A top-level BSDF block ends at the first "  </bsdf>" followed by a top-level
-    # element (a blendbsdf, thin glass, nests a child at the same indentation).
-    block = re.compile(r'  <bsdf type="[^"]*" id="bsdf(\d+)">.*?\n  </bsdf>\n'
+    # element (a blendbsdf, thin glass, nests a child at the same indentation). Its id is
+    # bsdfK, with a suffix for the mirrored-UV half of a normal-mapped material.
+    block = re.compile(r'  <bsdf type="([^"]*)" id="bsdf(\d+)((?:-[a-z]+)*)">.*?\n  </bsdf>\n'
                        r'(?=\s*(?:<!--|<shape|<bsdf type="[^"]*" id=|<emitter|</scene>|<sensor'
                        r'|<integrator|<texture))', re.S)
 
     def replace(m):
-        k = int(m.group(1))
+        kind, k, suffix = m.group(1), int(m.group(2)), m.group(3)
         # One past the file's materials is lanterna's default material (the glTF one).
         mat = materials[k] if k < len(materials) else {}
-        why = _refusal(k, mat)
+        lines = m.group(0).splitlines(keepends=True)
+        # The export's wrappers (mask, then normalmap) come first, each closed by one
+        # "  </bsdf>" line at the block's end; inside them the material's own two-sided
+        # BSDF, which the plugin replaces.
+        wrappers = [re.match(r'  <bsdf type="([a-z]+)"', line).group(1) for line in lines
+                    if re.match(r'  <bsdf type="(mask|normalmap)"', line)]
+        if wrappers and wrappers[0] != kind:
+            raise ValueError(f"material {k}: unexpected BSDF nesting in the export")
+        why = _refusal(k, mat, wrappers)
         if why:
             raise ValueError(why)
         params = mitsuba_gltf_layers.plugin_dict(mat)
         body = "".join(f'    <float name="{name}" value="{value!r}"/>\n'
                        for name, value in params.items() if name != "type")
-        return f'  <bsdf type="{params["type"]}" id="bsdf{k}">\n{body}  </bsdf>\n'
+        if not wrappers:
+            return f'  <bsdf type="{params["type"]}" id="bsdf{k}{suffix}">\n{body}  </bsdf>\n'
+        start = next(i for i, line in enumerate(lines)
+                     if line.startswith('  <bsdf type="twosided">'))
+        inner = f'  <bsdf type="{params["type"]}">\n{body}  </bsdf>\n'
+        return "".join(lines[:start]) + inner + "".join(lines[len(lines) - len(wrappers):])
 
     out, n = block.subn(replace, xml)
     if n == 0:

@@ -953,57 +953,60 @@ fn alpha_agrees_with_mitsuba() {
 /// under a mirroring node and a wall whose right half's UVs run backward, tilts up to 25°,
 /// bilinear and nearest, scale 0.5), at depth 2, where every path sees its texels from
 /// above their mapped normals, so that the export's one caveat (a texel seen from below
-/// reflects in lanterna, not in Mitsuba) does not arise. `pt` and `guided-ris`, 8 × 64
-/// spp against 8 × 256, 64 × 48. Seen to fail with lanterna's bitangent blind to the
-/// UVs' orientation (a block at t = 127) and with the map's scale ignored (a block at
-/// t = −33, 30 blocks below p = 0.01 against 0.9 expected).
+/// reflects in lanterna, not in Mitsuba) does not arise; and the same layout with a rough
+/// gold metal floor and a glossy plastic wall (`normal_map_glossy.gltf`) through the
+/// glTF BSDF plugin inside Mitsuba's `normalmap`. `pt` and `guided-ris`, 8 × 64 spp
+/// against 8 × 256, 64 × 48. Seen to fail with lanterna's bitangent blind to the UVs'
+/// orientation (a block at t = 127 on either scene; the glossy one's image mean at
+/// t = 57–63) and with the map's scale ignored (a block at t = −33, 30 blocks below
+/// p = 0.01 against 0.9 expected; glossy: a block at t = −65, the mean at t = −34 to −53).
 #[test]
 fn normal_maps_agree_with_mitsuba() {
     if !mitsuba_available() {
         println!("skipped: no Python here imports mitsuba (scripts/setup --mitsuba)");
         return;
     }
-    let tmp = tempfile::tempdir().unwrap();
-    let dir = tmp.path().join("export");
-    let loaded = session::load_scene(&data("normal_map.gltf")).unwrap();
-    let options = export_at_depth(&loaded.scene, None, 64, 48, 2, &dir);
-    let manifest = read_manifest(&dir);
-    let caveats = manifest["approximations"].as_array().unwrap();
-    assert_eq!(caveats.len(), 1, "{manifest}");
-    assert!(
-        caveats[0]
-            .as_str()
-            .unwrap()
-            .starts_with("normal maps: a texel seen from below"),
-        "{manifest}"
-    );
-    for method in [Method::Pt, Method::GuidedRis] {
-        let exrs = lanterna_batches(&loaded.scene, method, &options, 8, 64, tmp.path());
-        let settings = RenderSettings {
-            method,
-            ..RenderSettings::default()
-        };
-        let alpha = if lanterna::testing::repeatable(&settings) {
-            ALPHA
-        } else {
-            lanterna::testing::FRESH_BLOCK_ALPHA
-        };
-        let report = compare_at(
-            &dir,
-            &exrs,
-            256,
-            alpha,
-            &tmp.path().join("report.json"),
-            &[],
-        );
-        assert!(
-            report["agree"].as_bool().unwrap(),
-            "{}: lanterna and Mitsuba disagree:\nmean {}\nblocks {}\npixels {}",
-            method.name(),
-            report["mean"],
-            report["blocks"],
-            report["pixels"]
-        );
+    for (name, extra) in [
+        ("normal_map.gltf", &[][..]),
+        ("normal_map_glossy.gltf", &["--gltf-bsdf"][..]),
+    ] {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("export");
+        let loaded = session::load_scene(&data(name)).unwrap();
+        let options = export_at_depth(&loaded.scene, None, 64, 48, 2, &dir);
+        for method in [Method::Pt, Method::GuidedRis] {
+            let exrs = lanterna_batches(&loaded.scene, method, &options, 8, 64, tmp.path());
+            let settings = RenderSettings {
+                method,
+                ..RenderSettings::default()
+            };
+            let alpha = if lanterna::testing::repeatable(&settings) {
+                ALPHA
+            } else {
+                lanterna::testing::FRESH_BLOCK_ALPHA
+            };
+            let json = tmp.path().join("report.json");
+            let report = compare_at(&dir, &exrs, 256, alpha, &json, extra);
+            // Exact but for the one caveat, which these views never meet.
+            let caveats = report["approximations"].as_array().unwrap();
+            assert_eq!(caveats.len(), 1, "{name}: {}", report["approximations"]);
+            assert!(
+                caveats[0]
+                    .as_str()
+                    .unwrap()
+                    .starts_with("normal maps: a texel seen from below"),
+                "{name}: {}",
+                report["approximations"]
+            );
+            assert!(
+                report["agree"].as_bool().unwrap(),
+                "{name}, {}: lanterna and Mitsuba disagree:\nmean {}\nblocks {}\npixels {}",
+                method.name(),
+                report["mean"],
+                report["blocks"],
+                report["pixels"]
+            );
+        }
     }
 }
 

@@ -14,6 +14,8 @@ agree up to noise.
                   node, the wall's right half with its u running backward; an area light
                   and two point lights; the camera sees every texel from well above its
                   mapped normal
+  normal_map_glossy.gltf  the same with a rough gold metal floor and a glossy plastic
+                  wall (checked through the glTF BSDF plugin)
   alpha.gltf      alpha between a lamp and a floor: a fence cut out (MASK) by a
                   nearest RGBA texture, a BLEND panel whose alpha runs across a bilinear
                   texture (times 0.8), a constant BLEND of 0.4 and a MASK under its cutoff
@@ -406,13 +408,15 @@ def normal_map_png(w, h, max_tilt_deg, seed):
     return png_rgb(w, h, rows)
 
 
-def normal_map_scene():
+def normal_map_scene(glossy=False):
+    """normal_map.gltf, or with `glossy` normal_map_glossy.gltf: the same layout with a
+    rough gold metal floor and a glossy plastic wall, for the glTF BSDF plugin."""
     b = Builder()
     floor_map = b.texture(normal_map_png(8, 8, 25, 0))
     wall_map = b.texture(normal_map_png(4, 4, 25, 3), nearest=True)
-    floor = b.lambert((0.7, 0.7, 0.7))
+    floor = b.pbr((1.0, 0.78, 0.34), 1.0, 0.35) if glossy else b.lambert((0.7, 0.7, 0.7))
     b.materials[floor]["normalTexture"] = {"index": floor_map, "scale": 0.5}
-    wall = b.lambert((0.8, 0.6, 0.4))
+    wall = b.pbr((0.2, 0.4, 0.8), 0.0, 0.3) if glossy else b.lambert((0.8, 0.6, 0.4))
     b.materials[wall]["normalTexture"] = {"index": wall_map}
     up, front = [0, 1, 0], [0, 0, 1]
     # The floor under a node mirrored in x.
@@ -432,7 +436,7 @@ def normal_map_scene():
     eye = (0.0, 2.6, 2.2)
     b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
            rotation=look_at_rotation(eye, (0, 0.4, -0.4)))
-    b.write("normal_map.gltf")
+    b.write("normal_map_glossy.gltf" if glossy else "normal_map.gltf")
 
 
 def alpha_scene():
@@ -925,4 +929,5 @@ if __name__ == "__main__":
     solid_pane_scene()
     coat_sheen_scene()
     normal_map_scene()
+    normal_map_scene(glossy=True)
     alpha_scene()
