@@ -73,40 +73,32 @@ import zlib
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
-def png_rgb(w, h, pixels):
-    """A minimal RGB8 PNG (pixels: rows of (r, g, b) tuples, top row first)."""
-    raw = b"".join(b"\x00" + bytes(c for px in row for c in px) for row in pixels)
+def _png(w, h, bit_depth, colour_type, rows):
+    """A minimal PNG from its filtered-out scanlines (`rows`: bytes per row)."""
+    raw = b"".join(b"\x00" + row for row in rows)
 
     def chunk(tag, data):
         c = struct.pack(">I", len(data)) + tag + data
         return c + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
 
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
-            + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+    header = struct.pack(">IIBBBBB", w, h, bit_depth, colour_type, 0, 0, 0)
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw))
+            + chunk(b"IEND", b""))
+
+
+def png_rgb(w, h, pixels):
+    """A minimal RGB8 PNG (pixels: rows of (r, g, b) tuples, top row first)."""
+    return _png(w, h, 8, 2, [bytes(c for px in row for c in px) for row in pixels])
 
 
 def png_rgba(w, h, pixels):
     """A minimal RGBA8 PNG (pixels: rows of (r, g, b, a) tuples, top row first)."""
-    raw = b"".join(b"\x00" + bytes(c for px in row for c in px) for row in pixels)
-
-    def chunk(tag, data):
-        c = struct.pack(">I", len(data)) + tag + data
-        return c + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
-
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0))
-            + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+    return _png(w, h, 8, 6, [bytes(c for px in row for c in px) for row in pixels])
 
 
 def png_rgb16(w, h, pixels):
     """A minimal 16-bit RGB PNG (pixels: rows of (r, g, b) tuples of 0-65535, top row first)."""
-    raw = b"".join(b"\x00" + b"".join(struct.pack(">3H", *px) for px in row) for row in pixels)
-
-    def chunk(tag, data):
-        c = struct.pack(">I", len(data)) + tag + data
-        return c + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
-
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 16, 2, 0, 0, 0))
-            + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+    return _png(w, h, 16, 2, [b"".join(struct.pack(">3H", *px) for px in row) for row in pixels])
 
 
 class Builder:
