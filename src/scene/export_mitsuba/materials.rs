@@ -416,35 +416,45 @@ impl Writer<'_> {
             )));
         }
         let tex = &self.scene.textures[tref.index as usize];
-        let key = (
+        let key = format!(
+            "opacity {} {:08x} {:08x} {mask}",
             tref.index,
-            [
-                factor.to_bits(),
-                mat.alpha_cutoff.to_bits(),
-                u32::from(mask),
-            ],
+            factor.to_bits(),
+            mat.alpha_cutoff.to_bits()
         );
-        let file = match self.opacity_maps.get(&key) {
-            Some(f) => f.clone(),
-            None => {
-                let opacity: Vec<[f32; 3]> = (0..tex.texels.len() / 4)
-                    .map(|p| [cut(factor * tex.texels.unorm(4 * p + 3)); 3])
-                    .collect();
-                let file = format!(
-                    "textures/opacity{}-{}.pfm",
-                    tref.index,
-                    self.opacity_maps.len()
-                );
-                self.write(&file, &files::pfm_bytes(tex.width, tex.height, &opacity))?;
-                self.opacity_maps.insert(key, file.clone());
-                file
-            }
-        };
+        let file =
+            self.derived_texture(key, "opacity", tref.index, tex, |c| [cut(factor * c[3]); 3])?;
         let to_uv = match plan.bake {
             Some(b) => uv_matrix(&tref) * uv_matrix(&b).inverse(),
             None => uv_matrix(&tref),
         };
         Ok(Some(bitmap_xml("opacity", &file, true, tex, &to_uv, "  ")))
+    }
+
+    /// A linear PFM made from texture `slot`'s texels (`texel` maps each, linear RGBA as
+    /// lanterna's sampler decodes it, to the RGB written), once per `key`: the file name.
+    fn derived_texture(
+        &mut self,
+        key: String,
+        stem: &str,
+        slot: i32,
+        tex: &TextureData,
+        texel: impl Fn([f32; 4]) -> [f32; 3],
+    ) -> Result<String, ExportError> {
+        if let Some(f) = self.derived_textures.get(&key) {
+            return Ok(f.clone());
+        }
+        let (w, h) = (tex.width, tex.height);
+        let rgb: Vec<[f32; 3]> = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .map(|(x, y)| {
+                texel(tex.texel([(x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32]))
+            })
+            .collect();
+        let file = format!("textures/{stem}{slot}-{}.pfm", self.derived_textures.len());
+        self.write(&file, &files::pfm_bytes(w, h, &rgb))?;
+        self.derived_textures.insert(key, file.clone());
+        Ok(file)
     }
 
     /// Whether some vertex colour of a mesh of material `m` has alpha below one.
@@ -560,33 +570,21 @@ impl Writer<'_> {
     ) -> Result<String, ExportError> {
         let tref = mat.normal_tex;
         let tex = &self.scene.textures[tref.index as usize];
-        let key = (tref.index, mat.normal_scale.to_bits(), mirrored_uvs);
-        let file = match self.normal_maps.get(&key) {
-            Some(f) => f.clone(),
-            None => {
-                let y = if mirrored_uvs { -1.0 } else { 1.0 };
-                let rgb: Vec<[f32; 3]> = linear_texels(tex)
-                    .iter()
-                    .map(|c| {
-                        let m = c.map(|v| 2.0 * v - 1.0);
-                        [
-                            m[0] * mat.normal_scale,
-                            m[1] * mat.normal_scale * y,
-                            m[2].max(1e-4),
-                        ]
-                        .map(|v| (v + 1.0) / 2.0)
-                    })
-                    .collect();
-                let file = format!(
-                    "textures/normal{}-{}.pfm",
-                    tref.index,
-                    self.normal_maps.len()
-                );
-                self.write(&file, &files::pfm_bytes(tex.width, tex.height, &rgb))?;
-                self.normal_maps.insert(key, file.clone());
-                file
-            }
-        };
+        let key = format!(
+            "normal {} {:08x} {mirrored_uvs}",
+            tref.index,
+            mat.normal_scale.to_bits()
+        );
+        let y = if mirrored_uvs { -1.0 } else { 1.0 };
+        let file = self.derived_texture(key, "normal", tref.index, tex, |c| {
+            let m = c.map(|v| 2.0 * v - 1.0);
+            [
+                m[0] * mat.normal_scale,
+                m[1] * mat.normal_scale * y,
+                m[2].max(1e-4),
+            ]
+            .map(|v| (v + 1.0) / 2.0)
+        })?;
         Ok(bitmap_xml(
             "normalmap",
             &file,

@@ -27,11 +27,9 @@ pub(super) struct Writer<'a> {
     pub(super) dir: PathBuf,
     /// (texture slot, factor bits) → file name relative to the export directory.
     pub(super) textures: HashMap<(i32, [u32; 3]), (String, bool)>,
-    /// (texture slot, scale bits, green negated) → the normal map written for Mitsuba.
-    pub(super) normal_maps: HashMap<(i32, u32, bool), String>,
-    /// (texture slot, [alpha factor, cutoff, MASK] bits) → the opacity map written for
-    /// Mitsuba's `mask`.
-    pub(super) opacity_maps: HashMap<(i32, [u32; 3]), String>,
+    /// Textures made for Mitsuba from lanterna's (normal maps with lanterna's arithmetic
+    /// baked in, `mask` opacities), by what they were made of → file name.
+    pub(super) derived_textures: HashMap<String, String>,
     /// Whether some BSDF went out inside a `mask` (the integrator must be `volpath`).
     pub(super) masks: bool,
     pub(super) approximations: Vec<String>,
