@@ -117,23 +117,30 @@ def random_normal_map(r, s, max_tilt):
                      nearest=r.random() < 0.5)
 
 
-def add_normal_maps(s, seed):
-    """Normal maps (tilts up to 35°, scales 0.3-1) on about half of the opaque Lambertian
-    materials of meshes with texture coordinates, drawn from a generator of their own so
-    that the scene is otherwise the one the seed gives without them."""
-    r = random.Random(seed + 1_000_003)
-    mapped = set()
+def opaque_lambertian_materials(s):
+    """The non-emissive, non-transmitting Lambertian materials the meshes use, each with
+    whether every primitive of it has texture coordinates."""
+    uvs = {}
     for mesh in s.meshes:
         for prim in mesh["primitives"]:
             m = s.materials[prim["material"]]
             lambertian = (m.get("extensions", {}).get("KHR_materials_specular", {})
                           .get("specularFactor") == 0 and "emissiveFactor" not in m
                           and "KHR_materials_transmission" not in m.get("extensions", {}))
-            if "TEXCOORD_0" in prim["attributes"] and lambertian:
-                mapped.add(prim["material"])
+            if lambertian:
+                has_uv = "TEXCOORD_0" in prim["attributes"]
+                uvs[prim["material"]] = uvs.get(prim["material"], True) and has_uv
+    return uvs
+
+
+def add_normal_maps(s, seed):
+    """Normal maps (tilts up to 35°, scales 0.3-1) on about half of the opaque Lambertian
+    materials of meshes with texture coordinates, drawn from a generator of their own so
+    that the scene is otherwise the one the seed gives without them."""
+    r = random.Random(seed + 1_000_003)
     count = 0
-    for index in sorted(mapped):
-        if r.random() < 0.5:
+    for index, has_uv in sorted(opaque_lambertian_materials(s).items()):
+        if has_uv and r.random() < 0.5:
             s.materials[index]["normalTexture"] = {"index": random_normal_map(r, s, math.radians(35)),
                                                    "scale": r.uniform(0.3, 1.0)}
             count += 1
@@ -147,16 +154,7 @@ def add_alpha(s, seed):
     has UVs, else a constant MASK above or below its cutoff. Drawn from a generator of
     their own, so that the scene is otherwise the one the seed gives without them."""
     r = random.Random(seed + 2_000_003)
-    uv_of = {}
-    for mesh in s.meshes:
-        for prim in mesh["primitives"]:
-            m = s.materials[prim["material"]]
-            lambertian = (m.get("extensions", {}).get("KHR_materials_specular", {})
-                          .get("specularFactor") == 0 and "emissiveFactor" not in m
-                          and "KHR_materials_transmission" not in m.get("extensions", {}))
-            if lambertian:
-                has_uv = "TEXCOORD_0" in prim["attributes"]
-                uv_of[prim["material"]] = uv_of.get(prim["material"], True) and has_uv
+    uv_of = opaque_lambertian_materials(s)
     kinds = []
     for index in sorted(uv_of):
         if r.random() >= 0.5:
