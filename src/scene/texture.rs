@@ -113,6 +113,24 @@ fn wrap(t: f32, mode: WrapMode) -> f32 {
     }
 }
 
+/// Texel index `i` of `n` along an axis, wrapped as the sampler's mode says.
+fn wrap_index(i: i64, n: u32, mode: WrapMode) -> u32 {
+    let n = i64::from(n);
+    let i = match mode {
+        WrapMode::Repeat => i.rem_euclid(n),
+        WrapMode::ClampToEdge => i.clamp(0, n - 1),
+        WrapMode::MirroredRepeat => {
+            let m = i.rem_euclid(2 * n);
+            if m < n {
+                m
+            } else {
+                2 * n - 1 - m
+            }
+        }
+    };
+    i as u32
+}
+
 impl TextureData {
     /// Nearest texel at `uv`, decoded to linear RGBA.
     pub fn texel(&self, uv: [f32; 2]) -> [f32; 4] {
@@ -129,6 +147,37 @@ impl TextureData {
         }
     }
 
+    /// The bilinear filter at `uv`, as the GPU's sampler takes it (texel centres at
+    /// half-integers, the sampler's wrap mode per axis), of the texels decoded to linear
+    /// RGBA.
+    pub fn bilinear(&self, uv: [f32; 2]) -> [f32; 4] {
+        let taps = |t: f32, n: u32, mode: WrapMode| {
+            let x = t * n as f32 - 0.5;
+            let x0 = x.floor();
+            let f = x - x0;
+            let i = x0 as i64;
+            [
+                (wrap_index(i, n, mode), 1.0 - f),
+                (wrap_index(i + 1, n, mode), f),
+            ]
+        };
+        let xs = taps(uv[0], self.width, self.sampler.wrap_u);
+        let ys = taps(uv[1], self.height, self.sampler.wrap_v);
+        let mut out = [0.0; 4];
+        for (y, wy) in ys {
+            for (x, wx) in xs {
+                let c = self.texel([
+                    (x as f32 + 0.5) / self.width as f32,
+                    (y as f32 + 0.5) / self.height as f32,
+                ]);
+                for k in 0..4 {
+                    out[k] += wx * wy * c[k];
+                }
+            }
+        }
+        out
+    }
+
     /// Largest linear luminance over all texels (0 means the texture is black).
     pub fn max_luminance(&self) -> f32 {
         let decode = |i: usize| match self.format {
@@ -140,5 +189,59 @@ impl TextureData {
                 0.2126 * decode(4 * p) + 0.7152 * decode(4 * p + 1) + 0.0722 * decode(4 * p + 2)
             })
             .fold(0.0, f32::max)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The CPU's bilinear filter (the export's cut of a bilinear MASK) samples as the GPU
+    /// does: texel centres at half-integers, and each wrap mode's neighbour past the edge.
+    #[test]
+    fn bilinear_filter_matches_the_samplers_rules() {
+        let texture = |wrap: WrapMode| TextureData {
+            name: "ramp".into(),
+            width: 4,
+            height: 1,
+            // Red 0, 1/3, 2/3, 1 (as 8-bit codes), linear.
+            texels: Texels::Rgba8(
+                [0u8, 85, 170, 255]
+                    .iter()
+                    .flat_map(|&r| [r, 0, 0, 255])
+                    .collect(),
+            ),
+            format: TextureFormat::Linear,
+            sampler: SamplerDesc {
+                wrap_u: wrap,
+                wrap_v: wrap,
+                nearest: false,
+            },
+        };
+        let red = |t: &TextureData, u: f32| t.bilinear([u, 0.5])[0];
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-6;
+        for wrap in [
+            WrapMode::Repeat,
+            WrapMode::ClampToEdge,
+            WrapMode::MirroredRepeat,
+        ] {
+            let t = texture(wrap);
+            // At a texel centre, its own value; halfway between two, their mean.
+            assert!(close(red(&t, 0.375), 1.0 / 3.0), "{wrap:?}");
+            assert!(close(red(&t, 0.5), 0.5), "{wrap:?}");
+            assert!(close(red(&t, 0.3125), 0.25), "{wrap:?}");
+        }
+        // Left of the first centre: the neighbour is the last texel (repeat), the first
+        // itself (clamp and mirror).
+        assert!(close(red(&texture(WrapMode::Repeat), 0.0), 0.5));
+        assert!(close(red(&texture(WrapMode::ClampToEdge), 0.0), 0.0));
+        assert!(close(red(&texture(WrapMode::MirroredRepeat), 0.0), 0.0));
+        // Past the right edge: repeat starts over, clamp holds, mirror walks back.
+        assert!(close(red(&texture(WrapMode::Repeat), 1.125), 0.0));
+        assert!(close(red(&texture(WrapMode::ClampToEdge), 1.125), 1.0));
+        assert!(close(
+            red(&texture(WrapMode::MirroredRepeat), 1.375),
+            2.0 / 3.0
+        ));
     }
 }

@@ -19,6 +19,9 @@ use crate::vk::{Texels, TextureFormat};
 use glam::Mat3;
 use std::fmt::Write as _;
 
+/// How many texels the cut of a bilinearly filtered MASK may have in the export.
+const MASK_CUT_TEXELS: f64 = 4.0 * 1024.0 * 1024.0;
+
 impl Writer<'_> {
     /// Which UV set the PLY of a material carries, which transform is baked in, and
     /// whether its normal map goes out (see [`Self::normal_map_exportable`]).
@@ -353,12 +356,12 @@ impl Writer<'_> {
     /// lanterna's alpha test takes it (`geometry_coverage`): BLEND the alpha (factor ×
     /// the base colour texture's alpha, filtered as lanterna filters it); MASK 1 where
     /// that reaches the cutoff, else 0 (exact for a constant alpha and for a nearest-
-    /// filtered texture, whose texels can be cut out one by one). `None` for opaque
-    /// materials, and where the export cannot match lanterna (the reason goes to the
-    /// approximations; the material then goes out opaque): an emitter (Mitsuba's `area`
-    /// emitter would also emit in the holes), a transmitting material, vertex colours
-    /// with alpha, a MASK cut from a bilinear texture, a texture on another UV set than
-    /// the PLY's. Sets `self.masks` when it returns one (the integrator must be `volpath`,
+    /// filtered texture, whose texels can be cut out one by one; a bilinear texture's cut
+    /// goes out sampled at up to 16× its resolution, an approximation). `None` for
+    /// opaque materials, and where the export cannot match lanterna (the reason goes to
+    /// the approximations; the material then goes out opaque): an emitter (Mitsuba's
+    /// `area` emitter would also emit in the holes), a transmitting material, vertex
+    /// colours with alpha, a texture on another UV set than the PLY's. Sets `self.masks` when it returns one (the integrator must be `volpath`,
     /// whose shadow rays pass through null interfaces).
     fn opacity_xml(
         &mut self,
@@ -380,13 +383,6 @@ impl Writer<'_> {
             Some("vertex colours with alpha")
         } else if mat.base_color_tex.index >= 0 && plan.set != Some(mat.base_color_tex.uv_set) {
             Some("its texture is on another UV set than the exported one")
-        } else if mask
-            && mat.base_color_tex.index >= 0
-            && !self.scene.textures[mat.base_color_tex.index as usize]
-                .sampler
-                .nearest
-        {
-            Some("a MASK cut from a bilinear texture (lanterna cuts the filtered alpha)")
         } else {
             None
         };
@@ -422,34 +418,52 @@ impl Writer<'_> {
             factor.to_bits(),
             mat.alpha_cutoff.to_bits()
         );
-        let file =
-            self.derived_texture(key, "opacity", tref.index, tex, |c| [cut(factor * c[3]); 3])?;
+        let mut sampler = tex.sampler;
+        let file = if mask && !sampler.nearest {
+            // lanterna cuts the bilinearly filtered alpha, a curve inside each texel;
+            // Mitsuba gets that cut sampled at k× the resolution, nearest-filtered.
+            let k = (MASK_CUT_TEXELS / (tex.width as f64 * tex.height as f64))
+                .sqrt()
+                .clamp(1.0, 16.0) as u32;
+            self.approximations.push(format!(
+                "material `{name}`: its MASK is cut from a bilinear texture; exported as that cut at {k}× the texture's resolution"
+            ));
+            sampler.nearest = true;
+            let size = (tex.width * k, tex.height * k);
+            self.derived_texture(key, "opacity", tref.index, size, |uv| {
+                [cut(factor * tex.bilinear(uv)[3]); 3]
+            })?
+        } else {
+            let size = (tex.width, tex.height);
+            self.derived_texture(key, "opacity", tref.index, size, |uv| {
+                [cut(factor * tex.texel(uv)[3]); 3]
+            })?
+        };
         let to_uv = match plan.bake {
             Some(b) => uv_matrix(&tref) * uv_matrix(&b).inverse(),
             None => uv_matrix(&tref),
         };
-        Ok(Some(bitmap_xml("opacity", &file, true, tex, &to_uv, "  ")))
+        Ok(Some(bitmap_xml(
+            "opacity", &file, true, sampler, &to_uv, "  ",
+        )))
     }
 
-    /// A linear PFM made from texture `slot`'s texels (`texel` maps each, linear RGBA as
-    /// lanterna's sampler decodes it, to the RGB written), once per `key`: the file name.
+    /// A linear PFM of `size` texels made from texture `slot` (`texel` gives the RGB
+    /// written at each texel centre's uv), once per `key`: the file name.
     fn derived_texture(
         &mut self,
         key: String,
         stem: &str,
         slot: i32,
-        tex: &TextureData,
-        texel: impl Fn([f32; 4]) -> [f32; 3],
+        (w, h): (u32, u32),
+        texel: impl Fn([f32; 2]) -> [f32; 3],
     ) -> Result<String, ExportError> {
         if let Some(f) = self.derived_textures.get(&key) {
             return Ok(f.clone());
         }
-        let (w, h) = (tex.width, tex.height);
         let rgb: Vec<[f32; 3]> = (0..h)
             .flat_map(|y| (0..w).map(move |x| (x, y)))
-            .map(|(x, y)| {
-                texel(tex.texel([(x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32]))
-            })
+            .map(|(x, y)| texel([(x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32]))
             .collect();
         let file = format!("textures/{stem}{slot}-{}.pfm", self.derived_textures.len());
         self.write(&file, &files::pfm_bytes(w, h, &rgb))?;
@@ -512,7 +526,7 @@ impl Writer<'_> {
             None => uv_matrix(&tref),
         };
         let (file, raw) = self.texture_file(tref.index, tex, factor)?;
-        Ok(bitmap_xml(param, &file, raw, tex, &to_uv, "      "))
+        Ok(bitmap_xml(param, &file, raw, tex.sampler, &to_uv, "      "))
     }
 
     pub(super) fn radiance_xml(
@@ -552,7 +566,7 @@ impl Writer<'_> {
             "radiance",
             &file,
             raw,
-            tex,
+            tex.sampler,
             &Mat3::IDENTITY,
             "      ",
         ));
@@ -576,8 +590,9 @@ impl Writer<'_> {
             mat.normal_scale.to_bits()
         );
         let y = if mirrored_uvs { -1.0 } else { 1.0 };
-        let file = self.derived_texture(key, "normal", tref.index, tex, |c| {
-            let m = c.map(|v| 2.0 * v - 1.0);
+        let size = (tex.width, tex.height);
+        let file = self.derived_texture(key, "normal", tref.index, size, |uv| {
+            let m = tex.texel(uv).map(|v| 2.0 * v - 1.0);
             [
                 m[0] * mat.normal_scale,
                 m[1] * mat.normal_scale * y,
@@ -589,7 +604,7 @@ impl Writer<'_> {
             "normalmap",
             &file,
             true,
-            tex,
+            tex.sampler,
             &uv_matrix(&tref),
             "  ",
         ))

@@ -3,8 +3,7 @@
 
 use super::ExportOptions;
 use crate::gpu;
-use crate::scene::TextureData;
-use crate::vk::WrapMode;
+use crate::vk::{SamplerDesc, WrapMode};
 use glam::{Mat3, Mat4, Vec3};
 use std::fmt::Write as _;
 
@@ -53,11 +52,11 @@ pub(super) fn bitmap_xml(
     name: &str,
     file: &str,
     raw: bool,
-    tex: &TextureData,
+    sampler: SamplerDesc,
     to_uv: &Mat3,
     indent: &str,
 ) -> String {
-    let wrap = match tex.sampler.wrap_u {
+    let wrap = match sampler.wrap_u {
         WrapMode::Repeat => "repeat",
         WrapMode::MirroredRepeat => "mirror",
         WrapMode::ClampToEdge => "clamp",
@@ -70,7 +69,7 @@ pub(super) fn bitmap_xml(
     let _ = writeln!(
         s,
         "{indent}  <string name=\"filter_type\" value=\"{}\"/>",
-        if tex.sampler.nearest {
+        if sampler.nearest {
             "nearest"
         } else {
             "bilinear"
