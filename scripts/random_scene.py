@@ -20,6 +20,10 @@ method up to noise:
 Give Mitsuba 64 runs (`--runs 64`, about 0.2 s each at 48×36) where the scene is dark or
 has glass: with 16, its rare bright samples leave most of its runs low in the dark pixels
 and the pixel test rejects methods that have fewer such samples (README, "Random scenes").
+The skew can be lanterna's too: when most rejected pixels are darker in lanterna while
+the image mean is not, eight batches miss lanterna's own rare paths (through glass),
+and more samples per lanterna batch (`--spp`) cure it where more Mitsuba runs make it
+worse.
 
 `--materials` widens the material mix where the export stays exact: sRGB base colour
 textures (nearest and bilinear, on the walls, the floor and some boxes), emissive
