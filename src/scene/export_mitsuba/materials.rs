@@ -113,7 +113,7 @@ impl Writer<'_> {
                 ExportError::Invalid(format!("material index {m} is out of range"))
             })?;
         let opacity = self.opacity_xml(m, &mat, plan, vertex_colors)?;
-        let bsdf = self.opaque_bsdf_xml(m, plan, vertex_colors, mirrored_uvs)?;
+        let bsdf = self.opaque_bsdf_xml(m, &mat, plan, vertex_colors, mirrored_uvs)?;
         let Some(opacity) = opacity else {
             return Ok(bsdf);
         };
@@ -130,15 +130,13 @@ impl Writer<'_> {
     fn opaque_bsdf_xml(
         &mut self,
         m: u32,
+        mat: &gpu::Material,
         plan: UvPlan,
         vertex_colors: bool,
         mirrored_uvs: bool,
     ) -> Result<String, ExportError> {
         let id = bsdf_id(m, vertex_colors, mirrored_uvs);
-        let mat =
-            *self.scene.materials.get(m as usize).ok_or_else(|| {
-                ExportError::Invalid(format!("material index {m} is out of range"))
-            })?;
+        let mat = *mat;
         let name = self.material_name(m).to_string();
         let colour = if vertex_colors {
             "      <texture type=\"mesh_attribute\" name=\"reflectance\">\n        <string name=\"name\" value=\"vertex_color\"/>\n      </texture>\n".to_string()
