@@ -150,6 +150,7 @@ pub fn export(
         textures: HashMap::new(),
         derived_textures: HashMap::new(),
         masks: false,
+        emitter_coverage: HashMap::new(),
         approximations: Vec::new(),
         warnings: Vec::new(),
         sampled_emitters: 0,

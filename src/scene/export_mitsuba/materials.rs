@@ -357,10 +357,14 @@ impl Writer<'_> {
     /// filtered texture, whose texels can be cut out one by one; a bilinear texture's cut
     /// goes out sampled at up to 16× its resolution, an approximation). `None` for
     /// opaque materials, and where the export cannot match lanterna (the reason goes to
-    /// the approximations; the material then goes out opaque): an emitter (Mitsuba's
-    /// `area` emitter would also emit in the holes), a transmitting material, vertex
-    /// colours with alpha, a texture on another UV set than the PLY's. Sets `self.masks` when it returns one (the integrator must be `volpath`,
-    /// whose shadow rays pass through null interfaces).
+    /// the approximations; the material then goes out opaque): an emitter whose alpha
+    /// comes from a texture or that is double-sided (Mitsuba's `area` emitter emits
+    /// wherever a ray meets the shape, so a one-sided emitter under a constant alpha
+    /// goes out with its radiance premultiplied by the coverage instead; a double-sided
+    /// one's back sheet would need to be a pure null interface), a transmitting
+    /// material, vertex colours with alpha, a texture on another UV set than the PLY's.
+    /// Sets `self.masks` when it returns one (the integrator must be `volpath`, whose
+    /// shadow rays pass through null interfaces).
     fn opacity_xml(
         &mut self,
         m: u32,
@@ -373,8 +377,10 @@ impl Writer<'_> {
         }
         let mask = mat.alpha_mode == gpu::ALPHA_MODE_MASK;
         let name = self.material_name(m).to_string();
-        let why = if mat.emission.iter().any(|&c| c > 0.0) {
-            Some("an emitter (Mitsuba's area emitter also emits in the holes)")
+        let emits = mat.emission.iter().any(|&c| c > 0.0);
+        let double_sided = mat.flags & gpu::MATERIAL_FLAG_DOUBLE_SIDED != 0;
+        let why = if emits && (mat.base_color_tex.index >= 0 || double_sided) {
+            Some("an emitter whose alpha varies or that is double-sided (Mitsuba's area emitter also emits in the holes)")
         } else if mat.transmission > 0.0 && mat.metallic < 1.0 {
             Some("a transmitting material")
         } else if vertex_colors && self.vertex_alpha_below_one(m) {
@@ -404,6 +410,12 @@ impl Writer<'_> {
         };
         let tref = mat.base_color_tex;
         if tref.index < 0 {
+            if emits {
+                // Mitsuba's area emitter emits wherever a ray meets the shape, hole or
+                // not: its radiance is premultiplied by the coverage (radiance_xml), so
+                // that it emits what lanterna's hits find on average.
+                self.emitter_coverage.insert(m, cut(factor));
+            }
             return Ok(Some(format!(
                 "  <float name=\"opacity\" value=\"{}\"/>\n",
                 cut(factor)
@@ -534,10 +546,13 @@ impl Writer<'_> {
         mesh: &PlyMesh,
     ) -> Result<String, ExportError> {
         let mat = self.scene.materials[m as usize];
+        // An emitter under a constant alpha emits its coverage's share (see opacity_xml).
+        let coverage = self.emitter_coverage.get(&m).copied().unwrap_or(1.0);
+        let radiance = mat.emission.map(|c| c * coverage);
         let tref = mat.emissive_tex;
         if tref.index < 0 {
             self.sampled_emitters += 1;
-            return Ok(format!("      {}\n", rgb_xml("radiance", mat.emission)));
+            return Ok(format!("      {}\n", rgb_xml("radiance", radiance)));
         }
         let tex = &self.scene.textures[tref.index as usize];
         debug_assert_eq!(plan.set, Some(tref.uv_set));
@@ -559,7 +574,7 @@ impl Writer<'_> {
                 xml.push_str("      <float name=\"sampling_weight\" value=\"0\"/>\n");
             }
         }
-        let (file, raw) = self.texture_file(tref.index, tex, mat.emission)?;
+        let (file, raw) = self.texture_file(tref.index, tex, radiance)?;
         xml.push_str(&bitmap_xml(
             "radiance",
             &file,

@@ -32,6 +32,9 @@ pub(super) struct Writer<'a> {
     pub(super) derived_textures: HashMap<String, String>,
     /// Whether some BSDF went out inside a `mask` (the integrator must be `volpath`).
     pub(super) masks: bool,
+    /// Emissive materials under a constant alpha → their coverage, which premultiplies
+    /// their radiance (see `opacity_xml`).
+    pub(super) emitter_coverage: HashMap<u32, f32>,
     pub(super) approximations: Vec<String>,
     pub(super) warnings: Vec<String>,
     /// Emitters Mitsuba may sample (area emitters of nonzero sampling weight; punctual

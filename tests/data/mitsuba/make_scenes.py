@@ -18,7 +18,8 @@ agree up to noise.
                   wall (checked through the glTF BSDF plugin)
   alpha.gltf      alpha between a lamp and a floor: a fence cut out (MASK) by a
                   nearest RGBA texture, a BLEND panel whose alpha runs across a bilinear
-                  texture (times 0.8), a constant BLEND of 0.4 and a MASK under its cutoff
+                  texture (times 0.8), a constant BLEND of 0.4, a MASK under its cutoff
+                  and a one-sided emitter under a constant BLEND of 0.5
   twosided.gltf   a double-sided emitter standing in a room seen edge-on, and a
                   one-sided emitter facing away from the camera
   punctual.gltf   point, spot (penumbra), hard spot and directional lights on a floor
@@ -463,6 +464,12 @@ def alpha_scene():
     b.node(mesh=b.quad((-0.5, 0.05, 0.9), (0.5, 0.05, 0.9), (0.5, 0.7, 0.9), (-0.5, 0.7, 0.9), ghost))
     lamp = b.lambert((0, 0, 0), emission=(1, 0.95, 0.9), strength=6)
     b.node(mesh=b.quad((-0.5, 2.3, -0.2), (-0.5, 2.2, 0.5), (0.5, 2.2, 0.5), (0.5, 2.3, -0.2), lamp))
+    # A one-sided emitter under a constant BLEND of 0.5, before the wall and over the
+    # floor, facing the camera: it emits as much as rays find of it.
+    glow = b.lambert((0.6, 0.6, 0.6), emission=(1, 0.5, 0.2), strength=3)
+    b.materials[glow]["pbrMetallicRoughness"]["baseColorFactor"][3] = 0.5
+    b.materials[glow]["alphaMode"] = "BLEND"
+    b.node(mesh=b.quad((0.5, 1.3, -1.2), (1.2, 1.3, -1.2), (1.2, 1.8, -1.2), (0.5, 1.8, -1.2), glow))
     b.node(extensions={"KHR_lights_punctual": {"light": b.light(
         type="point", color=[1, 0.8, 0.6], intensity=2.0)}}, translation=[-0.3, 1.4, 0.6])
     eye = (0.2, 1.6, 2.8)
