@@ -48,6 +48,19 @@ def _params(props):
     return p
 
 
+def sample_result(wo, sgn, pdf, f, valid, sampled_type):
+    """A `sample` method's return: the BSDFSample of local direction `wo` (turned back to
+    the side `sgn` the query came from) with density `pdf`, and its weight f / pdf, both
+    zero where not `valid`."""
+    bs = dr.zeros(mi.BSDFSample3f)
+    bs.wo = mi.Vector3f(wo.x, wo.y, wo.z * sgn)
+    bs.pdf = dr.select(valid, pdf, 0.0)
+    bs.eta = 1.0
+    bs.sampled_component = mi.UInt32(0)
+    bs.sampled_type = sampled_type
+    return (bs, mi.Color3f(dr.select(valid & (pdf > 0), f / pdf, 0.0)))
+
+
 class GltfBSDF(mi.BSDF):
     def __init__(self, props):
         mi.BSDF.__init__(self, props)
@@ -137,15 +150,9 @@ class GltfBSDF(mi.BSDF):
         valid = active & (wi.z > 0) & (wo.z > 0)
         pdf = self.pdf_local(wi, wo)
         f = self.brdf(wi, wo) * wo.z
-        bs = dr.zeros(mi.BSDFSample3f)
-        bs.wo = mi.Vector3f(wo.x, wo.y, wo.z * sgn)
-        bs.pdf = dr.select(valid, pdf, 0.0)
-        bs.eta = 1.0
-        bs.sampled_component = mi.UInt32(0)
-        bs.sampled_type = dr.select(use_spec, mi.UInt32(+mi.BSDFFlags.GlossyReflection),
-                                    mi.UInt32(+mi.BSDFFlags.DiffuseReflection))
-        weight = dr.select(valid & (pdf > 0), f / pdf, 0.0)
-        return (bs, mi.Color3f(weight))
+        kind = dr.select(use_spec, mi.UInt32(+mi.BSDFFlags.GlossyReflection),
+                         mi.UInt32(+mi.BSDFFlags.DiffuseReflection))
+        return sample_result(wo, sgn, pdf, f, valid, kind)
 
     def _local(self, si, wo):
         sgn = self._side(si)

@@ -309,16 +309,10 @@ class GltfLayered(base_mod.GltfBSDF):
         f = self.brdf(wi, wo) * wo.z
         valid = (active & (wi.z > 1e-6) & (wo.z > 1e-6) & dr.isfinite(pdf)
                  & dr.isfinite(f.x) & dr.isfinite(f.y) & dr.isfinite(f.z))
-        bs = dr.zeros(mi.BSDFSample3f)
-        bs.wo = mi.Vector3f(wo.x, wo.y, wo.z * sgn)
-        bs.pdf = dr.select(valid, pdf, 0.0)
-        bs.eta = 1.0
-        bs.sampled_component = mi.UInt32(0)
-        bs.sampled_type = dr.select(use_coat | use_sheen | use_spec,
-                                    mi.UInt32(+mi.BSDFFlags.GlossyReflection),
-                                    mi.UInt32(+mi.BSDFFlags.DiffuseReflection))
-        weight = dr.select(valid & (pdf > 0), f / pdf, 0.0)
-        return (bs, mi.Color3f(weight))
+        kind = dr.select(use_coat | use_sheen | use_spec,
+                         mi.UInt32(+mi.BSDFFlags.GlossyReflection),
+                         mi.UInt32(+mi.BSDFFlags.DiffuseReflection))
+        return base_mod.sample_result(wo, sgn, pdf, f, valid, kind)
 
     # robustness (one NaN pixel seen in one of 32 Mitsuba runs of sheen.gltf): directions
     # within 1e-6 of the horizon are left out and non-finite values are dropped
@@ -465,15 +459,11 @@ class GltfThin(base_mod.GltfBSDF):
         f = self.bsdf(wi, wo) * dr.abs(wo.z)
         valid = (active & (wi.z > 1e-6) & ok_dir & dr.isfinite(pdf) & (pdf > 0)
                  & dr.isfinite(f.x) & dr.isfinite(f.y) & dr.isfinite(f.z))
-        bs = dr.zeros(mi.BSDFSample3f)
-        bs.wo = mi.Vector3f(wo.x, wo.y, wo.z * sgn)
-        bs.pdf = dr.select(valid, pdf, 0.0)
-        bs.eta = 1.0
-        bs.sampled_component = mi.UInt32(0)
-        bs.sampled_type = dr.select(use_t, mi.UInt32(+mi.BSDFFlags.GlossyTransmission),
-                                    dr.select(use_r, mi.UInt32(+mi.BSDFFlags.GlossyReflection),
-                                              mi.UInt32(+mi.BSDFFlags.DiffuseReflection)))
-        return (bs, mi.Color3f(dr.select(valid, f / pdf, 0.0)))
+        kind = dr.select(use_t, mi.UInt32(+mi.BSDFFlags.GlossyTransmission),
+                         dr.select(use_r, mi.UInt32(+mi.BSDFFlags.GlossyReflection),
+                                   mi.UInt32(+mi.BSDFFlags.DiffuseReflection)))
+        # valid already requires pdf > 0 here.
+        return base_mod.sample_result(wo, sgn, pdf, f, valid, kind)
 
     def to_string(self):
         return "GltfThin[%s]" % self.p
