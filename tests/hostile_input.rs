@@ -748,6 +748,24 @@ fn wrong_values_are_refused() {
             }),
             "KHR_materials_sheen sheenColorFactor must be three finite numbers",
         ),
+        // KHR_materials_anisotropy: a rotation that is not a number, a texture that
+        // does not exist.
+        (
+            scene_with(|j| {
+                j["extensionsUsed"] = json!(["KHR_materials_anisotropy"]);
+                j["materials"][0]["extensions"] = json!({"KHR_materials_anisotropy":
+                    {"anisotropyStrength": 1, "anisotropyRotation": "sideways"}});
+            }),
+            "KHR_materials_anisotropy anisotropyRotation is not a finite number",
+        ),
+        (
+            scene_with(|j| {
+                j["extensionsUsed"] = json!(["KHR_materials_anisotropy"]);
+                j["materials"][0]["extensions"] = json!({"KHR_materials_anisotropy":
+                    {"anisotropyStrength": 1, "anisotropyTexture": {"index": 9}}});
+            }),
+            "anisotropyTexture refers to texture 9, which does not exist",
+        ),
     ];
     for (s, says) in scenes {
         let before = snapshot(s.dir.path());

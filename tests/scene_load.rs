@@ -543,18 +543,31 @@ fn transmission_texture_scales_the_factor() {
 /// blue plastic (half a smooth coat), written to `dir` as `name.gltf`; `edit` changes
 /// the JSON further.
 fn coated_glossy(dir: &Path, name: &str, edit: impl FnOnce(&mut serde_json::Value)) -> Scene {
-    let src = root().join("tests/data/mitsuba/glossy.gltf");
+    edited_scene(dir, "glossy.gltf", name, |json| {
+        json["materials"][0]["extensions"]["KHR_materials_clearcoat"] =
+            serde_json::json!({"clearcoatFactor": 1.0, "clearcoatRoughnessFactor": 0.2});
+        json["materials"][2]["extensions"]["KHR_materials_clearcoat"] =
+            serde_json::json!({"clearcoatFactor": 0.5, "clearcoatRoughnessFactor": 0.05});
+        json["extensionsUsed"] = serde_json::json!([
+            "KHR_materials_specular",
+            "KHR_materials_emissive_strength",
+            "KHR_materials_clearcoat"
+        ]);
+        edit(json);
+    })
+}
+
+/// The Mitsuba peer scene `file` (tests/data/mitsuba) edited by `edit`, written to
+/// `dir` as `name`.gltf and loaded.
+fn edited_scene(
+    dir: &Path,
+    file: &str,
+    name: &str,
+    edit: impl FnOnce(&mut serde_json::Value),
+) -> Scene {
+    let src = root().join("tests/data/mitsuba").join(file);
     let mut json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&src).unwrap()).unwrap();
-    json["materials"][0]["extensions"]["KHR_materials_clearcoat"] =
-        serde_json::json!({"clearcoatFactor": 1.0, "clearcoatRoughnessFactor": 0.2});
-    json["materials"][2]["extensions"]["KHR_materials_clearcoat"] =
-        serde_json::json!({"clearcoatFactor": 0.5, "clearcoatRoughnessFactor": 0.05});
-    json["extensionsUsed"] = serde_json::json!([
-        "KHR_materials_specular",
-        "KHR_materials_emissive_strength",
-        "KHR_materials_clearcoat"
-    ]);
     edit(&mut json);
     let path = dir.join(format!("{name}.gltf"));
     std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
@@ -698,11 +711,56 @@ fn assert_textures_act_like_factors(
     let factor = coated_glossy(dir.path(), "factor", |j| {
         j["materials"][0]["extensions"][extension] = factor;
     });
-    let camera = factor.cameras[0].clone();
+    assert_same_image(&textured, &factor);
+}
+
+/// `a` and `b` render the same image (`pt`, 32×24, 8 × 64 spp, `b`'s camera).
+fn assert_same_image(a: &Scene, b: &Scene) {
+    let camera = b.cameras[0].clone();
     let settings = testing::settings(Method::Pt, 32, 24);
-    let a = render_batches(&textured, &camera, settings.clone(), 8, 64);
-    let b = render_batches(&factor, &camera, settings, 8, 64);
+    let a = render_batches(a, &camera, settings.clone(), 8, 64);
+    let b = render_batches(b, &camera, settings, 8, 64);
     testing::assert_same_expectation(&a, &b, 8, 1e-3);
+}
+
+/// The anisotropy's texture acts on its factors (KHR_materials_anisotropy): its RG,
+/// mapped to [−1, 1]², is the direction in the tangent frame, turned by
+/// `anisotropyRotation`, and its B multiplies `anisotropyStrength`. On
+/// `anisotropy.gltf`'s floor, wall and box, a constant texture of (40, 220, 153) with
+/// strength 1 and rotations 0.6, 0.4 and 1.2 renders like strength 153/255 and the
+/// rotations plus atan2(220/255·2 − 1, 40/255·2 − 1). Seen to fail with the texture's
+/// strength (B) ignored, and with its direction not turned by the rotation.
+#[test]
+fn anisotropy_texture_acts_like_its_factors() {
+    let dir = tempfile::tempdir().unwrap();
+    let texel = [40u8, 220, 153, 255];
+    image::RgbaImage::from_pixel(2, 2, image::Rgba(texel))
+        .save(dir.path().join("t.png"))
+        .unwrap();
+    let unit = |c: u8| c as f64 / 255.0 * 2.0 - 1.0;
+    let turn = unit(texel[1]).atan2(unit(texel[0]));
+    let strength = texel[2] as f64 / 255.0;
+    let rotations = [0.6, 0.4, 1.2];
+    let textured = edited_scene(dir.path(), "anisotropy.gltf", "textured", |j| {
+        j["images"] = serde_json::json!([{ "uri": "t.png" }]);
+        j["textures"] = serde_json::json!([{ "source": 0 }]);
+        for (m, r) in rotations.iter().enumerate() {
+            j["materials"][m]["extensions"]["KHR_materials_anisotropy"] = serde_json::json!({
+                "anisotropyStrength": 1.0, "anisotropyRotation": r,
+                "anisotropyTexture": { "index": 0 }
+            });
+        }
+    });
+    let factor = edited_scene(dir.path(), "anisotropy.gltf", "factor", |j| {
+        for (m, r) in rotations.iter().enumerate() {
+            j["materials"][m]["extensions"]["KHR_materials_anisotropy"] = serde_json::json!({
+                "anisotropyStrength": strength, "anisotropyRotation": r + turn
+            });
+        }
+    });
+    let stats = lanterna::scene::SceneStats::new(&textured, &LightTable::build(&textured).unwrap());
+    assert_eq!(stats.anisotropic_materials, 3);
+    assert_same_image(&textured, &factor);
 }
 
 /// Morph targets at their default weights (a static scene shows the posed mesh): a quad

@@ -41,7 +41,9 @@
 struct BsdfParams {
     vec3 base_color;
     float metallic;
-    float alpha;           // GGX α = roughness², clamped to MIN_GGX_ALPHA
+    float alpha;           // GGX α = roughness², clamped to MIN_GGX_ALPHA (along the local y)
+    float alpha_t;         // GGX α along the local x: alpha, or larger along the direction of
+                           // KHR_materials_anisotropy (make_surface turns the frame to it)
     float specular;        // KHR_materials_specular factor: dielectric F90
     vec3 f0_dielectric;    // dielectric F0 (ior, specular colour and factor)
     float transmission;    // KHR_materials_transmission: share of the dielectric's diffuse
@@ -65,8 +67,19 @@ float ggx_d_cos_sin2(float c, float s2, float a) {
     return d > 0.0 ? a2 / (PI * d * d) : 0.0;
 }
 
-// D of a unit microfacet normal in the local frame (z the macro normal).
-float ggx_d(vec3 h, float a) { return ggx_d_cos_sin2(h.z, dot(h.xy, h.xy), a); }
+// D of a unit microfacet normal in the local frame (z the macro normal), α = a.x along x
+// and a.y along y: 1 / (π ax ay (hx²/ax² + hy²/ay² + hz²)²), written as ax·ay / (π (hx²·ay/ax
+// + hy²·ax/ay + hz²·ax·ay)²), which is ggx_d_cos_sin2's form where ax = ay (no
+// cancellation near the peak).
+float ggx_d(vec3 h, vec2 a) {
+    if (a.x == a.y) return ggx_d_cos_sin2(h.z, dot(h.xy, h.xy), a.x);
+    float k = a.x * a.y;
+    float d = h.x * h.x * (a.y / a.x) + h.y * h.y * (a.x / a.y) + h.z * h.z * k;
+    return d > 0.0 ? k / (PI * d * d) : 0.0;
+}
+
+// The material's (α along x, α along y).
+vec2 ggx_alphas(BsdfParams p) { return vec2(p.alpha_t, p.alpha); }
 
 // D of a unit microfacet normal `h` about the unit macro normal `n`.
 float ggx_d_about(vec3 h, vec3 n, float a) {
@@ -82,7 +95,13 @@ float ggx_lambda_cos(float c, float a) {
     return 0.5 * (-1.0 + sqrt(1.0 + a * a * t2));
 }
 
-float ggx_lambda(vec3 v, float a) { return ggx_lambda_cos(v.z, a); }
+// Λ of a local direction v for α = a.x along x and a.y along y: the projected α² tan²θ
+// is (ax² vx² + ay² vy²) / vz².
+float ggx_lambda(vec3 v, vec2 a) {
+    if (a.x == a.y) return ggx_lambda_cos(v.z, a.x);
+    float t2 = (sqr(a.x * v.x) + sqr(a.y * v.y)) / max(v.z * v.z, 1e-12);
+    return 0.5 * (-1.0 + sqrt(1.0 + t2));
+}
 
 // (1 − c)⁵ of Schlick's Fresnel, by multiplication: pow() is exp2(5·log2(x)) on CPU
 // devices (lavapipe), several times the cost.
@@ -118,8 +137,9 @@ struct BsdfWo {
     float sheen_prob;      // probability of sampling the sheen, below the coat's choice
 };
 
-// Visible GGX normal for wo (Dupuy & Benyoub 2023).
-vec3 ggx_sample_visible_normal(vec3 wo, float a, vec2 u) {
+// Visible GGX normal for wo (Dupuy & Benyoub 2023), α = a.x along x and a.y along y (the
+// stretch to the unit hemisphere and back is per axis).
+vec3 ggx_sample_visible_normal(vec3 wo, vec2 a, vec2 u) {
     vec3 v = normalize(vec3(wo.xy * a, wo.z));
     vec2 cs = cos_sin_turn(u.x);  // of φ = 2π·u.x
     float z = (1.0 - u.y) * (1.0 + v.z) - v.z;
@@ -168,9 +188,9 @@ vec3 interface_eval_pdf(BsdfParams p, vec3 wo, float lambda_wo, vec3 wi, out flo
     float hi = dot(wi, h);
     // Microfacets seen from behind by either direction carry nothing.
     if (ho <= 0.0 || hi * wi.z <= 0.0) return vec3(0.0);
-    float d = ggx_d(h, p.alpha);
+    float d = ggx_d(h, ggx_alphas(p));
     float g1o = 1.0 / (1.0 + lambda_wo);
-    float g1i = 1.0 / (1.0 + ggx_lambda(wi, p.alpha));
+    float g1i = 1.0 / (1.0 + ggx_lambda(wi, ggx_alphas(p)));
     float f = fresnel_dielectric(ho, p.eta);
     // Visible-normal density of h: g1o·D·(wo·h)/cosθo.
     float visible = g1o * d * ho / wo.z;
@@ -186,7 +206,7 @@ vec3 interface_eval_pdf(BsdfParams p, vec3 wo, float lambda_wo, vec3 wi, out flo
 // Sample the interface: a visible normal from u.yz, then reflection with probability F
 // (decided by u.x) or refraction.
 bool interface_sample(BsdfParams p, vec3 wo, vec3 u, out vec3 wi) {
-    vec3 h = ggx_sample_visible_normal(wo, p.alpha, u.yz);
+    vec3 h = ggx_sample_visible_normal(wo, ggx_alphas(p), u.yz);
     float ho = dot(wo, h);
     if (u.x < fresnel_dielectric(ho, p.eta)) {
         wi = reflect(-wo, h);
@@ -222,7 +242,7 @@ float coat_eval_pdf(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
 bool coat_sample(BsdfParams p, vec3 wo, vec2 u, out vec3 wi) {
     vec3 t, b;
     make_basis(p.coat_n, t, b);
-    vec3 h = ggx_sample_visible_normal(to_local(wo, t, b, p.coat_n), p.coat_alpha, u);
+    vec3 h = ggx_sample_visible_normal(to_local(wo, t, b, p.coat_n), vec2(p.coat_alpha), u);
     wi = reflect(-wo, to_world(h, t, b, p.coat_n));
     return wi.z > 0.0 && dot(wi, p.coat_n) > 0.0;
 }
@@ -277,7 +297,7 @@ float sheen_eval(BsdfParams p, vec3 wo, vec3 wi) {
 BsdfWo bsdf_at(BsdfParams p, vec3 wo) {
     BsdfWo c;
     c.wo = wo;
-    c.lambda_wo = ggx_lambda(wo, p.alpha);
+    c.lambda_wo = ggx_lambda(wo, ggx_alphas(p));
     // On a solid's boundary the specular probability is the opaque rest's.
     c.spec_prob = bsdf_specular_probability(p.eta > 0.0 ? volume_rest(p) : p, wo);
     c.coat_weight = 0.0;
@@ -312,9 +332,9 @@ vec3 bsdf_eval_pdf_walls(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
     if (wo.z <= 0.0 || wi.z == 0.0 || (through && p.transmission <= 0.0)) return vec3(0.0);
     vec3 wr = through ? vec3(wi.xy, -wi.z) : wi;  // mirrored above the surface
     vec3 h = normalize(wo + wr);
-    float d = ggx_d(h, p.alpha);
+    float d = ggx_d(h, ggx_alphas(p));
     float w = schlick_weight(dot(wo, h));
-    float spec = d / (1.0 + c.lambda_wo + ggx_lambda(wr, p.alpha)) / (4.0 * wo.z * wr.z);
+    float spec = d / (1.0 + c.lambda_wo + ggx_lambda(wr, ggx_alphas(p))) / (4.0 * wo.z * wr.z);
     vec3 fd = p.f0_dielectric + (vec3(p.specular) - p.f0_dielectric) * w;
     // Specular and transmission lobes: visible normals, g1·D/(4 cosθo) (reflection of
     // the sampled normal; mirrored below the surface for transmission).
@@ -438,13 +458,13 @@ bool bsdf_sample(BsdfParams p, BsdfWo c, vec3 u, float u_fresnel, out vec3 wi) {
     }
     float ps = c.spec_prob;
     if (u.x < ps) {
-        vec3 h = ggx_sample_visible_normal(wo, p.alpha, u.yz);
+        vec3 h = ggx_sample_visible_normal(wo, ggx_alphas(p), u.yz);
         wi = reflect(-wo, h);
         return wi.z > 0.0;
     }
     if (u.y < p.transmission) {
         vec2 v = vec2(min(u.y / p.transmission, 0.99999994), u.z);
-        vec3 h = ggx_sample_visible_normal(wo, p.alpha, v);
+        vec3 h = ggx_sample_visible_normal(wo, ggx_alphas(p), v);
         wi = reflect(-wo, h);
         wi.z = -wi.z;
         return wi.z < 0.0;

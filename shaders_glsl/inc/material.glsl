@@ -128,6 +128,29 @@ Surface make_surface(Hit h, vec3 ray_dir) {
         n = normal_mapped(t, m.normal_scale, n, normal_map_tangent(t.uv_set, w, v0, v1, v2, object_to_world, flipped, p0, p1, p2),
                           t.uv_set == 1u ? s.uv1 : s.uv0);
     }
+    // KHR_materials_anisotropy: the direction of the larger α, in world space, from the
+    // tangent frame of the front face (the anisotropy texture's UV set, else the normal
+    // texture's): zero where the frame or the direction degenerates (isotropic then).
+    float anisotropy = m.anisotropy_strength;
+    vec3 anisotropy_dir = vec3(0.0);
+    if (anisotropy > 0.0) {
+        TextureRef t = m.anisotropy_tex.index >= 0 ? m.anisotropy_tex : m.normal_tex;
+        uint uv_set = t.index >= 0 ? t.uv_set : 0u;
+        vec2 dir = m.anisotropy_rotation;
+        if (m.anisotropy_tex.index >= 0) {
+            vec3 a = sample_texture(m.anisotropy_tex, uv_set == 1u ? s.uv1 : s.uv0).rgb;
+            vec2 d = a.rg * 2.0 - 1.0;
+            d = dot(d, d) > 1e-12 ? normalize(d) : vec2(1.0, 0.0);
+            dir = vec2(dir.x * d.x - dir.y * d.y, dir.y * d.x + dir.x * d.y);
+            anisotropy *= a.b;
+        }
+        vec4 ts = normal_map_tangent(uv_set, w, v0, v1, v2, object_to_world, flipped, p0, p1, p2);
+        vec3 tangent = ts.xyz - n * dot(n, ts.xyz);
+        if (dot(tangent, tangent) > 1e-20) {
+            tangent = normalize(tangent);
+            anisotropy_dir = tangent * dir.x + cross(n, tangent) * (ts.w * dir.y);
+        }
+    }
     // Two-sided BSDF: work on the side the ray came from.
     if (!s.front) {
         ng = -ng;
@@ -148,7 +171,14 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     }
     s.ng = ng;
     s.n = n;
-    make_basis(n, s.t, s.b);
+    // The local frame's x along the anisotropy direction (the BSDF's alpha_t), else any.
+    vec3 anisotropy_t = anisotropy_dir - n * dot(n, anisotropy_dir);
+    if (dot(anisotropy_t, anisotropy_t) > 1e-12) {
+        s.t = normalize(anisotropy_t);
+        s.b = cross(n, s.t);
+    } else {
+        make_basis(n, s.t, s.b);
+    }
 
     // Material.
     vec4 base = m.base_color * interpolate_color(inst, vi, w);
@@ -165,6 +195,9 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     s.bsdf.base_color = clamp(base.rgb, 0.0, 1.0);
     s.bsdf.metallic = clamp(metallic, 0.0, 1.0);
     s.bsdf.alpha = max(roughness * roughness, MIN_GGX_ALPHA);
+    s.bsdf.alpha_t = s.bsdf.alpha;
+    if (dot(anisotropy_t, anisotropy_t) > 1e-12)
+        s.bsdf.alpha_t = max(mix(roughness * roughness, 1.0, sqr(clamp(anisotropy, 0.0, 1.0))), MIN_GGX_ALPHA);
     s.bsdf.specular = m.specular;
     float f0 = sqr((m.ior - 1.0) / (m.ior + 1.0));
     s.bsdf.f0_dielectric = min(f0 * m.specular_color, vec3(1.0)) * m.specular;

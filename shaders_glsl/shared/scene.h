@@ -83,6 +83,14 @@ struct Material {
     float sheen_roughness;
     TextureRef sheen_color_tex;
     TextureRef sheen_roughness_tex;
+    // KHR_materials_anisotropy: the base's GGX α along the anisotropy direction is
+    // mix(α, 1, strength²), across it α (strength = factor × texture B). The direction is
+    // (cos, sin) of the rotation in the tangent frame (tangent, bitangent), or the
+    // texture's RG mapped to [−1, 1]² and turned by the rotation. Counted in the content
+    // hash only where a material has anisotropy.
+    float anisotropy_strength;
+    vec2 anisotropy_rotation;
+    TextureRef anisotropy_tex;
 };
 
 // One emissive triangle in world space.

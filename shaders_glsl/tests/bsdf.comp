@@ -21,6 +21,7 @@ struct BsdfCase {
     vec3 coat_n;
     vec3 sheen_color;
     float sheen_roughness;
+    float alpha_t;
 };
 
 layout(local_size_x = 64) in;
@@ -36,6 +37,7 @@ void main() {
     p.base_color = bsdf_case.base_color;
     p.metallic = bsdf_case.metallic;
     p.alpha = bsdf_case.alpha;
+    p.alpha_t = bsdf_case.alpha_t;
     p.specular = bsdf_case.specular;
     p.f0_dielectric = bsdf_case.f0_dielectric;
     p.transmission = bsdf_case.transmission;

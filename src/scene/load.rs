@@ -126,7 +126,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         if let Some(sg) = m.pbr_specular_glossiness() {
             mark(sg.diffuse_texture().map(|i| i.texture()));
         }
-        // Malformed coats and sheens are reported by the conversion below.
+        // Malformed coats, sheens and anisotropy are reported by the conversion below.
         if let Ok(Some(coat)) = material::Clearcoat::read(&m, &document) {
             for t in [coat.texture, coat.roughness_texture, coat.normal_texture] {
                 mark(t.map(|t| t.texture));
@@ -136,6 +136,9 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
             for t in [sheen.colour_texture, sheen.roughness_texture] {
                 mark(t.map(|t| t.texture));
             }
+        }
+        if let Ok(Some(a)) = material::Anisotropy::read(&m, &document) {
+            mark(a.texture.map(|t| t.texture));
         }
     }
     let mut images = Vec::new();
@@ -716,6 +719,7 @@ fn parse(bytes: &[u8], warnings: &mut Vec<String>) -> Result<gltf::Gltf, gltf::E
 /// renders without its iridescence, a `KHR_materials_unlit` material lit.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
+    "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
@@ -780,11 +784,12 @@ fn content_hash(scene: &Scene) -> String {
     }
     eat(bytemuck::cast_slice(&scene.indices));
     // Materials up to their transmission fields, which count only where a material
-    // transmits, and the coat's and the sheen's, which count only where it has one
+    // transmits, and the coat's, the sheen's and the anisotropy's, which count only where it has one
     // (scenes without keep their hashes, as for vertex colours).
     let opaque_part = std::mem::offset_of!(crate::gpu::Material, transmission);
     let coat_part = std::mem::offset_of!(crate::gpu::Material, clearcoat);
     let sheen_part = std::mem::offset_of!(crate::gpu::Material, sheen_color);
+    let anisotropy_part = std::mem::offset_of!(crate::gpu::Material, anisotropy_strength);
     for m in &scene.materials {
         let bytes = bytemuck::bytes_of(m);
         eat(&bytes[..opaque_part]);
@@ -795,7 +800,10 @@ fn content_hash(scene: &Scene) -> String {
             eat(&bytes[coat_part..sheen_part]);
         }
         if m.sheen_color.iter().any(|&c| c > 0.0) {
-            eat(&bytes[sheen_part..]);
+            eat(&bytes[sheen_part..anisotropy_part]);
+        }
+        if m.anisotropy_strength > 0.0 {
+            eat(&bytes[anisotropy_part..]);
         }
     }
     for i in &scene.instances {

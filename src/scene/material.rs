@@ -1,6 +1,6 @@
 //! glTF materials → the kernels' `Material`: metallic-roughness with
 //! KHR_materials_specular / emissive_strength / ior / texture_transform / transmission /
-//! volume / clearcoat / sheen, and KHR_materials_pbrSpecularGlossiness converted to
+//! volume / clearcoat / sheen / anisotropy, and KHR_materials_pbrSpecularGlossiness converted to
 //! metallic-roughness.
 
 use super::texture::{to_texels, TextureData, TextureKey};
@@ -179,6 +179,9 @@ pub fn default_material() -> gpu::Material {
         sheen_roughness: 0.0,
         sheen_color_tex: no_texture(),
         sheen_roughness_tex: no_texture(),
+        anisotropy_strength: 0.0,
+        anisotropy_rotation: [1.0, 0.0],
+        anisotropy_tex: no_texture(),
     }
 }
 
@@ -259,6 +262,13 @@ pub fn convert(
             out.sheen_roughness_tex = t.reference(reg, TextureFormat::Linear);
         }
     }
+    if let Some(a) = Anisotropy::read(m, doc)? {
+        out.anisotropy_strength = a.strength;
+        out.anisotropy_rotation = [a.rotation.cos(), a.rotation.sin()];
+        if let Some(t) = &a.texture {
+            out.anisotropy_tex = t.reference(reg, TextureFormat::Linear);
+        }
+    }
     if let Some(ior) = m
         .extension_value("KHR_materials_ior")
         .and_then(|v| v.get("ior"))
@@ -319,6 +329,9 @@ pub fn convert(
         out.clearcoat_roughness,
         out.clearcoat_normal_scale,
         out.sheen_roughness,
+        out.anisotropy_strength,
+        out.anisotropy_rotation[0],
+        out.anisotropy_rotation[1],
     ];
     let finite = out
         .base_color
@@ -346,6 +359,7 @@ pub fn convert(
     out.clearcoat_roughness = out.clearcoat_roughness.clamp(0.0, 1.0);
     out.sheen_color = out.sheen_color.map(|c| c.clamp(0.0, 1.0));
     out.sheen_roughness = out.sheen_roughness.clamp(0.0, 1.0);
+    out.anisotropy_strength = out.anisotropy_strength.clamp(0.0, 1.0);
     Ok(out)
 }
 
@@ -519,6 +533,31 @@ impl<'a> Sheen<'a> {
             roughness: r.number("sheenRoughnessFactor", 0.0)?,
             colour_texture: r.texture("sheenColorTexture")?,
             roughness_texture: r.texture("sheenRoughnessTexture")?,
+        }))
+    }
+}
+
+/// KHR_materials_anisotropy of one material.
+pub struct Anisotropy<'a> {
+    strength: f32,
+    /// Radians, counter-clockwise from the tangent toward the bitangent.
+    rotation: f32,
+    pub texture: Option<RawTexture<'a>>,
+}
+
+impl<'a> Anisotropy<'a> {
+    /// The material's anisotropy, if it has the extension; malformed values and texture
+    /// references are errors naming the material.
+    pub fn read(m: &gltf::Material<'_>, doc: &'a gltf::Document) -> Result<Option<Self>, String> {
+        const NAME: &str = "KHR_materials_anisotropy";
+        let Some(v) = m.extension_value(NAME) else {
+            return Ok(None);
+        };
+        let r = ExtensionReader::new(m, doc, NAME, v);
+        Ok(Some(Anisotropy {
+            strength: r.number("anisotropyStrength", 0.0)?,
+            rotation: r.number("anisotropyRotation", 0.0)?,
+            texture: r.texture("anisotropyTexture")?,
         }))
     }
 }

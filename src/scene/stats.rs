@@ -21,6 +21,8 @@ pub struct SceneStats {
     /// (KHR_materials_sheen).
     pub coated_materials: u64,
     pub sheen_materials: u64,
+    /// Materials with anisotropy (KHR_materials_anisotropy, strength above 0).
+    pub anisotropic_materials: u64,
     /// Every material in use is Lambertian (`Scene::only_lambertian`): the kernels take
     /// that lobe alone.
     pub only_lambertian: bool,
@@ -104,6 +106,11 @@ impl SceneStats {
                 .iter()
                 .filter(|m| m.sheen_color.iter().any(|&c| c > 0.0))
                 .count() as u64,
+            anisotropic_materials: scene
+                .materials
+                .iter()
+                .filter(|m| m.anisotropy_strength > 0.0)
+                .count() as u64,
             only_lambertian: scene.only_lambertian(),
             textures: scene.textures.len() as u64,
             cameras: scene.cameras.len() as u64,
@@ -152,6 +159,9 @@ impl fmt::Display for SceneStats {
         }
         if self.sheen_materials > 0 {
             kinds.push(format!("{} with sheen", self.sheen_materials));
+        }
+        if self.anisotropic_materials > 0 {
+            kinds.push(format!("{} anisotropic", self.anisotropic_materials));
         }
         if self.only_lambertian {
             kinds.push("every one in use Lambertian".into());

@@ -16,6 +16,10 @@ agree up to noise.
                   mapped normal
   normal_map_glossy.gltf  the same with a rough gold metal floor and a glossy plastic
                   wall (checked through the glTF BSDF plugin)
+  anisotropy.gltf  KHR_materials_anisotropy: a brushed gold floor under a mirroring
+                  node, a stretched blue plastic wall with a mirror seam and a rotated
+                  brushed steel box, lit by two point lights and a small lamp (checked
+                  through the glTF BSDF plugin)
   alpha.gltf      alpha between a lamp and a floor: a fence cut out (MASK) by a
                   nearest RGBA texture, a BLEND panel whose alpha runs across a bilinear
                   texture (times 0.8), a constant BLEND of 0.4, a MASK under its cutoff
@@ -430,6 +434,50 @@ def normal_map_scene(glossy=False):
     b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
            rotation=look_at_rotation(eye, (0, 0.4, -0.4)))
     b.write("normal_map_glossy.gltf" if glossy else "normal_map.gltf")
+
+
+def anisotropic(b, rgb, metallic, roughness, strength, rotation):
+    """A glossy material with KHR_materials_anisotropy (factors only)."""
+    m = b.pbr(rgb, metallic, roughness)
+    b.materials[m]["extensions"] = {"KHR_materials_anisotropy": {
+        "anisotropyStrength": strength, "anisotropyRotation": rotation}}
+    if "KHR_materials_anisotropy" not in b.used:
+        b.used.append("KHR_materials_anisotropy")
+    return m
+
+
+def anisotropy_scene():
+    """anisotropy.gltf: brushed metal and anisotropic plastic under point lights and a
+    small lamp, where the highlights stretch across the surfaces: a floor of brushed
+    gold (rotation 0.6 rad) under a node mirrored in x, a wall of blue plastic stretched
+    along its tangent whose right half runs its u backward (a mirror seam, where the
+    bitangent turns), and a rotated box of brushed steel stretched at 1.2 rad."""
+    b = Builder()
+    floor = anisotropic(b, (1.0, 0.78, 0.34), 1.0, 0.2, 0.9, 0.6)
+    wall = anisotropic(b, (0.2, 0.4, 0.8), 0.0, 0.15, 1.0, 0.4)
+    steel = anisotropic(b, (0.85, 0.85, 0.88), 1.0, 0.1, 0.8, 1.2)
+    up, front = [0, 1, 0], [0, 0, 1]
+    b.node(mesh=b.mesh([(-1, 0, 1), (1, 0, 1), (1, 0, -1), (-1, 0, -1)], [0, 1, 2, 0, 2, 3], floor,
+                       [up] * 4, [(0, 0), (1, 0), (1, 1), (0, 1)]), scale=[-1, 1, 1])
+    b.node(mesh=b.mesh([(-1, 0, -1), (0, 0, -1), (0, 2, -1), (-1, 2, -1),
+                        (0, 0, -1), (1, 0, -1), (1, 2, -1), (0, 2, -1)],
+                       [0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7], wall, [front] * 8,
+                       [(0, 1), (1, 1), (1, 0), (0, 0), (1, 1), (0, 1), (0, 0), (1, 0)]))
+    box = b.box(steel)
+    b.meshes[box]["primitives"][0]["attributes"]["TEXCOORD_0"] = b._acc(
+        b"".join(struct.pack("<2f", *t) for t in [(0, 0), (1, 0), (1, 1), (0, 1)] * 6), 5126, 24, "VEC2")
+    b.node(mesh=box, translation=[0.45, 0.25, -0.3], scale=[0.5, 0.5, 0.5],
+           rotation=[0, 0.3826834, 0, 0.9238795])
+    lamp = b.lambert((0, 0, 0), emission=(1, 0.9, 0.8), strength=4)
+    b.node(mesh=b.quad((-0.3, 2.2, 0.1), (-0.3, 2.0, 0.5), (0.3, 2.0, 0.5), (0.3, 2.2, 0.1), lamp))
+    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
+        type="point", color=[1, 0.9, 0.7], intensity=1.5)}}, translation=[0.5, 1.3, -0.6])
+    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
+        type="point", color=[0.7, 0.8, 1], intensity=0.8)}}, translation=[-0.5, 0.4, 0.2])
+    eye = (0.0, 2.4, 2.3)
+    b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.4, -0.4)))
+    b.write("anisotropy.gltf")
 
 
 def alpha_scene():
@@ -930,3 +978,4 @@ if __name__ == "__main__":
     normal_map_scene()
     normal_map_scene(glossy=True)
     alpha_scene()
+    anisotropy_scene()
