@@ -15,6 +15,14 @@ Written from the specification's formulas, not from lanterna's kernels:
     metal_brdf      = (baseColor + (1 - baseColor) * fresnel_w) * D * Vis
     material        = mix(dielectric_brdf, metal_brdf, metallic)
 
+KHR_materials_anisotropy (factors only: `anisotropy` the strength, `anisotropy_rotation` in
+radians from the local frame's x, which is Mitsuba's ∂P/∂u, toward its y): the specular
+lobes take Mitsuba's own anisotropic GGX (`mi.MicrofacetDistribution`, α_u = mix(a, 1,
+strength^2) along the rotated x and α_v = a across it) for D, its Smith G1 for the
+height-correlated visibility 1 / ((1 + Λ(V) + Λ(L)) 4 |N.V| |N.L|) with Λ = 1/G1 − 1, and
+its visible-normal sampling, so that lanterna's anisotropic GGX meets an implementation
+it does not share.
+
 Two-sided (a view from the back sees the same BRDF, both directions mirrored), reflection
 only. Sampling is a one-sample mixture of GGX visible normals (Heitz 2018) and the cosine
 hemisphere; `pdf` is the mixture's density. Only constant factors (no textures):
@@ -45,6 +53,8 @@ def _params(props):
              ior=g("ior", 1.5))
     default_ps = 0.0 if (p["metallic"] == 0.0 and p["specular"] == 0.0) else 0.5 + 0.5 * p["metallic"]
     p["spec_prob"] = g("spec_prob", default_ps)
+    p["anisotropy"] = g("anisotropy", 0.0)
+    p["anisotropy_rotation"] = g("anisotropy_rotation", 0.0)
     return p
 
 
@@ -74,6 +84,14 @@ class GltfBSDF(mi.BSDF):
         self.f0d = mi.Color3f(*[min(f0_ior * c, 1.0) * p["specular"] for c in p["spec_color"]])
         self.f90d = p["specular"]
         self.ps = p["spec_prob"]
+        # KHR_materials_anisotropy: Mitsuba's anisotropic GGX in the frame turned by the
+        # rotation (None: isotropic, the formulas below).
+        self.distr = None
+        if p["anisotropy"] > 0.0:
+            a = p["roughness"] ** 2
+            at = max(a + (1.0 - a) * p["anisotropy"] ** 2, 1e-4)
+            self.distr = mi.MicrofacetDistribution(mi.MicrofacetType.GGX, at, max(a, 1e-4), True)
+            self.rot = (math.cos(p["anisotropy_rotation"]), math.sin(p["anisotropy_rotation"]))
         flags = (mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.DiffuseReflection
                  | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide)
         self.m_components = [flags]
@@ -100,12 +118,33 @@ class GltfBSDF(mi.BSDF):
         t2 = dr.maximum(1.0 - c * c, 0.0) / dr.maximum(c * c, 1e-12)
         return 2.0 / (1.0 + dr.sqrt(1.0 + a2 * t2))
 
+    def to_anisotropy_frame(self, v):
+        """A local vector in the frame whose x is the anisotropy's direction."""
+        c, s = self.rot
+        return mi.Vector3f(c * v.x + s * v.y, c * v.y - s * v.x, v.z)
+
+    def from_anisotropy_frame(self, v):
+        c, s = self.rot
+        return mi.Vector3f(c * v.x - s * v.y, s * v.x + c * v.y, v.z)
+
+    def anisotropic_spec(self, wi, wo, h):
+        """D·Vis of Mitsuba's anisotropic GGX (wi = V, wo = L, h their half vector)."""
+        wi, wo, h = (self.to_anisotropy_frame(v) for v in (wi, wo, h))
+        g1i, g1o = self.distr.smith_g1(wi, h), self.distr.smith_g1(wo, h)
+        ok = (g1i > 0) & (g1o > 0)
+        lam = lambda g: 1.0 / dr.select(ok, g, 1.0) - 1.0
+        vis = 1.0 / ((1.0 + lam(g1i) + lam(g1o)) * 4.0 * wi.z * wo.z)
+        return dr.select(ok, self.distr.eval(h) * vis, 0.0)
+
     def brdf(self, wi, wo):
         """f(wi, wo) for wi, wo in the upper local hemisphere (wi = view V, wo = light L)."""
         h = dr.normalize(wi + wo)
         vh = dr.abs(dr.dot(wi, h))
         fw = dr.power(1.0 - vh, 5.0) if hasattr(dr, "power") else (1.0 - vh) ** 5
-        spec = self.D(h.z) * self.Vis(wo.z, wi.z)
+        if self.distr is not None:
+            spec = self.anisotropic_spec(wi, wo, h)
+        else:
+            spec = self.D(h.z) * self.Vis(wo.z, wi.z)
         Fd = self.f0d + (self.f90d - self.f0d) * fw
         Fd_max = dr.maximum(dr.maximum(Fd.x, Fd.y), Fd.z)
         dielectric = Fd * spec + (1.0 - Fd_max) * self.base * dr.inv_pi
@@ -115,11 +154,20 @@ class GltfBSDF(mi.BSDF):
 
     def pdf_local(self, wi, wo):
         h = dr.normalize(wi + wo)
-        p_spec = self.G1(wi.z) * self.D(h.z) / (4.0 * wi.z)  # visible normals, reflected
+        if self.distr is not None:
+            # Mitsuba's visible-normal density of h, reflected.
+            hi = dr.dot(wi, h)
+            p_spec = dr.select(hi > 0, self.distr.pdf(self.to_anisotropy_frame(wi),
+                                                      self.to_anisotropy_frame(h)) / (4.0 * hi), 0.0)
+        else:
+            p_spec = self.G1(wi.z) * self.D(h.z) / (4.0 * wi.z)  # visible normals, reflected
         p_diff = wo.z * dr.inv_pi
         return self.ps * p_spec + (1.0 - self.ps) * p_diff
 
     def sample_vndf(self, wi, u):
+        if self.distr is not None:
+            m, _ = self.distr.sample(self.to_anisotropy_frame(wi), mi.Point2f(u.x, u.y))
+            return self.from_anisotropy_frame(m)
         a = self.alpha
         vh = dr.normalize(mi.Vector3f(a * wi.x, a * wi.y, wi.z))
         lensq = vh.x * vh.x + vh.y * vh.y
@@ -199,6 +247,10 @@ def plugin_dict(mat):
     ior = mat.get("extensions", {}).get("KHR_materials_ior", {}).get("ior")
     if ior is not None:
         d["ior"] = ior
+    an = mat.get("extensions", {}).get("KHR_materials_anisotropy", {})
+    if an.get("anisotropyStrength", 0.0) > 0.0:
+        d["anisotropy"] = min(float(an["anisotropyStrength"]), 1.0)
+        d["anisotropy_rotation"] = float(an.get("anisotropyRotation", 0.0))
     return d
 
 
@@ -237,6 +289,8 @@ def _refusal(index, mat, wrappers=()):
     spec = mat.get("extensions", {}).get("KHR_materials_specular", {})
     if "specularTexture" in spec or "specularColorTexture" in spec:
         return f"material {index} has a specular texture"
+    if "anisotropyTexture" in mat.get("extensions", {}).get("KHR_materials_anisotropy", {}):
+        return f"material {index} has an anisotropyTexture"
     for e in ("KHR_materials_clearcoat", "KHR_materials_sheen"):
         for t in _LAYER_TEXTURES:
             if t in mat.get("extensions", {}).get(e, {}):
@@ -285,6 +339,10 @@ def rewrite_export(export_dir):
         if why:
             raise ValueError(why)
         params = mitsuba_gltf_layers.plugin_dict(mat)
+        if "anisotropy_rotation" in params and "mirrored" in suffix:
+            # Where the UVs appear mirrored lanterna's bitangent is −cross(n, ∂P/∂u) and
+            # Mitsuba's +cross(n, ∂P/∂u): the direction (cos r, sin r) is (cos r, −sin r).
+            params["anisotropy_rotation"] = -params["anisotropy_rotation"]
         body = "".join(f'    <float name="{name}" value="{value!r}"/>\n'
                        for name, value in params.items() if name != "type")
         if not wrappers:

@@ -58,6 +58,10 @@ pub(super) struct UvPlan {
     pub(super) bake: Option<gpu::TextureRef>,
     /// The material's normal map goes out (`set` is its UV set, nothing baked).
     pub(super) normal: bool,
+    /// The PLY's coordinates give Mitsuba the material's tangent frame, for its normal
+    /// map or its anisotropy (`set` is the frame's UV set, nothing baked), and its
+    /// triangles go out in two groups by the orientation of their UVs.
+    pub(super) frame: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -68,10 +72,11 @@ pub(super) struct GroupKey {
     /// The base colour is the material's factor × the vertex colours, written into the
     /// PLY (Mitsuba's `vertex_color` attribute).
     pub(super) colored: bool,
-    /// Normal-mapped triangles on whose front the texture's image appears mirrored
+    /// Triangles with a tangent frame (normal-mapped or anisotropic) on whose front the texture's image appears mirrored
     /// (det(Δuv) > 0 in the PLY's winding, glTF's v pointing down the image): there
     /// lanterna's bitangent is −cross(n, ∂P/∂u), while Mitsuba's is always
-    /// +cross(n, ∂P/∂u), so they use the map with its green channel negated.
+    /// +cross(n, ∂P/∂u), so they use the map with its green channel negated (and the
+    /// anisotropy's direction mirrored: `scripts/mitsuba_gltf_bsdf.py`).
     pub(super) mirrored_uvs: bool,
 }
 
@@ -153,7 +158,7 @@ pub(super) fn append_instance(
         let i = p.index_offset as usize + 3 * t;
         let [a, b, c] = [0, 1, 2].map(|k| base + scene.indices[i + k]);
         let face = if flipped { [a, c, b] } else { [a, b, c] };
-        if plan.normal {
+        if plan.frame {
             let uv = face.map(|v| mesh.uvs[v as usize]);
             if uvs_mirrored(uv).unwrap_or(false) != key.mirrored_uvs {
                 continue;

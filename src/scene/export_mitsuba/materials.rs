@@ -35,18 +35,21 @@ impl Writer<'_> {
                 set: Some(mat.emissive_tex.uv_set),
                 bake,
                 normal: false,
+                frame: false,
             }
         } else if base {
             UvPlan {
                 set: Some(mat.base_color_tex.uv_set),
                 bake: None,
                 normal: false,
+                frame: false,
             }
         } else {
             UvPlan {
                 set: None,
                 bake: None,
                 normal: false,
+                frame: false,
             }
         };
         if mat.normal_tex.index >= 0 {
@@ -54,6 +57,7 @@ impl Writer<'_> {
                 Ok(()) => {
                     plan.set = Some(mat.normal_tex.uv_set);
                     plan.normal = true;
+                    plan.frame = true;
                 }
                 Err(why) => self.approximations.push(format!(
                     "material `{}`: its normal texture is not exported ({why})",
@@ -61,7 +65,56 @@ impl Writer<'_> {
                 )),
             }
         }
+        if mat.anisotropy_strength > 0.0 && !crate::scene::is_lambertian(mat) {
+            // Only the glTF BSDF plugin reads the anisotropy (from the glTF file), in the
+            // frame of the PLY's UVs; `principled` stays isotropic.
+            let set = if mat.anisotropy_tex.index >= 0 {
+                mat.anisotropy_tex.uv_set
+            } else if mat.normal_tex.index >= 0 {
+                mat.normal_tex.uv_set
+            } else {
+                0
+            };
+            match self.frame_exportable(m, plan, set) {
+                Ok(()) => {
+                    plan.set = Some(set);
+                    plan.frame = true;
+                }
+                Err(why) => self.approximations.push(format!(
+                    "material `{}`: its anisotropy's frame is not exported ({why})",
+                    self.material_name(m)
+                )),
+            }
+        }
         plan
+    }
+
+    /// Whether the tangent frame of material `m`'s anisotropy can reach Mitsuba through
+    /// the PLY's coordinates of UV set `set`, given the UVs `plan` already writes (as for
+    /// a normal map: [`Self::normal_map_exportable`]).
+    fn frame_exportable(&self, m: u32, plan: UvPlan, set: u32) -> Result<(), &'static str> {
+        if plan.set.is_some_and(|s| s != set) {
+            return Err("another texture of the material uses another UV set");
+        }
+        if plan.bake.is_some() {
+            return Err("the PLY's coordinates carry the emissive texture's transform");
+        }
+        if self.has_tangents(m) {
+            return Err(
+                "its meshes have TANGENT attributes; Mitsuba derives tangents from the UVs",
+            );
+        }
+        Ok(())
+    }
+
+    /// Whether some mesh of material `m` has a TANGENT attribute.
+    fn has_tangents(&self, m: u32) -> bool {
+        self.scene.primitives.iter().any(|p| {
+            p.material == m
+                && self.scene.vertices[p.vertex_offset as usize..][..p.vertex_count as usize]
+                    .iter()
+                    .any(|v| v.tangent[..3] != [0.0; 3])
+        })
     }
 
     /// Whether material `m`'s normal map can go out as Mitsuba's `normalmap` around the
@@ -80,13 +133,7 @@ impl Writer<'_> {
         if plan.bake.is_some() {
             return Err("the PLY's coordinates carry the emissive texture's transform");
         }
-        let tangents = self.scene.primitives.iter().any(|p| {
-            p.material == m
-                && self.scene.vertices[p.vertex_offset as usize..][..p.vertex_count as usize]
-                    .iter()
-                    .any(|v| v.tangent[..3] != [0.0; 3])
-        });
-        if tangents {
+        if self.has_tangents(m) {
             return Err(
                 "its meshes have TANGENT attributes; Mitsuba derives tangents from the UVs",
             );
@@ -230,6 +277,12 @@ impl Writer<'_> {
                     mat.clearcoat,
                     1.0 - mat.clearcoat_roughness
                 );
+            }
+            if mat.anisotropy_strength > 0.0 {
+                self.approximations.push(format!(
+                    "material `{name}`: its anisotropy (strength {}) is left out of `principled` (the glTF BSDF plugin of scripts/mitsuba_gltf_bsdf.py renders it)",
+                    mat.anisotropy_strength
+                ));
             }
             if sheen > 0.0 {
                 // Mitsuba's sheen is Disney's (a Schlick-weighted lobe tinted toward the

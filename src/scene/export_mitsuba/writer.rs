@@ -132,16 +132,17 @@ impl Writer<'_> {
                     ));
                 }
             }
-            if plan.normal && degenerate_uvs(scene, prim, plan) {
+            if plan.frame && degenerate_uvs(scene, prim, plan) {
                 self.approximations.push(format!(
-                    "mesh {}: triangles without a UV parameterisation under material `{}`'s normal map (lanterna leaves them unmapped, Mitsuba maps them in an arbitrary frame)",
+                    "mesh {}: triangles without a UV parameterisation under material `{}`'s normal map or anisotropy (lanterna leaves them unmapped or isotropic, Mitsuba takes an arbitrary frame)",
                     prim.name,
                     self.material_name(prim.material)
                 ));
             }
-            // Normal-mapped meshes go out in two groups by the orientation of their UVs.
+            // Normal-mapped and anisotropic meshes go out in two groups by the
+            // orientation of their UVs.
             for mirrored_uvs in [false, true] {
-                if mirrored_uvs && !plan.normal {
+                if mirrored_uvs && !plan.frame {
                     continue;
                 }
                 let key = GroupKey {
