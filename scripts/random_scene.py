@@ -41,6 +41,12 @@ Mitsuba's `normalmap` and marks the scene approximate for one reason only: a tex
 from below its mapped normal reflects in lanterna and not in Mitsuba (README, shading
 normals).
 
+`--anisotropy` makes about half of the opaque Lambertian materials with texture
+coordinates (walls and the box group then carry UVs) glossy metals or plastics with
+KHR_materials_anisotropy (factors only), which `mitsuba_compare.py --gltf-bsdf` renders
+exactly through the glTF BSDF plugin (Mitsuba's own anisotropic GGX). Don't combine it
+with `--materials` there: the plugin refuses textures.
+
 `--alpha` makes about half of the opaque non-emissive Lambertian materials BLEND (alpha
 0.2-0.9) or MASK (a nearest RGBA texture where the mesh has UVs, else a constant alpha
 either side of the cutoff), which the export writes exactly as Mitsuba's `mask` under
@@ -182,7 +188,36 @@ def add_alpha(s, seed):
     return kinds
 
 
-def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=False):
+def add_anisotropy(s, seed):
+    """KHR_materials_anisotropy on about half of the opaque Lambertian materials of meshes
+    with texture coordinates (factors only): each becomes a glossy metal or plastic
+    (roughness 0.05-0.5) stretched by a strength of 0.3-1 at a rotation of 0-2π. Drawn
+    from a generator of their own, so that the scene is otherwise the one the seed gives
+    without them."""
+    r = random.Random(seed + 3_000_003)
+    count = 0
+    for index, has_uv in sorted(opaque_lambertian_materials(s).items()):
+        if not has_uv or r.random() >= 0.5:
+            continue
+        m = s.materials[index]
+        pbr = m.setdefault("pbrMetallicRoughness", {})
+        metal = r.random() < 0.5
+        pbr["metallicFactor"] = 1.0 if metal else 0.0
+        pbr["roughnessFactor"] = r.uniform(0.05, 0.5)
+        if metal:
+            pbr["baseColorFactor"] = rgb_of(r, 0.5, 1.0) + [1.0]
+        m["extensions"].pop("KHR_materials_specular", None)
+        m["extensions"]["KHR_materials_anisotropy"] = {
+            "anisotropyStrength": r.uniform(0.3, 1.0),
+            "anisotropyRotation": r.uniform(0.0, 2 * math.pi)}
+        count += 1
+    if count and "KHR_materials_anisotropy" not in s.used:
+        s.used.append("KHR_materials_anisotropy")
+    return count
+
+
+def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=False,
+             anisotropy=False):
     r = random.Random(seed)
     s = Builder()
     rgb = lambda lo, hi: [r.uniform(lo, hi) for _ in range(3)]  # noqa: E731
@@ -190,7 +225,8 @@ def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=Fa
     absorbing = materials and r.random() < 0.5
     wall_material = (lambda: textured(r, s, 0.4, 1.0) if materials and r.random() < 0.5
                      else material(s, rgb(0.2, 0.9)))
-    walls = [s.quad(*UNIT_QUAD, wall_material(), uv=materials or normal_maps) for _ in range(3)]
+    with_uvs = materials or normal_maps or anisotropy
+    walls = [s.quad(*UNIT_QUAD, wall_material(), uv=with_uvs) for _ in range(3)]
     for k, (t, q) in enumerate([
             ([0, 0, 0], quat([1, 0, 0], -math.pi / 2)),  # floor, facing +y
             ([0, room, 0], quat([1, 0, 0], math.pi / 2)),  # ceiling, facing −y
@@ -208,7 +244,7 @@ def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=Fa
         if materials:
             m = r.choice([m, solid_glass(r, s, absorbing), solid_glass(r, s, absorbing),
                           textured(r, s, 0.3, 1.0)])
-        boxes.append(s.node(root=False, mesh=box(s, m, textured=materials or normal_maps),
+        boxes.append(s.node(root=False, mesh=box(s, m, textured=with_uvs),
                             translation=[r.uniform(-1.5, 1.5), r.uniform(0.2, 1.2), r.uniform(-1.5, 1.0)],
                             rotation=quat(rgb(-1, 1), r.uniform(0, 2 * math.pi)), scale=scale))
     s.node(children=boxes, rotation=quat([0, 1, 0], r.uniform(0, 2 * math.pi)),
@@ -278,6 +314,8 @@ def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=Fa
     if alpha:
         alphas = add_alpha(s, seed)
         kinds.append(f"alpha: {', '.join(alphas) or 'none'}")
+    if anisotropy:
+        kinds.append(f"{add_anisotropy(s, seed)} anisotropic materials")
     return s, kinds
 
 
@@ -304,10 +342,14 @@ def main():
                     help="normal maps on about half of the opaque Lambertian materials with UVs")
     ap.add_argument("--alpha", action="store_true",
                     help="alpha BLEND or MASK on about half of the opaque Lambertian materials")
+    ap.add_argument("--anisotropy", action="store_true",
+                    help="anisotropic glossy metals and plastics on about half of the opaque "
+                    "Lambertian materials with UVs")
     ap.add_argument("--two-sided-boxes", action="store_true",
                     help="let emissive boxes be two-sided too (Mitsuba's references leak there)")
     a = ap.parse_args()
-    scene, kinds = generate(a.seed, a.two_sided_boxes, a.materials, a.normal_maps, a.alpha)
+    scene, kinds = generate(a.seed, a.two_sided_boxes, a.materials, a.normal_maps, a.alpha,
+                            a.anisotropy)
     scene.write(os.path.abspath(a.output))  # an absolute name: not next to make_scenes.py
     print(f"{a.output}: {', '.join(kinds)}")
     return 0
