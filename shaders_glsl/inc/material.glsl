@@ -131,9 +131,9 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     // KHR_materials_anisotropy: the direction of the larger α, in world space, from the
     // tangent frame of the front face (the anisotropy texture's UV set, else the normal
     // texture's): zero where the frame or the direction degenerates (isotropic then).
-    float anisotropy = m.anisotropy_strength;
+    float anisotropy = ANISOTROPY ? m.anisotropy_strength : 0.0;
     vec3 anisotropy_dir = vec3(0.0);
-    if (anisotropy > 0.0) {
+    if (ANISOTROPY && anisotropy > 0.0) {
         TextureRef t = m.anisotropy_tex.index >= 0 ? m.anisotropy_tex : m.normal_tex;
         uint uv_set = t.index >= 0 ? t.uv_set : 0u;
         vec2 dir = m.anisotropy_rotation;
@@ -172,8 +172,8 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     s.ng = ng;
     s.n = n;
     // The local frame's x along the anisotropy direction (the BSDF's alpha_t), else any.
-    vec3 anisotropy_t = anisotropy_dir - n * dot(n, anisotropy_dir);
-    if (dot(anisotropy_t, anisotropy_t) > 1e-12) {
+    vec3 anisotropy_t = ANISOTROPY ? anisotropy_dir - n * dot(n, anisotropy_dir) : vec3(0.0);
+    if (ANISOTROPY && dot(anisotropy_t, anisotropy_t) > 1e-12) {
         s.t = normalize(anisotropy_t);
         s.b = cross(n, s.t);
     } else {
@@ -196,7 +196,7 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     s.bsdf.metallic = clamp(metallic, 0.0, 1.0);
     s.bsdf.alpha = max(roughness * roughness, MIN_GGX_ALPHA);
     s.bsdf.alpha_t = s.bsdf.alpha;
-    if (dot(anisotropy_t, anisotropy_t) > 1e-12)
+    if (ANISOTROPY && dot(anisotropy_t, anisotropy_t) > 1e-12)
         s.bsdf.alpha_t = max(mix(roughness * roughness, 1.0, sqr(clamp(anisotropy, 0.0, 1.0))), MIN_GGX_ALPHA);
     s.bsdf.specular = m.specular;
     float f0 = sqr((m.ior - 1.0) / (m.ior + 1.0));

@@ -17,7 +17,12 @@ layout(constant_id = 4) const bool SOLIDS = false;
 layout(constant_id = 5) const bool CLEARCOAT = false;
 // The scene has sheen (KHR_materials_sheen): without, the sheen lobe compiles away.
 layout(constant_id = 6) const bool SHEEN = false;
-// (constant_id 7 is SCENE_ADDRESSES, inc/scene_data.glsl.)
+// (constant_id 7 is SCENE_ADDRESSES, inc/scene_data.glsl; 9 LIGHT_REUSE,
+// inc/light_reuse.glsl; 10 LIGHT_VISIBILITY, inc/light_visibility.glsl.)
+// The scene has anisotropic materials (KHR_materials_anisotropy) that are not Lambertian:
+// without, the anisotropy's frame compiles away (lavapipe: 8 % of a `pt` sample on
+// `cornell-lights`, whose kernels are otherwise the Lambertian lobe alone).
+layout(constant_id = 11) const bool ANISOTROPY = false;
 // Where the kernels take the Lambertian lobe alone (BSDF_KERNEL_*): at Lambertian
 // surfaces (metallic 0, specular 0, no transmission, coat or sheen), or everywhere when
 // every material the scene uses is (`Scene::only_lambertian`), the other lobes then

@@ -26,6 +26,9 @@ pub(super) struct Variant {
     pub clearcoat: bool,
     /// The scene has materials with sheen (KHR_materials_sheen).
     pub sheen: bool,
+    /// The scene has anisotropic materials that are not Lambertian
+    /// (KHR_materials_anisotropy).
+    pub anisotropy: bool,
     /// Where the kernels take the Lambertian lobe alone (`gpu::BSDF_KERNEL_*`).
     pub bsdf: u32,
     /// World-space light reuse (`light_reuse.rs`; RIS methods).
@@ -185,16 +188,17 @@ impl Renderer {
                 v.bsdf,
                 v.reuse as u32,
                 v.visibility as u32,
+                v.anisotropy as u32,
             ];
             let name = format!(
-                "render (ris={}, guiding={}, training={}, aovs={}, solids={}, clearcoat={}, sheen={}, bsdf={}, reuse={}, visibility={}, debug={}, lanes={}, traversal={})",
-                v.ris, v.guiding, v.training, v.aovs, v.solids, v.clearcoat, v.sheen, v.bsdf, v.reuse, v.visibility, v.debug, v.lanes, self.traversal.kind
+                "render (ris={}, guiding={}, training={}, aovs={}, solids={}, clearcoat={}, sheen={}, anisotropy={}, bsdf={}, reuse={}, visibility={}, debug={}, lanes={}, traversal={})",
+                v.ris, v.guiding, v.training, v.aovs, v.solids, v.clearcoat, v.sheen, v.anisotropy, v.bsdf, v.reuse, v.visibility, v.debug, v.lanes, self.traversal.kind
             );
             requests.push((v, spirv, spec, name));
         }
         let bindings = self.bindings();
         let device = &self.device;
-        let create = |(v, spirv, spec, name): &(Variant, Vec<u32>, [u32; 11], String)| {
+        let create = |(v, spirv, spec, name): &(Variant, Vec<u32>, [u32; 12], String)| {
             let started = Instant::now();
             let p = ComputePipeline::new(
                 device,
@@ -332,6 +336,7 @@ impl Renderer {
             solids: self.has_solids,
             clearcoat: self.has_clearcoat,
             sheen: self.has_sheen,
+            anisotropy: self.has_anisotropy,
             bsdf: self.bsdf_kernel(),
             reuse: self.settings.light_reuse.world && method.uses_ris(),
             visibility: self.settings.light_visibility.learned && method.uses_ris(),

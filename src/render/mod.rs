@@ -173,6 +173,9 @@ pub struct Renderer {
     has_clearcoat: bool,
     /// Whether any material has a sheen (the kernels' SHEEN constant).
     has_sheen: bool,
+    /// Whether any material is anisotropic and not Lambertian (the kernels' ANISOTROPY
+    /// constant).
+    has_anisotropy: bool,
     /// Whether every material in use is Lambertian (the kernels' BSDF_KERNEL constant:
     /// `Renderer::bsdf_kernel`).
     only_lambertian: bool,
@@ -299,6 +302,10 @@ impl Renderer {
                 .materials
                 .iter()
                 .any(|m| m.sheen_color.iter().any(|&c| c > 0.0)),
+            has_anisotropy: scene
+                .materials
+                .iter()
+                .any(|m| m.anisotropy_strength > 0.0 && !crate::scene::is_lambertian(m)),
             only_lambertian: scene.only_lambertian(),
             guide,
             reuse_cells,
