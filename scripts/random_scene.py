@@ -64,7 +64,6 @@ import argparse
 import math
 import os
 import random
-import struct
 import sys
 
 # The glTF writer of the Mitsuba peer scenes (tests/data/mitsuba/make_scenes.py).
@@ -321,15 +320,7 @@ def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=Fa
 
 def box(s, m, textured):
     """The unit cube; with `textured`, each face carries uv (0,0)-(1,1) for its texture."""
-    mesh = s.box(m)
-    if textured:
-        # Texture coordinates for the 24 vertices of Builder.box (four per face, in the
-        # order of its corners).
-        uvs = [(0, 0), (1, 0), (1, 1), (0, 1)] * 6
-        prim = s.meshes[mesh]["primitives"][0]
-        prim["attributes"]["TEXCOORD_0"] = s._acc(
-            b"".join(struct.pack("<2f", *t) for t in uvs), 5126, len(uvs), "VEC2")
-    return mesh
+    return s.box(m, uv=textured)
 
 
 def main():

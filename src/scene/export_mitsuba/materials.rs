@@ -89,9 +89,11 @@ impl Writer<'_> {
         plan
     }
 
-    /// Whether the tangent frame of material `m`'s anisotropy can reach Mitsuba through
-    /// the PLY's coordinates of UV set `set`, given the UVs `plan` already writes (as for
-    /// a normal map: [`Self::normal_map_exportable`]).
+    /// Whether a tangent frame of material `m` (its anisotropy's, its normal map's) can
+    /// reach Mitsuba through the PLY's coordinates of UV set `set`, given the UVs `plan`
+    /// already writes: Mitsuba takes the frame from them (∂P/∂u, its bitangent
+    /// cross(n, ∂P/∂u)), so they must be that set, untransformed; the frame from a
+    /// TANGENT attribute is lanterna's alone.
     fn frame_exportable(&self, m: u32, plan: UvPlan, set: u32) -> Result<(), &'static str> {
         if plan.set.is_some_and(|s| s != set) {
             return Err("another texture of the material uses another UV set");
@@ -118,27 +120,15 @@ impl Writer<'_> {
     }
 
     /// Whether material `m`'s normal map can go out as Mitsuba's `normalmap` around the
-    /// opaque BSDF, given the UVs `plan` already writes: Mitsuba takes the map's frame
-    /// from the PLY's coordinates (∂P/∂u, its bitangent cross(n, ∂P/∂u)), so they must
-    /// be the normal texture's own set, untransformed; the frame from a TANGENT
-    /// attribute is lanterna's alone.
+    /// opaque BSDF, given the UVs `plan` already writes: its frame must reach Mitsuba
+    /// ([`Self::frame_exportable`] for the normal texture's set), and the material must
+    /// be opaque.
     fn normal_map_exportable(&self, m: u32, plan: UvPlan) -> Result<(), &'static str> {
         let mat = &self.scene.materials[m as usize];
         if mat.transmission > 0.0 && mat.metallic < 1.0 {
             return Err("transmitting materials keep their geometric frame in the export");
         }
-        if plan.set.is_some_and(|s| s != mat.normal_tex.uv_set) {
-            return Err("another texture of the material uses another UV set");
-        }
-        if plan.bake.is_some() {
-            return Err("the PLY's coordinates carry the emissive texture's transform");
-        }
-        if self.has_tangents(m) {
-            return Err(
-                "its meshes have TANGENT attributes; Mitsuba derives tangents from the UVs",
-            );
-        }
-        Ok(())
+        self.frame_exportable(m, plan, mat.normal_tex.uv_set)
     }
 
     /// The BSDF of material `m`; with `vertex_colors`, its base colour is the meshes'

@@ -177,8 +177,9 @@ class Builder:
         uvs = [(0, 0), (1, 0), (1, 1), (0, 1)] if uv else None
         return self.mesh([p0, p1, p2, p3], [0, 1, 2, 0, 2, 3], material, n, uvs)
 
-    def box(self, material):
-        """Unit cube [-0.5, 0.5]^3, outward faces, flat normals."""
+    def box(self, material, uv=False):
+        """Unit cube [-0.5, 0.5]^3, outward faces, flat normals; with `uv`, each face
+        carries uv (0,0)-(1,1) in the order of its corners."""
         prims_p, prims_n, idx = [], [], []
         for axis in range(3):
             for s in (-1, 1):
@@ -198,7 +199,12 @@ class Builder:
                 prims_p += corners
                 prims_n += [n] * 4
                 idx += [base, base + 1, base + 2, base, base + 2, base + 3]
-        return self.mesh(prims_p, idx, material, prims_n)
+        mesh = self.mesh(prims_p, idx, material, prims_n)
+        if uv:
+            uvs = [(0, 0), (1, 0), (1, 1), (0, 1)] * 6
+            self.meshes[mesh]["primitives"][0]["attributes"]["TEXCOORD_0"] = self._acc(
+                b"".join(struct.pack("<2f", *t) for t in uvs), 5126, len(uvs), "VEC2")
+        return mesh
 
     def lambert(self, rgb, emission=None, strength=None, double_sided=False, base_tex=None,
                 emissive_tex=None):
@@ -405,6 +411,18 @@ def normal_map_png(w, h, max_tilt_deg, seed):
     return png_rgb(w, h, rows)
 
 
+def mirrored_floor_and_seamed_wall(b, floor, wall):
+    """A 2 m floor under a node mirrored in x, and a 2 m wall behind it in two halves,
+    the right half's u running backward (a mirror seam), both with UVs."""
+    up, front = [0, 1, 0], [0, 0, 1]
+    b.node(mesh=b.mesh([(-1, 0, 1), (1, 0, 1), (1, 0, -1), (-1, 0, -1)], [0, 1, 2, 0, 2, 3], floor,
+                       [up] * 4, [(0, 0), (1, 0), (1, 1), (0, 1)]), scale=[-1, 1, 1])
+    b.node(mesh=b.mesh([(-1, 0, -1), (0, 0, -1), (0, 2, -1), (-1, 2, -1),
+                        (0, 0, -1), (1, 0, -1), (1, 2, -1), (0, 2, -1)],
+                       [0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7], wall, [front] * 8,
+                       [(0, 1), (1, 1), (1, 0), (0, 0), (1, 1), (0, 1), (0, 0), (1, 0)]))
+
+
 def normal_map_scene(glossy=False):
     """normal_map.gltf, or with `glossy` normal_map_glossy.gltf: the same layout with a
     rough gold metal floor and a glossy plastic wall, for the glTF BSDF plugin."""
@@ -415,15 +433,7 @@ def normal_map_scene(glossy=False):
     b.materials[floor]["normalTexture"] = {"index": floor_map, "scale": 0.5}
     wall = b.pbr((0.2, 0.4, 0.8), 0.0, 0.3) if glossy else b.lambert((0.8, 0.6, 0.4))
     b.materials[wall]["normalTexture"] = {"index": wall_map}
-    up, front = [0, 1, 0], [0, 0, 1]
-    # The floor under a node mirrored in x.
-    b.node(mesh=b.mesh([(-1, 0, 1), (1, 0, 1), (1, 0, -1), (-1, 0, -1)], [0, 1, 2, 0, 2, 3], floor,
-                       [up] * 4, [(0, 0), (1, 0), (1, 1), (0, 1)]), scale=[-1, 1, 1])
-    # The wall in two halves, the right half's u running backward (a mirror seam).
-    b.node(mesh=b.mesh([(-1, 0, -1), (0, 0, -1), (0, 2, -1), (-1, 2, -1),
-                        (0, 0, -1), (1, 0, -1), (1, 2, -1), (0, 2, -1)],
-                       [0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7], wall, [front] * 8,
-                       [(0, 1), (1, 1), (1, 0), (0, 0), (1, 1), (0, 1), (0, 0), (1, 0)]))
+    mirrored_floor_and_seamed_wall(b, floor, wall)
     lamp = b.lambert((0, 0, 0), emission=(1, 0.9, 0.8), strength=4)
     b.node(mesh=b.quad((-0.4, 2.2, 0.1), (-0.4, 2.0, 0.7), (0.4, 2.0, 0.7), (0.4, 2.2, 0.1), lamp))
     b.node(extensions={"KHR_lights_punctual": {"light": b.light(
@@ -456,17 +466,8 @@ def anisotropy_scene():
     floor = anisotropic(b, (1.0, 0.78, 0.34), 1.0, 0.2, 0.9, 0.6)
     wall = anisotropic(b, (0.2, 0.4, 0.8), 0.0, 0.15, 1.0, 0.4)
     steel = anisotropic(b, (0.85, 0.85, 0.88), 1.0, 0.1, 0.8, 1.2)
-    up, front = [0, 1, 0], [0, 0, 1]
-    b.node(mesh=b.mesh([(-1, 0, 1), (1, 0, 1), (1, 0, -1), (-1, 0, -1)], [0, 1, 2, 0, 2, 3], floor,
-                       [up] * 4, [(0, 0), (1, 0), (1, 1), (0, 1)]), scale=[-1, 1, 1])
-    b.node(mesh=b.mesh([(-1, 0, -1), (0, 0, -1), (0, 2, -1), (-1, 2, -1),
-                        (0, 0, -1), (1, 0, -1), (1, 2, -1), (0, 2, -1)],
-                       [0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7], wall, [front] * 8,
-                       [(0, 1), (1, 1), (1, 0), (0, 0), (1, 1), (0, 1), (0, 0), (1, 0)]))
-    box = b.box(steel)
-    b.meshes[box]["primitives"][0]["attributes"]["TEXCOORD_0"] = b._acc(
-        b"".join(struct.pack("<2f", *t) for t in [(0, 0), (1, 0), (1, 1), (0, 1)] * 6), 5126, 24, "VEC2")
-    b.node(mesh=box, translation=[0.45, 0.25, -0.3], scale=[0.5, 0.5, 0.5],
+    mirrored_floor_and_seamed_wall(b, floor, wall)
+    b.node(mesh=b.box(steel, uv=True), translation=[0.45, 0.25, -0.3], scale=[0.5, 0.5, 0.5],
            rotation=[0, 0.3826834, 0, 0.9238795])
     lamp = b.lambert((0, 0, 0), emission=(1, 0.9, 0.8), strength=4)
     b.node(mesh=b.quad((-0.3, 2.2, 0.1), (-0.3, 2.0, 0.5), (0.3, 2.0, 0.5), (0.3, 2.2, 0.1), lamp))
