@@ -290,6 +290,11 @@ class Builder:
         self.lights.append(kw)
         return len(self.lights) - 1
 
+    def point_light(self, color, intensity, translation):
+        """A KHR_lights_punctual point light at `translation` (a root node)."""
+        return self.node(extensions={"KHR_lights_punctual": {"light": self.light(
+            type="point", color=color, intensity=intensity)}}, translation=translation)
+
     def write(self, name):
         used = ["KHR_materials_specular", "KHR_materials_emissive_strength"]
         g = {"asset": {"version": "2.0", "generator": "lanterna tests/data/mitsuba/make_scenes.py"},
@@ -388,8 +393,7 @@ def tex16_scene():
     panel = b.lambert((0.5, 0.5, 0.5), emission=(1, 1, 1), emissive_tex=glow)
     b.node(mesh=b.quad((-0.6, 1.3, 0.2), (0.6, 1.3, 0.2), (0.6, 1.6, 0.9), (-0.6, 1.6, 0.9),
                        panel))
-    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
-        type="point", color=[1, 0.95, 0.9], intensity=4.0)}}, translation=[0.5, 1.0, 0.6])
+    b.point_light([1, 0.95, 0.9], 4.0, [0.5, 1.0, 0.6])
     eye = (0.3, 1.2, 2.6)
     b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
            rotation=look_at_rotation(eye, (0, 0.6, 0)))
@@ -436,10 +440,8 @@ def normal_map_scene(glossy=False):
     mirrored_floor_and_seamed_wall(b, floor, wall)
     lamp = b.lambert((0, 0, 0), emission=(1, 0.9, 0.8), strength=4)
     b.node(mesh=b.quad((-0.4, 2.2, 0.1), (-0.4, 2.0, 0.7), (0.4, 2.0, 0.7), (0.4, 2.2, 0.1), lamp))
-    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
-        type="point", color=[1, 0.9, 0.7], intensity=1.5)}}, translation=[0.6, 1.4, -0.65])
-    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
-        type="point", color=[0.7, 0.8, 1], intensity=0.8)}}, translation=[-0.5, 0.35, 0.3])
+    b.point_light([1, 0.9, 0.7], 1.5, [0.6, 1.4, -0.65])
+    b.point_light([0.7, 0.8, 1], 0.8, [-0.5, 0.35, 0.3])
     eye = (0.0, 2.6, 2.2)
     b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
            rotation=look_at_rotation(eye, (0, 0.4, -0.4)))
@@ -471,10 +473,8 @@ def anisotropy_scene():
            rotation=[0, 0.3826834, 0, 0.9238795])
     lamp = b.lambert((0, 0, 0), emission=(1, 0.9, 0.8), strength=4)
     b.node(mesh=b.quad((-0.3, 2.2, 0.1), (-0.3, 2.0, 0.5), (0.3, 2.0, 0.5), (0.3, 2.2, 0.1), lamp))
-    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
-        type="point", color=[1, 0.9, 0.7], intensity=1.5)}}, translation=[0.5, 1.3, -0.6])
-    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
-        type="point", color=[0.7, 0.8, 1], intensity=0.8)}}, translation=[-0.5, 0.4, 0.2])
+    b.point_light([1, 0.9, 0.7], 1.5, [0.5, 1.3, -0.6])
+    b.point_light([0.7, 0.8, 1], 0.8, [-0.5, 0.4, 0.2])
     eye = (0.0, 2.4, 2.3)
     b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
            rotation=look_at_rotation(eye, (0, 0.4, -0.4)))
@@ -519,8 +519,7 @@ def alpha_scene():
     b.materials[glow]["pbrMetallicRoughness"]["baseColorFactor"][3] = 0.5
     b.materials[glow]["alphaMode"] = "BLEND"
     b.node(mesh=b.quad((0.5, 1.3, -1.2), (1.2, 1.3, -1.2), (1.2, 1.8, -1.2), (0.5, 1.8, -1.2), glow))
-    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
-        type="point", color=[1, 0.8, 0.6], intensity=2.0)}}, translation=[-0.3, 1.4, 0.6])
+    b.point_light([1, 0.8, 0.6], 2.0, [-0.3, 1.4, 0.6])
     eye = (0.2, 1.6, 2.8)
     b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
            rotation=look_at_rotation(eye, (0, 0.5, -0.2)))
@@ -837,8 +836,7 @@ def lit_emitters_scene():
     panel = b.lambert((0.9, 0.9, 0.9), emission=(1.0, 0.7, 0.4), strength=0.5)
     b.node(mesh=b.quad((-0.9, 0.6, -1.99), (-0.1, 0.6, -1.99), (-0.1, 1.2, -1.99),
                        (-0.9, 1.2, -1.99), panel))  # faces +Z, 1 cm before the wall
-    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
-        type="point", color=[0.7, 0.9, 1.0], intensity=0.4)}}, translation=[-0.5, 0.9, -1.74])
+    b.point_light([0.7, 0.9, 1.0], 0.4, [-0.5, 0.9, -1.74])
     fin = b.lambert((0.3, 0.8, 0.5), emission=(0.4, 0.4, 1.0), strength=0.3, double_sided=True)
     b.node(mesh=b.quad((0.3, 0.0, -1.2), (0.9, 0.0, -0.9), (0.9, 0.7, -0.9), (0.3, 0.7, -1.2),
                        fin))
@@ -948,8 +946,7 @@ def coat_sheen_scene():
     lamp = b.lambert((0.5, 0.5, 0.5), emission=(1, 0.95, 0.85), strength=6.0)
     y = 2 * s - 0.01
     b.node(mesh=b.quad((-0.4, y, 0.4), (0.4, y, 0.4), (0.4, y, -0.4), (-0.4, y, -0.4), lamp))
-    b.node(extensions={"KHR_lights_punctual": {"light": b.light(
-        type="point", color=[1, 0.9, 0.8], intensity=3.0)}}, translation=[0.8, 1.2, 0.9])
+    b.point_light([1, 0.9, 0.8], 3.0, [0.8, 1.2, 0.9])
     b.node(mesh=b.box(amber), translation=[-0.4, 0.35, -0.2], scale=[0.7, 0.7, 0.7],
            rotation=[0, 0.3826834, 0, 0.9238795])
     eye = (0.3, 1.1, 3.2)
