@@ -76,6 +76,10 @@ struct Case {
     /// KHR_materials_anisotropy: GGX α along the local x (the anisotropy direction);
     /// 0: `alpha`, isotropic.
     alpha_t: f64,
+    /// KHR_materials_diffuse_transmission: the share of the diffuse lobe (what
+    /// `transmission` leaves) that leaves below the surface, and its colour.
+    diffuse_transmission: f64,
+    diffuse_transmission_color: [f64; 3],
 }
 
 impl Case {
@@ -98,7 +102,14 @@ impl Case {
             sheen: [0.0; 3],
             sheen_roughness: 0.5,
             alpha_t: 0.0,
+            diffuse_transmission: 0.0,
+            diffuse_transmission_color: [1.0; 3],
         }
+    }
+
+    /// Whether directions below the surface carry light (the density lives on the sphere).
+    fn transmits(&self) -> bool {
+        self.transmission > 0.0 || self.diffuse_transmission > 0.0
     }
 
     /// α along the local x and along y.
@@ -137,6 +148,10 @@ impl Case {
             self.sheen[2],
             self.sheen_roughness,
             self.alphas().0,
+            self.diffuse_transmission,
+            self.diffuse_transmission_color[0],
+            self.diffuse_transmission_color[1],
+            self.diffuse_transmission_color[2],
         ];
         v.iter().flat_map(|&x| (x as f32).to_le_bytes()).collect()
     }
@@ -409,6 +424,79 @@ fn cases() -> Vec<(&'static str, Case)> {
             },
         ),
         (
+            "leaf: diffuse transmission, oblique",
+            Case {
+                base_color: [0.3, 0.6, 0.2],
+                diffuse_transmission: 0.6,
+                diffuse_transmission_color: [0.9, 0.8, 0.3],
+                ..plastic
+            },
+        ),
+        (
+            "paper: all diffuse light through, specular 0, grazing",
+            Case {
+                f0: [0.0; 3],
+                specular: 0.0,
+                wo: grazing,
+                diffuse_transmission: 1.0,
+                ..plastic
+            },
+        ),
+        (
+            "lamp shade: half-transmitting glossy thin wall, the rest half diffusely through, near the normal",
+            Case {
+                base_color: [0.9, 0.85, 0.7],
+                alpha: 0.1,
+                wo: near_normal,
+                transmission: 0.4,
+                diffuse_transmission: 0.5,
+                diffuse_transmission_color: [1.0, 0.7, 0.4],
+                ..plastic
+            },
+        ),
+        (
+            "half metal with diffuse transmission and coloured specular, grazing",
+            Case {
+                f0: [0.8 * 0.04, 0.8 * 0.02, 0.8 * 0.08],
+                specular: 0.8,
+                diffuse_transmission: 0.7,
+                diffuse_transmission_color: [0.2, 0.9, 0.5],
+                ..Case::opaque([0.2, 0.6, 0.9], 0.5, 0.3, grazing)
+            },
+        ),
+        (
+            "wax: a solid entered by diffuse transmission alone, leaving, oblique",
+            Case {
+                base_color: [0.9, 0.8, 0.6],
+                wo: unit([0.3, -0.5, 0.8]),
+                eta: 1.0 / 1.45,
+                diffuse_transmission: 0.8,
+                diffuse_transmission_color: [1.0, 0.8, 0.5],
+                ..plastic
+            },
+        ),
+        (
+            "glass solid, half diffusely transmitting, entering, oblique",
+            Case {
+                base_color: [0.9, 0.95, 0.8],
+                alpha: 0.2,
+                transmission: 0.5,
+                eta: 1.5,
+                diffuse_transmission: 0.6,
+                ..plastic
+            },
+        ),
+        (
+            "diffuse transmitter under a glossy coat, oblique",
+            Case {
+                diffuse_transmission: 0.5,
+                diffuse_transmission_color: [0.5, 0.9, 0.9],
+                coat: 1.0,
+                coat_alpha: 0.05,
+                ..plastic
+            },
+        ),
+        (
             "coated rough glass solid, entering, oblique",
             Case {
                 base_color: [0.9, 0.95, 0.8],
@@ -621,7 +709,12 @@ fn base_f_cos(c: &Case, wi: [f64; 3]) -> [f64; 3] {
         // A solid's boundary: the interface takes (1 − metallic)·transmission, the rest
         // is the opaque material.
         let share = (1.0 - c.metallic) * c.transmission;
-        let interface = walter_f_cos(c, wi);
+        // (None where the solid is entered by diffuse transmission alone.)
+        let interface = if share > 0.0 {
+            walter_f_cos(c, wi)
+        } else {
+            [0.0; 3]
+        };
         let opaque = |metallic| {
             let rest = Case {
                 metallic,
@@ -639,7 +732,7 @@ fn base_f_cos(c: &Case, wi: [f64; 3]) -> [f64; 3] {
     }
     let wo = c.wo;
     let nv = wo[2];
-    if wi[2] == 0.0 || nv <= 0.0 || (wi[2] < 0.0 && c.transmission == 0.0) {
+    if wi[2] == 0.0 || nv <= 0.0 || (wi[2] < 0.0 && !c.transmits()) {
         return [0.0; 3];
     }
     let through = wi[2] < 0.0;
@@ -672,13 +765,21 @@ fn base_f_cos(c: &Case, wi: [f64; 3]) -> [f64; 3] {
     let fd_max = fd.iter().cloned().fold(0.0, f64::max);
     let mut out = [0.0; 3];
     for k in 0..3 {
+        // KHR_materials_diffuse_transmission: the diffuse BSDF is mix(diffuse BRDF of
+        // the base colour, diffuse BTDF of its colour, diffuse transmission), under the
+        // same Fresnel weight.
+        let dt = c.diffuse_transmission;
         if through {
             let btdf = c.base_color[k] * d * v;
-            out[k] = (1.0 - c.metallic) * c.transmission * (1.0 - fd_max) * btdf * nl;
+            let diffuse_btdf = dt * c.diffuse_transmission_color[k] / PI;
+            out[k] = (1.0 - c.metallic)
+                * (1.0 - fd_max)
+                * (c.transmission * btdf + (1.0 - c.transmission) * diffuse_btdf)
+                * nl;
             continue;
         }
         let fm = c.base_color[k] + (1.0 - c.base_color[k]) * w;
-        let diffuse = (1.0 - c.transmission) * c.base_color[k] / PI;
+        let diffuse = (1.0 - c.transmission) * (1.0 - dt) * c.base_color[k] / PI;
         let dielectric = diffuse * (1.0 - fd_max) + fd[k] * d * v;
         let metal = fm * d * v;
         out[k] = ((1.0 - c.metallic) * dielectric + c.metallic * metal) * nl;
@@ -961,7 +1062,7 @@ fn bsdf_density_is_normalised_and_sampling_follows_it() {
         // The density on the grid: its integral, and each χ² bin's share.
         // A transmitting material's density lives on the whole sphere: the lower
         // hemisphere's bins follow the upper's.
-        let sphere = c.transmission > 0.0;
+        let sphere = c.transmits();
         let bins = if sphere { 2 * bt * bp } else { bt * bp };
         let mut expected = vec![0.0f64; bins + 1];
         let mut integral = 0.0;
@@ -1086,6 +1187,59 @@ fn white_thin_glass_scatters_at_most_all_light() {
             parts[0],
             parts[1]
         );
+    }
+    testing::assert_no_validation_errors();
+}
+
+/// Diffuse transmission against its closed form: with the specular lobe off (specular 0,
+/// so F = 0) a material reflects (1 − d)·base colour of the light above the surface and
+/// passes d·colour below it, whatever the view (d: its diffuse transmission factor).
+/// Per channel, the integral of f·|cosθi| over each hemisphere.
+#[test]
+fn diffuse_transmission_splits_the_diffuse_light_as_its_factor_says() {
+    let grid = Grid::fine();
+    let halves = [grid.items(false), grid.items(true)];
+    let base = [0.8, 0.4, 0.1];
+    let colour = [0.2, 0.5, 0.9];
+    for (dt, wo) in [
+        (1.0, unit([0.1, 0.0, 0.99])),
+        (0.3, unit([0.6, 0.3, 0.5])),
+        (0.75, unit([0.0, 0.98, 0.15])),
+    ] {
+        let c = Case {
+            f0: [0.0; 3],
+            specular: 0.0,
+            diffuse_transmission: dt,
+            diffuse_transmission_color: colour,
+            ..Case::opaque(base, 0.0, 0.3, wo)
+        };
+        let mut parts = [[0.0; 3]; 2];
+        for (part, cells) in parts.iter_mut().zip(&halves) {
+            let eval = run(&c, 1, cells);
+            grid.for_each_cell(|i, j, dw| {
+                for (k, p) in part.iter_mut().enumerate() {
+                    *p += eval[i * grid.n_phi + j].f[k] * dw;
+                }
+            });
+        }
+        let want = [base.map(|b| (1.0 - dt) * b), colour.map(|t| dt * t)];
+        eprintln!(
+            "diffuse transmission {dt}, cosθo {:.2}: reflected {:.4?} (want {:.4?}), transmitted {:.4?} (want {:.4?})",
+            wo[2], parts[0], want[0], parts[1], want[1]
+        );
+        for (side, (got, want)) in ["reflected", "transmitted"]
+            .iter()
+            .zip(parts.iter().zip(&want))
+        {
+            for k in 0..3 {
+                assert!(
+                    (got[k] - want[k]).abs() <= 1e-3 * want[k].max(0.1),
+                    "diffuse transmission {dt}: {side} channel {k} {} against {}",
+                    got[k],
+                    want[k]
+                );
+            }
+        }
     }
     testing::assert_no_validation_errors();
 }

@@ -19,6 +19,13 @@
 // takes the share (1 − metallic)·transmission of the material; the rest is the opaque
 // material (diffuse + specular, metal) with that share taken out (volume_rest).
 //
+// KHR_materials_diffuse_transmission splits the dielectric's diffuse lobe (what the
+// transmission leaves of it, on a thin wall or a solid's boundary alike) into reflection,
+// tinted by the base colour, and a share `diffuse_transmission` that leaves below the
+// surface, cosine-weighted and tinted by its own colour, both weighted by 1 − max(F) with
+// the Fresnel term at wi mirrored above the surface (as the thin transmission lobe).
+// Sampling sends that share of the cosine samples below.
+//
 // KHR_materials_clearcoat lays a GGX coat over all of it (the spec's fresnel_coat): with
 // w = clearcoat·F(ωo·nc), F Schlick's with F0 = 0.04 at the coat normal nc, the BSDF is
 // (1 − w)·base + w·D·G2/(4|ωo·nc||ωi·nc|) with the coat's own α and normal, the coat's
@@ -55,6 +62,9 @@ struct BsdfParams {
     vec3 coat_n;           // its unit normal in the local frame (upper hemisphere)
     vec3 sheen_color;      // KHR_materials_sheen: the sheen's colour (black: no sheen)
     float sheen_roughness; // its roughness r (α = r², r taken as at least 0.1)
+    float diffuse_transmission;       // KHR_materials_diffuse_transmission: share of the
+                                      // diffuse lobe (what `transmission` leaves) that
+    vec3 diffuse_transmission_color;  // leaves below the surface, tinted by this colour
 };
 
 // GGX's D of a unit microfacet normal whose cosine from the macro normal is `c` and
@@ -117,7 +127,10 @@ float bsdf_specular_probability(BsdfParams p, vec3 wo) {
     vec3 fd = p.f0_dielectric + (vec3(p.specular) - p.f0_dielectric) * w;
     vec3 fm = p.base_color + (1.0 - p.base_color) * w;
     float spec = (1.0 - p.metallic) * max3(fd) + p.metallic * luminance(fm);
-    float diff = (1.0 - p.metallic) * luminance(p.base_color) * (1.0 - max3(fd));
+    // The diffuse lobe's albedo: the base colour, and the transmitted colour's share.
+    vec3 albedo = p.diffuse_transmission > 0.0 ? mix(p.base_color, p.diffuse_transmission_color, p.diffuse_transmission)
+                                               : p.base_color;
+    float diff = (1.0 - p.metallic) * luminance(albedo) * (1.0 - max3(fd));
     if (spec <= 0.0) return 0.0;
     if (diff <= 0.0) return 1.0;
     return clamp(spec / (spec + diff), 0.1, 0.9);
@@ -329,7 +342,8 @@ vec3 bsdf_eval_pdf_walls(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
     vec3 wo = c.wo;
     pdf = 0.0;
     bool through = wi.z < 0.0;
-    if (wo.z <= 0.0 || wi.z == 0.0 || (through && p.transmission <= 0.0)) return vec3(0.0);
+    if (wo.z <= 0.0 || wi.z == 0.0 || (through && p.transmission <= 0.0 && p.diffuse_transmission <= 0.0))
+        return vec3(0.0);
     vec3 wr = through ? vec3(wi.xy, -wi.z) : wi;  // mirrored above the surface
     vec3 h = normalize(wo + wr);
     float d = ggx_d(h, ggx_alphas(p));
@@ -340,14 +354,25 @@ vec3 bsdf_eval_pdf_walls(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
     // the sampled normal; mirrored below the surface for transmission).
     float ps = c.spec_prob;
     float spec_pdf = d / ((1.0 + c.lambda_wo) * 4.0 * wo.z);
+    // The diffuse lobe (what the transmission leaves) splits into reflection and
+    // diffuse transmission, each cosine-weighted on its side.
+    float dt = p.diffuse_transmission;
     if (through) {
         pdf = (1.0 - ps) * p.transmission * spec_pdf;
-        return (1.0 - p.metallic) * p.transmission * (1.0 - max3(fd)) * spec * p.base_color * wr.z;
+        vec3 f = (1.0 - p.metallic) * p.transmission * (1.0 - max3(fd)) * spec * p.base_color * wr.z;
+        if (dt > 0.0) {
+            float lobe = (1.0 - p.transmission) * dt * wr.z * INV_PI;
+            pdf += (1.0 - ps) * lobe;
+            f += (1.0 - p.metallic) * (1.0 - max3(fd)) * lobe * p.diffuse_transmission_color;
+        }
+        return f;
     }
     vec3 diffuse = p.base_color * INV_PI * (1.0 - p.transmission);
+    if (dt > 0.0) diffuse *= 1.0 - dt;
     vec3 dielectric = diffuse * (1.0 - max3(fd)) + spec * fd;
     vec3 metal = spec * (p.base_color + (1.0 - p.base_color) * w);
-    pdf = (1.0 - ps) * (1.0 - p.transmission) * wi.z * INV_PI + ps * spec_pdf;
+    float diffuse_share = dt > 0.0 ? (1.0 - p.transmission) * (1.0 - dt) : 1.0 - p.transmission;
+    pdf = (1.0 - ps) * diffuse_share * wi.z * INV_PI + ps * spec_pdf;
     return mix(dielectric, metal, p.metallic) * wi.z;
 }
 
@@ -358,10 +383,14 @@ vec3 bsdf_eval_pdf_base(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
     pdf = 0.0;
     if (c.wo.z <= 0.0) return vec3(0.0);
     float share = volume_share(p);
-    float pdf_interface;
-    vec3 f = share * interface_eval_pdf(p, c.wo, c.lambda_wo, wi, pdf_interface);
-    pdf = share * pdf_interface;
-    if (share < 1.0 && wi.z > 0.0) {
+    vec3 f = vec3(0.0);
+    // (No interface where the solid is entered by diffuse transmission alone.)
+    if (share > 0.0) {
+        float pdf_interface;
+        f = share * interface_eval_pdf(p, c.wo, c.lambda_wo, wi, pdf_interface);
+        pdf = share * pdf_interface;
+    }
+    if (share < 1.0 && (wi.z > 0.0 || p.diffuse_transmission > 0.0)) {
         float pdf_rest;
         f += (1.0 - share) * bsdf_eval_pdf_walls(volume_rest(p), c, wi, pdf_rest);
         pdf += (1.0 - share) * pdf_rest;
@@ -470,7 +499,16 @@ bool bsdf_sample(BsdfParams p, BsdfWo c, vec3 u, float u_fresnel, out vec3 wi) {
         return wi.z < 0.0;
     }
     float t = p.transmission;
-    wi = square_to_cosine_hemisphere(vec2(t > 0.0 ? min((u.y - t) / (1.0 - t), 0.99999994) : u.y, u.z));
+    float y = t > 0.0 ? min((u.y - t) / (1.0 - t), 0.99999994) : u.y;
+    // Diffuse transmission: y below its share sends the cosine sample below the surface.
+    float dt = p.diffuse_transmission;
+    bool below = dt > 0.0 && y < dt;
+    if (dt > 0.0) y = below ? min(y / dt, 0.99999994) : min((y - dt) / (1.0 - dt), 0.99999994);
+    wi = square_to_cosine_hemisphere(vec2(y, u.z));
+    if (below) {
+        wi.z = -wi.z;
+        return wi.z < 0.0;
+    }
     return wi.z > 0.0;
 }
 

@@ -165,7 +165,7 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     // then reflects between the two surfaces (above the geometric one, below the shading
     // one; surface_bsdf_eval_pdf keeps directions below the geometric surface dark, so
     // nothing leaks through it). Transmitting surfaces keep the frame of their side.
-    if (dot(n, s.wo) < 0.0 && m.transmission <= 0.0) {
+    if (dot(n, s.wo) < 0.0 && m.transmission <= 0.0 && !(DIFFUSE_TRANSMISSION && m.diffuse_transmission > 0.0)) {
         n = -n;
         coat_n = -coat_n;
     }
@@ -207,9 +207,27 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     // Metals do not transmit: the lobe is part of the dielectric (the BSDF weighs it by
     // 1 − metallic), so a fully metallic surface stays opaque for the path's geometry too.
     s.bsdf.transmission = s.bsdf.metallic < 1.0 ? clamp(transmission, 0.0, 1.0) : 0.0;
-    // The boundary of a refracting solid (KHR_materials_volume): the index ratio across it
-    // seen from wo; the solid lies behind the front face (its outward side).
-    bool solid = SOLIDS && s.bsdf.transmission > 0.0 && (m.flags & MATERIAL_FLAG_VOLUME) != 0u;
+    // KHR_materials_diffuse_transmission: a share of the diffuse lobe that the
+    // transmission leaves goes through the surface, tinted by its colour (metals: none,
+    // as above).
+    s.bsdf.diffuse_transmission = 0.0;
+    s.bsdf.diffuse_transmission_color = vec3(1.0);
+    if (DIFFUSE_TRANSMISSION && m.diffuse_transmission > 0.0 && s.bsdf.metallic < 1.0) {
+        float dt = m.diffuse_transmission;
+        if (m.diffuse_transmission_tex.index >= 0)
+            dt *= sample_texture(m.diffuse_transmission_tex, m.diffuse_transmission_tex.uv_set == 1u ? s.uv1 : s.uv0).a;
+        vec3 color = m.diffuse_transmission_color;
+        if (m.diffuse_transmission_color_tex.index >= 0)
+            color *= sample_texture(m.diffuse_transmission_color_tex,
+                                    m.diffuse_transmission_color_tex.uv_set == 1u ? s.uv1 : s.uv0).rgb;
+        s.bsdf.diffuse_transmission = clamp(dt, 0.0, 1.0);
+        s.bsdf.diffuse_transmission_color = clamp(color, 0.0, 1.0);
+    }
+    // The boundary of a solid (KHR_materials_volume) that light enters, refracted or
+    // diffusely: the index ratio across it seen from wo; the solid lies behind the front
+    // face (its outward side).
+    bool solid = SOLIDS && (s.bsdf.transmission > 0.0 || s.bsdf.diffuse_transmission > 0.0)
+        && (m.flags & MATERIAL_FLAG_VOLUME) != 0u;
     float ior = max(m.ior, 1.0);
     s.bsdf.eta = solid ? (s.front ? ior : 1.0 / ior) : 0.0;
     // KHR_materials_clearcoat.
@@ -242,7 +260,7 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     }
     // With these at 0 every lobe but the Lambertian one has weight 0 (inc/bsdf.glsl).
     s.lambertian = s.bsdf.metallic == 0.0 && s.bsdf.specular == 0.0 && s.bsdf.transmission == 0.0
-        && s.bsdf.coat == 0.0 && max3(s.bsdf.sheen_color) == 0.0;
+        && s.bsdf.diffuse_transmission == 0.0 && s.bsdf.coat == 0.0 && max3(s.bsdf.sheen_color) == 0.0;
 
     // Emission: front face only unless the material is double-sided.
     bool emits = s.front || (m.flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;
@@ -267,9 +285,12 @@ BsdfWo surface_bsdf_at(Surface s) {
     return surface_lambertian(s) ? bsdf_at_lambertian(wo) : bsdf_at(s.bsdf, wo);
 }
 
-// Whether light can go through the surface (KHR_materials_transmission): directions
-// below the geometric surface then carry light too.
-bool surface_transmits(Surface s) { return BSDF_KERNEL != BSDF_KERNEL_LAMBERTIAN && s.bsdf.transmission > 0.0; }
+// Whether light can go through the surface (KHR_materials_transmission or
+// KHR_materials_diffuse_transmission): directions below the geometric surface then
+// carry light too.
+bool surface_transmits(Surface s) {
+    return BSDF_KERNEL != BSDF_KERNEL_LAMBERTIAN && (s.bsdf.transmission > 0.0 || s.bsdf.diffuse_transmission > 0.0);
+}
 
 // Sample a local direction (bsdf_sample's arguments; `c` is surface_bsdf_at(s)).
 bool surface_bsdf_sample(Surface s, BsdfWo c, vec3 u, float u_fresnel, out vec3 wi_local) {

@@ -23,8 +23,11 @@ layout(constant_id = 6) const bool SHEEN = false;
 // without, the anisotropy's frame compiles away (lavapipe: 8 % of a `pt` sample on
 // `cornell-lights`, whose kernels are otherwise the Lambertian lobe alone).
 layout(constant_id = 11) const bool ANISOTROPY = false;
+// The scene has diffusely transmitting materials (KHR_materials_diffuse_transmission)
+// that are not wholly metallic: without, that lobe compiles away.
+layout(constant_id = 12) const bool DIFFUSE_TRANSMISSION = false;
 // Where the kernels take the Lambertian lobe alone (BSDF_KERNEL_*): at Lambertian
-// surfaces (metallic 0, specular 0, no transmission, coat or sheen), or everywhere when
+// surfaces (metallic 0, specular 0, no transmission of either kind, coat or sheen), or everywhere when
 // every material the scene uses is (`Scene::only_lambertian`), the other lobes then
 // compiled away. The same image either way (lavapipe: `ris` 1.08–1.09× as fast on the
 // street and `bistro-night` per surface, 1.14–1.17× on `cornell-lights` everywhere).

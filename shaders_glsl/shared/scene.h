@@ -91,6 +91,14 @@ struct Material {
     float anisotropy_strength;
     vec2 anisotropy_rotation;
     TextureRef anisotropy_tex;
+    // KHR_materials_diffuse_transmission: the share of the dielectric's diffuse lobe (what
+    // thin transmission leaves of it) that leaves on the other side of the surface, as a
+    // Lambertian lobe tinted by its colour (share = factor × texture A; colour = factor ×
+    // texture RGB, sRGB). Counted in the content hash only where a material has it.
+    float diffuse_transmission;
+    vec3 diffuse_transmission_color;
+    TextureRef diffuse_transmission_tex;
+    TextureRef diffuse_transmission_color_tex;
 };
 
 // One emissive triangle in world space.

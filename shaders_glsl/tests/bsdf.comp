@@ -22,6 +22,8 @@ struct BsdfCase {
     vec3 sheen_color;
     float sheen_roughness;
     float alpha_t;
+    float diffuse_transmission;
+    vec3 diffuse_transmission_color;
 };
 
 layout(local_size_x = 64) in;
@@ -47,6 +49,8 @@ void main() {
     p.coat_n = bsdf_case.coat_n;
     p.sheen_color = bsdf_case.sheen_color;
     p.sheen_roughness = bsdf_case.sheen_roughness;
+    p.diffuse_transmission = bsdf_case.diffuse_transmission;
+    p.diffuse_transmission_color = bsdf_case.diffuse_transmission_color;
     bool lambertian = pc.mode >= 2u;
     BsdfWo c = lambertian ? bsdf_at_lambertian(bsdf_case.wo) : bsdf_at(p, bsdf_case.wo);
     vec3 wi = items[t].xyz;

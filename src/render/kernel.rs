@@ -29,6 +29,9 @@ pub(super) struct Variant {
     /// The scene has anisotropic materials that are not Lambertian
     /// (KHR_materials_anisotropy).
     pub anisotropy: bool,
+    /// The scene has diffusely transmitting materials that are not wholly metallic
+    /// (KHR_materials_diffuse_transmission).
+    pub diffuse_transmission: bool,
     /// Where the kernels take the Lambertian lobe alone (`gpu::BSDF_KERNEL_*`).
     pub bsdf: u32,
     /// World-space light reuse (`light_reuse.rs`; RIS methods).
@@ -189,16 +192,17 @@ impl Renderer {
                 v.reuse as u32,
                 v.visibility as u32,
                 v.anisotropy as u32,
+                v.diffuse_transmission as u32,
             ];
             let name = format!(
-                "render (ris={}, guiding={}, training={}, aovs={}, solids={}, clearcoat={}, sheen={}, anisotropy={}, bsdf={}, reuse={}, visibility={}, debug={}, lanes={}, traversal={})",
-                v.ris, v.guiding, v.training, v.aovs, v.solids, v.clearcoat, v.sheen, v.anisotropy, v.bsdf, v.reuse, v.visibility, v.debug, v.lanes, self.traversal.kind
+                "render (ris={}, guiding={}, training={}, aovs={}, solids={}, clearcoat={}, sheen={}, anisotropy={}, diffuse_transmission={}, bsdf={}, reuse={}, visibility={}, debug={}, lanes={}, traversal={})",
+                v.ris, v.guiding, v.training, v.aovs, v.solids, v.clearcoat, v.sheen, v.anisotropy, v.diffuse_transmission, v.bsdf, v.reuse, v.visibility, v.debug, v.lanes, self.traversal.kind
             );
             requests.push((v, spirv, spec, name));
         }
         let bindings = self.bindings();
         let device = &self.device;
-        let create = |(v, spirv, spec, name): &(Variant, Vec<u32>, [u32; 12], String)| {
+        let create = |(v, spirv, spec, name): &(Variant, Vec<u32>, [u32; 13], String)| {
             let started = Instant::now();
             let p = ComputePipeline::new(
                 device,
@@ -337,6 +341,7 @@ impl Renderer {
             clearcoat: self.has_clearcoat,
             sheen: self.has_sheen,
             anisotropy: self.has_anisotropy,
+            diffuse_transmission: self.has_diffuse_transmission,
             bsdf: self.bsdf_kernel(),
             reuse: self.settings.light_reuse.world && method.uses_ris(),
             visibility: self.settings.light_visibility.learned && method.uses_ris(),

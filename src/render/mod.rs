@@ -176,6 +176,9 @@ pub struct Renderer {
     /// Whether any material is anisotropic and not Lambertian (the kernels' ANISOTROPY
     /// constant).
     has_anisotropy: bool,
+    /// Whether any material transmits diffusely and is not wholly metallic (the kernels'
+    /// DIFFUSE_TRANSMISSION constant).
+    has_diffuse_transmission: bool,
     /// Whether every material in use is Lambertian (the kernels' BSDF_KERNEL constant:
     /// `Renderer::bsdf_kernel`).
     only_lambertian: bool,
@@ -306,6 +309,10 @@ impl Renderer {
                 .materials
                 .iter()
                 .any(|m| m.anisotropy_strength > 0.0 && !crate::scene::is_lambertian(m)),
+            has_diffuse_transmission: scene
+                .materials
+                .iter()
+                .any(|m| m.diffuse_transmission > 0.0 && m.metallic < 1.0),
             only_lambertian: scene.only_lambertian(),
             guide,
             reuse_cells,

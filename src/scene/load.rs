@@ -140,6 +140,11 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         if let Ok(Some(a)) = material::Anisotropy::read(&m, &document) {
             mark(a.texture.map(|t| t.texture));
         }
+        if let Ok(Some(dt)) = material::DiffuseTransmission::read(&m, &document) {
+            for t in [dt.texture, dt.colour_texture] {
+                mark(t.map(|t| t.texture));
+            }
+        }
     }
     let mut images = Vec::new();
     for img in document.images() {
@@ -721,6 +726,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",
+    "KHR_materials_diffuse_transmission",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_pbrSpecularGlossiness",
@@ -784,16 +790,19 @@ fn content_hash(scene: &Scene) -> String {
     }
     eat(bytemuck::cast_slice(&scene.indices));
     // Materials up to their transmission fields, which count only where a material
-    // transmits, and the coat's, the sheen's and the anisotropy's, which count only where it has one
-    // (scenes without keep their hashes, as for vertex colours).
+    // transmits (specularly or diffusely: the volume's absorption is among them), and the
+    // coat's, the sheen's, the anisotropy's and the diffuse transmission's, which count
+    // only where it has one (scenes without keep their hashes, as for vertex colours).
     let opaque_part = std::mem::offset_of!(crate::gpu::Material, transmission);
     let coat_part = std::mem::offset_of!(crate::gpu::Material, clearcoat);
     let sheen_part = std::mem::offset_of!(crate::gpu::Material, sheen_color);
     let anisotropy_part = std::mem::offset_of!(crate::gpu::Material, anisotropy_strength);
+    let diffuse_transmission_part =
+        std::mem::offset_of!(crate::gpu::Material, diffuse_transmission);
     for m in &scene.materials {
         let bytes = bytemuck::bytes_of(m);
         eat(&bytes[..opaque_part]);
-        if m.transmission > 0.0 {
+        if m.transmission > 0.0 || m.diffuse_transmission > 0.0 {
             eat(&bytes[opaque_part..coat_part]);
         }
         if m.clearcoat > 0.0 {
@@ -803,7 +812,10 @@ fn content_hash(scene: &Scene) -> String {
             eat(&bytes[sheen_part..anisotropy_part]);
         }
         if m.anisotropy_strength > 0.0 {
-            eat(&bytes[anisotropy_part..]);
+            eat(&bytes[anisotropy_part..diffuse_transmission_part]);
+        }
+        if m.diffuse_transmission > 0.0 {
+            eat(&bytes[diffuse_transmission_part..]);
         }
     }
     for i in &scene.instances {

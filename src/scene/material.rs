@@ -182,6 +182,10 @@ pub fn default_material() -> gpu::Material {
         anisotropy_strength: 0.0,
         anisotropy_rotation: [1.0, 0.0],
         anisotropy_tex: no_texture(),
+        diffuse_transmission: 0.0,
+        diffuse_transmission_color: [1.0; 3],
+        diffuse_transmission_tex: no_texture(),
+        diffuse_transmission_color_tex: no_texture(),
     }
 }
 
@@ -269,6 +273,16 @@ pub fn convert(
             out.anisotropy_tex = t.reference(reg, TextureFormat::Linear);
         }
     }
+    if let Some(dt) = DiffuseTransmission::read(m, doc)? {
+        out.diffuse_transmission = dt.factor;
+        out.diffuse_transmission_color = dt.colour;
+        if let Some(t) = &dt.texture {
+            out.diffuse_transmission_tex = t.reference(reg, TextureFormat::Linear);
+        }
+        if let Some(t) = &dt.colour_texture {
+            out.diffuse_transmission_color_tex = t.reference(reg, TextureFormat::Srgb);
+        }
+    }
     if let Some(ior) = m
         .extension_value("KHR_materials_ior")
         .and_then(|v| v.get("ior"))
@@ -332,6 +346,7 @@ pub fn convert(
         out.anisotropy_strength,
         out.anisotropy_rotation[0],
         out.anisotropy_rotation[1],
+        out.diffuse_transmission,
     ];
     let finite = out
         .base_color
@@ -339,6 +354,7 @@ pub fn convert(
         .chain(&out.emission)
         .chain(&out.specular_color)
         .chain(&out.sheen_color)
+        .chain(&out.diffuse_transmission_color)
         .chain(&scalars)
         .all(|v| v.is_finite());
     if !finite {
@@ -360,6 +376,8 @@ pub fn convert(
     out.sheen_color = out.sheen_color.map(|c| c.clamp(0.0, 1.0));
     out.sheen_roughness = out.sheen_roughness.clamp(0.0, 1.0);
     out.anisotropy_strength = out.anisotropy_strength.clamp(0.0, 1.0);
+    out.diffuse_transmission = out.diffuse_transmission.clamp(0.0, 1.0);
+    out.diffuse_transmission_color = out.diffuse_transmission_color.map(|c| c.clamp(0.0, 1.0));
     Ok(out)
 }
 
@@ -562,22 +580,51 @@ impl<'a> Anisotropy<'a> {
     }
 }
 
-/// Whether a material bounds a refracting solid (KHR_materials_volume with a thickness,
-/// and a transmission factor): what the kernels' SOLIDS constant, `lanterna info` and the
-/// Mitsuba export ask. (A metallic texture may still make parts of it opaque.)
+/// KHR_materials_diffuse_transmission of one material.
+pub struct DiffuseTransmission<'a> {
+    factor: f32,
+    colour: [f32; 3],
+    pub texture: Option<RawTexture<'a>>,
+    pub colour_texture: Option<RawTexture<'a>>,
+}
+
+impl<'a> DiffuseTransmission<'a> {
+    /// The material's diffuse transmission, if it has the extension; malformed values and
+    /// texture references are errors naming the material.
+    pub fn read(m: &gltf::Material<'_>, doc: &'a gltf::Document) -> Result<Option<Self>, String> {
+        const NAME: &str = "KHR_materials_diffuse_transmission";
+        let Some(v) = m.extension_value(NAME) else {
+            return Ok(None);
+        };
+        let r = ExtensionReader::new(m, doc, NAME, v);
+        Ok(Some(DiffuseTransmission {
+            factor: r.number("diffuseTransmissionFactor", 0.0)?,
+            colour: r.colour("diffuseTransmissionColorFactor", [1.0; 3])?,
+            texture: r.texture("diffuseTransmissionTexture")?,
+            colour_texture: r.texture("diffuseTransmissionColorTexture")?,
+        }))
+    }
+}
+
+/// Whether a material bounds a solid (KHR_materials_volume with a thickness, and a
+/// transmission or diffuse transmission factor: light goes into it, refracted or
+/// diffusely): what the kernels' SOLIDS constant, `lanterna info` and the Mitsuba export
+/// ask. (A metallic texture may still make parts of it opaque.)
 pub fn bounds_solid(m: &gpu::Material) -> bool {
-    m.transmission > 0.0 && m.flags & gpu::MATERIAL_FLAG_VOLUME != 0
+    (m.transmission > 0.0 || m.diffuse_transmission > 0.0)
+        && m.flags & gpu::MATERIAL_FLAG_VOLUME != 0
 }
 
 /// Whether a material's BSDF is the Lambertian lobe alone, whatever its textures: no
 /// metal (the factor, which its texture only scales, at 0), no specular lobe
 /// (KHR_materials_specular's factor 0, which takes the dielectric's F0 and F90 to 0), no
-/// transmission, coat or sheen. The kernels compare these factors with 0 the same way
+/// transmission (specular or diffuse), coat or sheen. The kernels compare these factors with 0 the same way
 /// (inc/material.glsl), and `Scene::only_lambertian` asks this of every material in use.
 pub fn is_lambertian(m: &gpu::Material) -> bool {
     m.metallic <= 0.0
         && m.specular == 0.0
         && m.transmission <= 0.0
+        && m.diffuse_transmission <= 0.0
         && m.clearcoat <= 0.0
         && m.sheen_color.iter().all(|&c| c <= 0.0)
 }

@@ -23,6 +23,9 @@ pub struct SceneStats {
     pub sheen_materials: u64,
     /// Materials with anisotropy (KHR_materials_anisotropy, strength above 0).
     pub anisotropic_materials: u64,
+    /// Materials with diffuse transmission (KHR_materials_diffuse_transmission, factor
+    /// above 0).
+    pub diffuse_transmission_materials: u64,
     /// Every material in use is Lambertian (`Scene::only_lambertian`): the kernels take
     /// that lobe alone.
     pub only_lambertian: bool,
@@ -111,6 +114,11 @@ impl SceneStats {
                 .iter()
                 .filter(|m| m.anisotropy_strength > 0.0)
                 .count() as u64,
+            diffuse_transmission_materials: scene
+                .materials
+                .iter()
+                .filter(|m| m.diffuse_transmission > 0.0)
+                .count() as u64,
             only_lambertian: scene.only_lambertian(),
             textures: scene.textures.len() as u64,
             cameras: scene.cameras.len() as u64,
@@ -162,6 +170,12 @@ impl fmt::Display for SceneStats {
         }
         if self.anisotropic_materials > 0 {
             kinds.push(format!("{} anisotropic", self.anisotropic_materials));
+        }
+        if self.diffuse_transmission_materials > 0 {
+            kinds.push(format!(
+                "{} diffusely transmitting",
+                self.diffuse_transmission_materials
+            ));
         }
         if self.only_lambertian {
             kinds.push("every one in use Lambertian".into());
