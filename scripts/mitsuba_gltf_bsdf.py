@@ -283,9 +283,17 @@ def _refusal(index, mat, wrappers=()):
             return f"material {index} has a {t}"
     if "normalTexture" in mat and "normalmap" not in wrappers:
         return f"material {index} has a normalTexture the export left out"
+    ext = mat.get("extensions", {})
+    # A solid entered by diffuse transmission alone: the export's interior medium absorbs
+    # what the plugin passes through (no refraction to write).
+    translucent_solid = (ext.get("KHR_materials_diffuse_transmission", {}).get("diffuseTransmissionFactor", 0.0) > 0
+                         and ext.get("KHR_materials_transmission", {}).get("transmissionFactor", 0.0) == 0)
     for e in _UNSUPPORTED_EXTENSIONS:
-        if e in mat.get("extensions", {}):
+        if e in ext and not (e == "KHR_materials_volume" and translucent_solid):
             return f"material {index} uses {e}"
+    for t in ("diffuseTransmissionTexture", "diffuseTransmissionColorTexture"):
+        if t in ext.get("KHR_materials_diffuse_transmission", {}):
+            return f"material {index} has a {t}"
     spec = mat.get("extensions", {}).get("KHR_materials_specular", {})
     if "specularTexture" in spec or "specularColorTexture" in spec:
         return f"material {index} has a specular texture"

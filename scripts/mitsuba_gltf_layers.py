@@ -367,10 +367,19 @@ def layered_dict(mat):
 #   specular_btdf(v, l) = (1 - F(v.h')) baseColor D(h') Vis(l'.z, v.z),
 #   l' = l mirrored through the surface plane, h' = normalize(v + l'),
 # with alpha = roughness^2 (applyIorToRoughness: factor clamp(2 ior - 2, 0, 1) = 1 at 1.5).
+# KHR_materials_diffuse_transmission (its README, "Material Structure Updates") makes the
+# diffuse BSDF in there
+#   mix(diffuse_brdf(baseColor), diffuse_btdf(diffuseTransmissionColor), diffuseTransmission)
+#   diffuse_btdf(v, l) = color / pi for v and l on opposite sides,
+# under the same Fresnel weight 1 - max(F(v.h')) as the diffuse BRDF (l mirrored, as the
+# sample viewer does). With KHR_materials_volume (thickness > 0, no transmission) the
+# light it passes enters the solid: the export's interior medium absorbs it (volpath).
 
 def np_thin(p, v, l):
     """Thin-walled transmission material (no coat/sheen), l on either side; BSDF without cosine."""
     t = p["transmission"]
+    dt = p.get("diffuse_transmission", 0.0)
+    dtc = np.array(p.get("dt_color", (1.0, 1.0, 1.0)))[None]
     a = max(p["roughness"] ** 2, 1e-4)
     f0i = ((1 - p["ior"]) / (1 + p["ior"])) ** 2
     f0 = np.array([min(f0i * c, 1.0) * p["specular"] for c in p["spec_color"]])
@@ -381,24 +390,33 @@ def np_thin(p, v, l):
     vh = np.abs(np.sum(v * h, -1)); fw = (1 - vh) ** 5
     F = f0[None] + (p["specular"] - f0[None]) * fw[:, None]
     spec = np_ggx_D(h[:, 2], a) * np_ggx_Vis(lm[:, 2], v[:, 2], a)
-    refl_d = F * spec[:, None] + (1 - F.max(1, keepdims=True)) * (1 - t) * base / math.pi
+    refl_d = F * spec[:, None] + (1 - F.max(1, keepdims=True)) * (1 - t) * (1 - dt) * base / math.pi
     refl_m = (base + (1 - base) * fw[:, None]) * spec[:, None]
     refl = (1 - p["metallic"]) * refl_d + p["metallic"] * refl_m
-    trans = (1 - p["metallic"]) * t * (1 - F) * base * spec[:, None]
+    trans = (1 - p["metallic"]) * (t * (1 - F) * base * spec[:, None]
+                                   + (1 - F.max(1, keepdims=True)) * (1 - t) * dt * dtc / math.pi)
     return np.where(up[:, None], refl, trans)
 
 
 class GltfThin(base_mod.GltfBSDF):
     def __init__(self, props):
         base_mod.GltfBSDF.__init__(self, props)
-        self.t = float(props["transmission"]) if props.has_property("transmission") else 0.0
+        g = lambda k, d: float(props[k]) if props.has_property(k) else d
+        self.t = g("transmission", 0.0)
         self.p["transmission"] = self.t
+        self.dt = g("diffuse_transmission", 0.0)
+        self.dtc = mi.Color3f(g("dt_r", 1.0), g("dt_g", 1.0), g("dt_b", 1.0))
+        self.p["diffuse_transmission"] = self.dt
+        self.p["dt_color"] = (g("dt_r", 1.0), g("dt_g", 1.0), g("dt_b", 1.0))
         w_spec = 0.5 + 0.5 * self.metallic
         self.pt = (1.0 - self.metallic) * self.t * 0.6
         self.pr = (1.0 - self.pt) * w_spec       # reflection VNDF
-        self.pd = 1.0 - self.pt - self.pr          # cosine
+        cosine = 1.0 - self.pt - self.pr
+        self.pdb = cosine * self.dt              # cosine, below the surface
+        self.pd = cosine - self.pdb              # cosine, above
         flags = (mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.DiffuseReflection
-                 | mi.BSDFFlags.GlossyTransmission | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide)
+                 | mi.BSDFFlags.GlossyTransmission | mi.BSDFFlags.DiffuseTransmission
+                 | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide)
         self.m_components = [flags]
         self.m_flags = flags
 
@@ -412,17 +430,19 @@ class GltfThin(base_mod.GltfBSDF):
         spec = self.D(h.z) * self.Vis(lm.z, wi.z)
         Fd = self.f0d + (self.f90d - self.f0d) * fw
         Fd_max = dr.maximum(dr.maximum(Fd.x, Fd.y), Fd.z)
-        refl_d = Fd * spec + (1.0 - Fd_max) * (1.0 - self.t) * self.base * dr.inv_pi
+        refl_d = Fd * spec + (1.0 - Fd_max) * (1.0 - self.t) * (1.0 - self.dt) * self.base * dr.inv_pi
         refl_m = (self.base + (1.0 - self.base) * fw) * spec
         refl = (1.0 - self.metallic) * refl_d + self.metallic * refl_m
-        trans = (1.0 - self.metallic) * self.t * (1.0 - Fd) * self.base * spec
+        trans = (1.0 - self.metallic) * (self.t * (1.0 - Fd) * self.base * spec
+                                         + (1.0 - Fd_max) * (1.0 - self.t) * self.dt * self.dtc * dr.inv_pi)
         return dr.select(up, refl, trans)
 
     def pdf_l(self, wi, wo):
         lm = mi.Vector3f(wo.x, wo.y, dr.abs(wo.z))
         h = dr.normalize(wi + lm)
         pv = self.G1(wi.z) * self.D(h.z) / (4.0 * wi.z)
-        return dr.select(wo.z > 0, self.pr * pv + self.pd * wo.z * dr.inv_pi, self.pt * pv)
+        return dr.select(wo.z > 0, self.pr * pv + self.pd * wo.z * dr.inv_pi,
+                         self.pt * pv + self.pdb * dr.abs(wo.z) * dr.inv_pi)
 
     def _loc(self, si, wo):
         sgn = self._side(si)
@@ -449,19 +469,23 @@ class GltfThin(base_mod.GltfBSDF):
         wi = mi.Vector3f(si.wi.x, si.wi.y, si.wi.z * sgn)
         use_t = sample1 < self.pt
         use_r = (~use_t) & (sample1 < self.pt + self.pr)
+        # The last share of sample1, pdb, takes the cosine below the surface.
+        use_db = (~use_t) & (~use_r) & (sample1 >= 1.0 - self.pdb)
         h = self.sample_vndf(wi, sample2)
         wr = 2.0 * dr.dot(wi, h) * h - wi
         wt = mi.Vector3f(wr.x, wr.y, -wr.z)
         wd = mi.warp.square_to_cosine_hemisphere(sample2)
+        wd = dr.select(use_db, mi.Vector3f(wd.x, wd.y, -wd.z), wd)
         wo = dr.select(use_t, wt, dr.select(use_r, wr, wd))
-        ok_dir = dr.select(use_t, wr.z > 1e-6, wo.z > 1e-6)
+        ok_dir = dr.select(use_t, wr.z > 1e-6, dr.select(use_db, wo.z < -1e-6, wo.z > 1e-6))
         pdf = self.pdf_l(wi, wo)
         f = self.bsdf(wi, wo) * dr.abs(wo.z)
         valid = (active & (wi.z > 1e-6) & ok_dir & dr.isfinite(pdf) & (pdf > 0)
                  & dr.isfinite(f.x) & dr.isfinite(f.y) & dr.isfinite(f.z))
         kind = dr.select(use_t, mi.UInt32(+mi.BSDFFlags.GlossyTransmission),
                          dr.select(use_r, mi.UInt32(+mi.BSDFFlags.GlossyReflection),
-                                   mi.UInt32(+mi.BSDFFlags.DiffuseReflection)))
+                                   dr.select(use_db, mi.UInt32(+mi.BSDFFlags.DiffuseTransmission),
+                                             mi.UInt32(+mi.BSDFFlags.DiffuseReflection))))
         # valid already requires pdf > 0 here.
         return base_mod.sample_result(wo, sgn, pdf, f, valid, kind)
 
@@ -477,7 +501,7 @@ def register():
 
 def plugin_dict(mat):
     """The plugin dictionary of glTF material `mat`: `gltf`, `gltf_layered` (coat, sheen)
-    or `gltf_thin` (thin-walled transmission)."""
+    or `gltf_thin` (thin-walled transmission, diffuse transmission)."""
     d = layered_dict(mat)
     ext = mat.get("extensions", {})
     tr = ext.get("KHR_materials_transmission")
@@ -486,4 +510,15 @@ def plugin_dict(mat):
             raise ValueError("thin transmission with coat/sheen/volume not supported here")
         d["type"] = "gltf_thin"
         d["transmission"] = tr["transmissionFactor"]
+    dt = ext.get("KHR_materials_diffuse_transmission")
+    if dt and dt.get("diffuseTransmissionFactor", 0.0) > 0 and d.get("metallic", 1.0) < 1.0:
+        if d["type"] not in ("gltf", "gltf_thin"):
+            raise ValueError("diffuse transmission with coat/sheen not supported here")
+        d["type"] = "gltf_thin"
+        d["diffuse_transmission"] = min(float(dt["diffuseTransmissionFactor"]), 1.0)
+        c = dt.get("diffuseTransmissionColorFactor", [1.0, 1.0, 1.0])
+        d.update(dt_r=min(max(c[0], 0.0), 1.0), dt_g=min(max(c[1], 0.0), 1.0),
+                 dt_b=min(max(c[2], 0.0), 1.0))
+    if d["type"] == "gltf_thin" and "anisotropy" in d:
+        raise ValueError("transmission with anisotropy not supported here")
     return d

@@ -748,6 +748,24 @@ fn wrong_values_are_refused() {
             }),
             "KHR_materials_sheen sheenColorFactor must be three finite numbers",
         ),
+        // KHR_materials_diffuse_transmission: a colour that is not three numbers, a
+        // texture that does not exist.
+        (
+            scene_with(|j| {
+                j["extensionsUsed"] = json!(["KHR_materials_diffuse_transmission"]);
+                j["materials"][0]["extensions"] = json!({"KHR_materials_diffuse_transmission":
+                    {"diffuseTransmissionFactor": 0.5, "diffuseTransmissionColorFactor": [1, 0.5]}});
+            }),
+            "KHR_materials_diffuse_transmission diffuseTransmissionColorFactor must be three finite numbers",
+        ),
+        (
+            scene_with(|j| {
+                j["extensionsUsed"] = json!(["KHR_materials_diffuse_transmission"]);
+                j["materials"][0]["extensions"] = json!({"KHR_materials_diffuse_transmission":
+                    {"diffuseTransmissionFactor": 0.5, "diffuseTransmissionTexture": {"index": 9}}});
+            }),
+            "KHR_materials_diffuse_transmission diffuseTransmissionTexture refers to texture 9, which does not exist",
+        ),
         // KHR_materials_anisotropy: a rotation that is not a number, a texture that
         // does not exist.
         (

@@ -240,7 +240,9 @@ fn required_extensions_lanterna_reads_load_and_others_are_refused_by_name() {
     let mut json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&src).unwrap()).unwrap();
     let read = [
+        "KHR_materials_anisotropy",
         "KHR_materials_clearcoat",
+        "KHR_materials_diffuse_transmission",
         "KHR_materials_ior",
         "KHR_materials_sheen",
         "KHR_materials_specular",
@@ -760,6 +762,52 @@ fn anisotropy_texture_acts_like_its_factors() {
     });
     let stats = lanterna::scene::SceneStats::new(&textured, &LightTable::build(&textured).unwrap());
     assert_eq!(stats.anisotropic_materials, 3);
+    assert_same_image(&textured, &factor);
+}
+
+/// The diffuse transmission's textures act on its factors
+/// (KHR_materials_diffuse_transmission): the share is the factor × the texture's A, the
+/// colour the colour factor × its RGB (sRGB). On `diffuse_transmission.gltf`'s paper
+/// shade, leaf and wax, a constant texture of (200, 120, 60, 153) for both, with factors
+/// 1 and white, renders like a share of 153/255 and the colour's decoded sRGB. Seen to
+/// fail with the share's texture read from R, and with the colour texture read as
+/// linear.
+#[test]
+fn diffuse_transmission_textures_act_like_their_factors() {
+    let dir = tempfile::tempdir().unwrap();
+    let texel = [200u8, 120, 60, 153];
+    image::RgbaImage::from_pixel(2, 2, image::Rgba(texel))
+        .save(dir.path().join("t.png"))
+        .unwrap();
+    let srgb = |c: u8| {
+        let c = c as f64 / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let translucent = [2usize, 4, 5];
+    let textured = edited_scene(dir.path(), "diffuse_transmission.gltf", "textured", |j| {
+        j["images"] = serde_json::json!([{ "uri": "t.png" }]);
+        j["textures"] = serde_json::json!([{ "source": 0 }]);
+        for &m in &translucent {
+            j["materials"][m]["extensions"]["KHR_materials_diffuse_transmission"] = serde_json::json!({
+                "diffuseTransmissionFactor": 1.0, "diffuseTransmissionTexture": { "index": 0 },
+                "diffuseTransmissionColorTexture": { "index": 0 }
+            });
+        }
+    });
+    let factor = edited_scene(dir.path(), "diffuse_transmission.gltf", "factor", |j| {
+        for &m in &translucent {
+            j["materials"][m]["extensions"]["KHR_materials_diffuse_transmission"] = serde_json::json!({
+                "diffuseTransmissionFactor": texel[3] as f64 / 255.0,
+                "diffuseTransmissionColorFactor": [srgb(texel[0]), srgb(texel[1]), srgb(texel[2])]
+            });
+        }
+    });
+    let stats = lanterna::scene::SceneStats::new(&textured, &LightTable::build(&textured).unwrap());
+    assert_eq!(stats.diffuse_transmission_materials, 3);
     assert_same_image(&textured, &factor);
 }
 

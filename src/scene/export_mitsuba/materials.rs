@@ -125,7 +125,7 @@ impl Writer<'_> {
     /// be opaque.
     fn normal_map_exportable(&self, m: u32, plan: UvPlan) -> Result<(), &'static str> {
         let mat = &self.scene.materials[m as usize];
-        if mat.transmission > 0.0 && mat.metallic < 1.0 {
+        if (mat.transmission > 0.0 || mat.diffuse_transmission > 0.0) && mat.metallic < 1.0 {
             return Err("transmitting materials keep their geometric frame in the export");
         }
         self.frame_exportable(m, plan, mat.normal_tex.uv_set)
@@ -182,6 +182,12 @@ impl Writer<'_> {
         };
         let mut s = String::new();
         let _ = writeln!(s, "  <!-- material `{}` -->", xml_escape(&name));
+        if mat.diffuse_transmission > 0.0 && mat.metallic < 1.0 {
+            self.approximations.push(format!(
+                "material `{name}`: its diffuse transmission (factor {}) is left out: Mitsuba has no diffuse BTDF (the glTF BSDF plugin of scripts/mitsuba_gltf_layers.py renders it)",
+                mat.diffuse_transmission
+            ));
+        }
         let transmits = mat.transmission > 0.0 && mat.metallic < 1.0;
         let solid = transmits && is_solid(&mat);
         let share = (1.0 - mat.metallic) * mat.transmission.min(1.0);

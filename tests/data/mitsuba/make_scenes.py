@@ -20,6 +20,12 @@ agree up to noise.
                   node, a stretched blue plastic wall with a mirror seam and a rotated
                   brushed steel box, lit by two point lights and a small lamp (checked
                   through the glTF BSDF plugin)
+  diffuse_transmission.gltf  KHR_materials_diffuse_transmission: a paper shade (no
+                  specular lobe) around a small lamp, a glossy green leaf panel lit from
+                  behind by a point light, and a block of wax (KHR_materials_volume,
+                  absorbing) that light enters diffusely, 5 cm above the floor (a face
+                  in the floor's plane would leave to each renderer which of the two a
+                  ray meets), under a ceiling lamp (checked through the glTF BSDF plugin)
   alpha.gltf      alpha between a lamp and a floor: a fence cut out (MASK) by a
                   nearest RGBA texture, a BLEND panel whose alpha runs across a bilinear
                   texture (times 0.8), a constant BLEND of 0.4, a MASK under its cutoff
@@ -456,6 +462,56 @@ def anisotropic(b, rgb, metallic, roughness, strength, rotation):
     if "KHR_materials_anisotropy" not in b.used:
         b.used.append("KHR_materials_anisotropy")
     return m
+
+
+def translucent(b, rgb, roughness, factor, colour, specular=None, ior=None, volume=None):
+    """A material with KHR_materials_diffuse_transmission (factors only); `volume` =
+    (attenuation colour, distance) makes it the boundary of an absorbing solid."""
+    m = b.pbr(rgb, 0.0, roughness)
+    ext = {"KHR_materials_diffuse_transmission": {
+        "diffuseTransmissionFactor": factor, "diffuseTransmissionColorFactor": list(colour)}}
+    if specular is not None:
+        ext["KHR_materials_specular"] = {"specularFactor": specular}
+    if ior is not None:
+        ext["KHR_materials_ior"] = {"ior": ior}
+    if volume is not None:
+        ext["KHR_materials_volume"] = {"thicknessFactor": 0.1, "attenuationColor": list(volume[0]),
+                                       "attenuationDistance": volume[1]}
+    b.materials[m]["extensions"] = ext
+    for e in ext:
+        if e not in b.used:
+            b.used.append(e)
+    return m
+
+
+def diffuse_transmission_scene():
+    """diffuse_transmission.gltf: light that reaches the room through diffusely
+    transmitting surfaces: a paper shade (an open box, no specular lobe) around a small
+    lamp, a glossy leaf-green panel whose point light stands behind it, and a block of
+    wax (index 1.45, absorbing inside) under a ceiling lamp."""
+    b = Builder()
+    grey = b.lambert((0.6, 0.6, 0.6))
+    floor_and_wall(b, grey)
+    ceiling_lamp(b)
+    paper = translucent(b, (0.9, 0.88, 0.8), 1.0, 0.6, (1.0, 0.85, 0.6), specular=0.0)
+    x0, x1, z0, z1, y0, y1 = -1.05, -0.55, -0.55, -0.05, 0.6, 1.2
+    for a, c in (((x0, z0), (x1, z0)), ((x1, z0), (x1, z1)), ((x1, z1), (x0, z1)), ((x0, z1), (x0, z0))):
+        b.node(mesh=b.quad((a[0], y0, a[1]), (c[0], y0, c[1]), (c[0], y1, c[1]), (a[0], y1, a[1]),
+                           paper, uv=False))
+    bulb = b.lambert((0, 0, 0), emission=(1, 0.9, 0.7), strength=15)
+    b.node(mesh=b.box(bulb), translation=[-0.8, 0.9, -0.3], scale=[0.12, 0.12, 0.12])
+    leaf = translucent(b, (0.25, 0.5, 0.15), 0.5, 0.5, (0.6, 0.9, 0.2))
+    b.node(mesh=b.quad((0.2, 0.3, 0.3), (0.9, 0.3, 0.3), (0.9, 1.2, 0.3), (0.2, 1.2, 0.3), leaf,
+                       uv=False))
+    b.point_light([1, 0.95, 0.8], 2.0, [0.55, 0.75, -0.1])
+    wax = translucent(b, (0.95, 0.9, 0.8), 0.6, 0.9, (1.0, 0.8, 0.5), ior=1.45,
+                      volume=((0.9, 0.6, 0.4), 0.3))
+    b.node(mesh=b.box(wax), translation=[-0.2, 0.25, 0.9], scale=[0.4, 0.4, 0.4],
+           rotation=[0, 0.258819, 0, 0.9659258])
+    eye = (0.3, 1.4, 3.6)
+    b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
+           rotation=look_at_rotation(eye, (-0.1, 0.7, -0.2)))
+    b.write("diffuse_transmission.gltf")
 
 
 def anisotropy_scene():
@@ -977,3 +1033,4 @@ if __name__ == "__main__":
     normal_map_scene(glossy=True)
     alpha_scene()
     anisotropy_scene()
+    diffuse_transmission_scene()
