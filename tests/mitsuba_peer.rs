@@ -1081,9 +1081,10 @@ fn anisotropy_agrees_with_mitsuba() {
 /// lamp, a glossy leaf-green panel lit from behind by a point light, and a block of wax
 /// that light enters diffusely, absorbed inside by the export's interior medium under
 /// `volpath`). `pt` and `guided-ris` at depth 4, 8 × 64 spp against 8 × 256, 64 × 48.
-/// Seen to fail with the transmitted lobe's Fresnel weight left out (the mean at t = ?),
-/// with diffuse transmission drawn from the base colour instead of its own (t = ?) and
-/// with the wax's absorption left out (the solid not entered: t = ?).
+/// Seen to fail (`pt`) with the transmitted lobe's 1 − max(F) left out (the image mean
+/// at t = 9, a block at t = 8), with the transmitted light tinted by the base colour
+/// instead of its own (the mean at t = −117) and with the wax's absorption left out (the
+/// solid not entered: a block of the wax at t = 39).
 #[test]
 fn diffuse_transmission_agrees_with_mitsuba() {
     if !mitsuba_available() {
