@@ -1013,27 +1013,34 @@ fn normal_maps_agree_with_mitsuba() {
         ("normal_map.gltf", &[][..]),
         ("normal_map_glossy.gltf", &["--gltf-bsdf"][..]),
     ] {
-        let tmp = tempfile::tempdir().unwrap();
-        let dir = tmp.path().join("export");
-        let loaded = session::load_scene(&data(name)).unwrap();
-        let options = export_at_depth(&loaded.scene, None, 64, 48, 2, &dir);
-        for method in [Method::Pt, Method::GuidedRis] {
-            let what = format!("{name}, {}", method.name());
-            // Exact but for the one caveat, which these views never meet.
-            let caveat = Some("normal maps: a texel seen from below");
-            assert_agrees_but_for(
-                &loaded.scene,
-                method,
-                &options,
-                &dir,
-                64,
-                256,
-                tmp.path(),
-                &what,
-                extra,
-                caveat,
-            );
-        }
+        // Exact but for the one caveat, which these views never meet.
+        let caveat = Some("normal maps: a texel seen from below");
+        assert_pt_and_guided_ris_agree(name, 2, extra, caveat);
+    }
+}
+
+/// `pt` and `guided-ris` on the peer scene `name` at max depth `depth` (64 × 48, 8 × 64
+/// spp against Mitsuba's 8 × 256, `extra` given to the comparison) agree with Mitsuba,
+/// an approximate export allowed only for `caveat`.
+fn assert_pt_and_guided_ris_agree(name: &str, depth: u32, extra: &[&str], caveat: Option<&str>) {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("export");
+    let loaded = session::load_scene(&data(name)).unwrap();
+    let options = export_at_depth(&loaded.scene, None, 64, 48, depth, &dir);
+    for method in [Method::Pt, Method::GuidedRis] {
+        let what = format!("{name}, {}", method.name());
+        assert_agrees_but_for(
+            &loaded.scene,
+            method,
+            &options,
+            &dir,
+            64,
+            256,
+            tmp.path(),
+            &what,
+            extra,
+            caveat,
+        );
     }
 }
 
@@ -1055,25 +1062,7 @@ fn anisotropy_agrees_with_mitsuba() {
         println!("skipped: no Python here imports mitsuba (scripts/setup --mitsuba)");
         return;
     }
-    let tmp = tempfile::tempdir().unwrap();
-    let dir = tmp.path().join("export");
-    let loaded = session::load_scene(&data("anisotropy.gltf")).unwrap();
-    let options = export_at_depth(&loaded.scene, None, 64, 48, 4, &dir);
-    for method in [Method::Pt, Method::GuidedRis] {
-        let what = format!("anisotropy.gltf, {}", method.name());
-        assert_agrees_but_for(
-            &loaded.scene,
-            method,
-            &options,
-            &dir,
-            64,
-            256,
-            tmp.path(),
-            &what,
-            &["--gltf-bsdf"],
-            None,
-        );
-    }
+    assert_pt_and_guided_ris_agree("anisotropy.gltf", 4, &["--gltf-bsdf"], None);
 }
 
 /// KHR_materials_diffuse_transmission against the glTF BSDF plugin's diffuse BTDF
@@ -1091,25 +1080,7 @@ fn diffuse_transmission_agrees_with_mitsuba() {
         println!("skipped: no Python here imports mitsuba (scripts/setup --mitsuba)");
         return;
     }
-    let tmp = tempfile::tempdir().unwrap();
-    let dir = tmp.path().join("export");
-    let loaded = session::load_scene(&data("diffuse_transmission.gltf")).unwrap();
-    let options = export_at_depth(&loaded.scene, None, 64, 48, 4, &dir);
-    for method in [Method::Pt, Method::GuidedRis] {
-        let what = format!("diffuse_transmission.gltf, {}", method.name());
-        assert_agrees_but_for(
-            &loaded.scene,
-            method,
-            &options,
-            &dir,
-            64,
-            256,
-            tmp.path(),
-            &what,
-            &["--gltf-bsdf"],
-            None,
-        );
-    }
+    assert_pt_and_guided_ris_agree("diffuse_transmission.gltf", 4, &["--gltf-bsdf"], None);
 }
 
 /// Punctual lights (point, spot with a penumbra, hard spot, directional) and textured

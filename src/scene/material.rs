@@ -410,21 +410,22 @@ struct ExtensionReader<'a, 'v> {
 }
 
 impl<'a> ExtensionReader<'a, '_> {
-    fn new<'v>(
-        m: &gltf::Material<'_>,
+    /// The reader of material `m`'s `extension`, or None where it has none.
+    fn of<'v>(
+        m: &'v gltf::Material<'_>,
         doc: &'a gltf::Document,
         extension: &str,
-        v: &'v serde_json::Value,
-    ) -> ExtensionReader<'a, 'v> {
+    ) -> Option<ExtensionReader<'a, 'v>> {
+        let v = m.extension_value(extension)?;
         let name = m
             .name()
             .map(str::to_string)
             .unwrap_or_else(|| format!("#{}", m.index().unwrap_or(0)));
-        ExtensionReader {
+        Some(ExtensionReader {
             v,
             doc,
             what: format!("material `{name}`: {extension}"),
-        }
+        })
     }
 
     fn bad(&self, what: String) -> String {
@@ -515,10 +516,9 @@ impl<'a> Clearcoat<'a> {
     /// references are errors naming the material.
     pub fn read(m: &gltf::Material<'_>, doc: &'a gltf::Document) -> Result<Option<Self>, String> {
         const NAME: &str = "KHR_materials_clearcoat";
-        let Some(v) = m.extension_value(NAME) else {
+        let Some(r) = ExtensionReader::of(m, doc, NAME) else {
             return Ok(None);
         };
-        let r = ExtensionReader::new(m, doc, NAME, v);
         Ok(Some(Clearcoat {
             factor: r.number("clearcoatFactor", 0.0)?,
             roughness: r.number("clearcoatRoughnessFactor", 0.0)?,
@@ -542,10 +542,9 @@ impl<'a> Sheen<'a> {
     /// references are errors naming the material.
     pub fn read(m: &gltf::Material<'_>, doc: &'a gltf::Document) -> Result<Option<Self>, String> {
         const NAME: &str = "KHR_materials_sheen";
-        let Some(v) = m.extension_value(NAME) else {
+        let Some(r) = ExtensionReader::of(m, doc, NAME) else {
             return Ok(None);
         };
-        let r = ExtensionReader::new(m, doc, NAME, v);
         Ok(Some(Sheen {
             colour: r.colour("sheenColorFactor", [0.0; 3])?,
             roughness: r.number("sheenRoughnessFactor", 0.0)?,
@@ -568,10 +567,9 @@ impl<'a> Anisotropy<'a> {
     /// references are errors naming the material.
     pub fn read(m: &gltf::Material<'_>, doc: &'a gltf::Document) -> Result<Option<Self>, String> {
         const NAME: &str = "KHR_materials_anisotropy";
-        let Some(v) = m.extension_value(NAME) else {
+        let Some(r) = ExtensionReader::of(m, doc, NAME) else {
             return Ok(None);
         };
-        let r = ExtensionReader::new(m, doc, NAME, v);
         Ok(Some(Anisotropy {
             strength: r.number("anisotropyStrength", 0.0)?,
             rotation: r.number("anisotropyRotation", 0.0)?,
@@ -593,10 +591,9 @@ impl<'a> DiffuseTransmission<'a> {
     /// texture references are errors naming the material.
     pub fn read(m: &gltf::Material<'_>, doc: &'a gltf::Document) -> Result<Option<Self>, String> {
         const NAME: &str = "KHR_materials_diffuse_transmission";
-        let Some(v) = m.extension_value(NAME) else {
+        let Some(r) = ExtensionReader::of(m, doc, NAME) else {
             return Ok(None);
         };
-        let r = ExtensionReader::new(m, doc, NAME, v);
         Ok(Some(DiffuseTransmission {
             factor: r.number("diffuseTransmissionFactor", 0.0)?,
             colour: r.colour("diffuseTransmissionColorFactor", [1.0; 3])?,

@@ -238,8 +238,7 @@ class Builder:
                                      "roughnessFactor": 0},
             "extensions": {"KHR_materials_specular": {"specularFactor": 0},
                            "KHR_materials_transmission": {"transmissionFactor": transmission}}})
-        if "KHR_materials_transmission" not in self.used:
-            self.used.append("KHR_materials_transmission")
+        self.uses("KHR_materials_transmission")
         return len(self.materials) - 1
 
     def solid_glass(self, rgb, roughness, ior, attenuation=None):
@@ -255,10 +254,23 @@ class Builder:
             "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1},
                            "KHR_materials_ior": {"ior": ior},
                            "KHR_materials_volume": volume}})
-        for e in ("KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_volume"):
-            if e not in self.used:
-                self.used.append(e)
+        self.uses("KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_volume")
         return len(self.materials) - 1
+
+    # The extensions write() lists in every file.
+    ALWAYS_USED = ["KHR_materials_specular", "KHR_materials_emissive_strength"]
+
+    def uses(self, *names):
+        """Lists extensions in the file's extensionsUsed, each once."""
+        for e in names:
+            if e not in self.used and e not in self.ALWAYS_USED:
+                self.used.append(e)
+
+    def extend(self, m, extensions):
+        """Material `m` gains `extensions` (name: JSON), listed as used; returns m."""
+        self.materials[m].setdefault("extensions", {}).update(extensions)
+        self.uses(*extensions)
+        return m
 
     def pbr(self, rgb, metallic, roughness):
         self.materials.append({"pbrMetallicRoughness": {"baseColorFactor": list(rgb) + [1],
@@ -302,7 +314,7 @@ class Builder:
             type="point", color=color, intensity=intensity)}}, translation=translation)
 
     def write(self, name):
-        used = ["KHR_materials_specular", "KHR_materials_emissive_strength"]
+        used = list(self.ALWAYS_USED)
         g = {"asset": {"version": "2.0", "generator": "lanterna tests/data/mitsuba/make_scenes.py"},
              "extensionsUsed": used + (["KHR_lights_punctual"] if self.lights else [])
              + self.used + self.required,
@@ -456,18 +468,13 @@ def normal_map_scene(glossy=False):
 
 def anisotropic(b, rgb, metallic, roughness, strength, rotation):
     """A glossy material with KHR_materials_anisotropy (factors only)."""
-    m = b.pbr(rgb, metallic, roughness)
-    b.materials[m]["extensions"] = {"KHR_materials_anisotropy": {
-        "anisotropyStrength": strength, "anisotropyRotation": rotation}}
-    if "KHR_materials_anisotropy" not in b.used:
-        b.used.append("KHR_materials_anisotropy")
-    return m
+    return b.extend(b.pbr(rgb, metallic, roughness), {"KHR_materials_anisotropy": {
+        "anisotropyStrength": strength, "anisotropyRotation": rotation}})
 
 
 def translucent(b, rgb, roughness, factor, colour, specular=None, ior=None, volume=None):
     """A material with KHR_materials_diffuse_transmission (factors only); `volume` =
     (attenuation colour, distance) makes it the boundary of an absorbing solid."""
-    m = b.pbr(rgb, 0.0, roughness)
     ext = {"KHR_materials_diffuse_transmission": {
         "diffuseTransmissionFactor": factor, "diffuseTransmissionColorFactor": list(colour)}}
     if specular is not None:
@@ -477,11 +484,7 @@ def translucent(b, rgb, roughness, factor, colour, specular=None, ior=None, volu
     if volume is not None:
         ext["KHR_materials_volume"] = {"thicknessFactor": 0.1, "attenuationColor": list(volume[0]),
                                        "attenuationDistance": volume[1]}
-    b.materials[m]["extensions"] = ext
-    for e in ext:
-        if e not in b.used:
-            b.used.append(e)
-    return m
+    return b.extend(b.pbr(rgb, 0.0, roughness), ext)
 
 
 def diffuse_transmission_scene():
@@ -976,9 +979,8 @@ def layered(b, rgb, roughness, coat=None, sheen=None, specular=None):
                         {"sheenColorFactor": list(sheen[0]), "sheenRoughnessFactor": sheen[1]})):
         if value is not None:
             m["extensions"][ext] = value
-            if ext not in b.used and ext != "KHR_materials_specular":  # write() lists that
-                b.used.append(ext)
     b.materials.append(m)
+    b.uses(*m["extensions"])
     return len(b.materials) - 1
 
 
