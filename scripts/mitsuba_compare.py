@@ -384,8 +384,8 @@ def main(argv=None):
                     help="render every material with the glTF BRDF plugins of "
                     "scripts/mitsuba_gltf_bsdf.py and mitsuba_gltf_layers.py (exact for "
                     "untextured opaque metallic-roughness materials, with clearcoat, "
-                    "sheen or thin-walled transmission factors) instead of the export's "
-                    "BSDFs")
+                    "sheen, thin-walled transmission or diffuse transmission factors) "
+                    "instead of the export's BSDFs")
     ap.add_argument("--fail-on-disagree", action="store_true",
                     help="exit with status 1 when the block test rejects agreement")
     args = ap.parse_args(argv)

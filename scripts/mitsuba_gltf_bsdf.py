@@ -314,8 +314,9 @@ def rewrite_export(export_dir):
     `scene_path`). Returns the path. Raises ValueError for a material the plugin cannot
     write exactly (textures, vertex colours, solid glass, a normal map or alpha the
     export left out). A BSDF the export wrapped in `normalmap` or `mask` keeps its
-    wrappers around the plugin. Coats, sheens and thin-walled transmission are written
-    by mitsuba_gltf_layers."""
+    wrappers around the plugin. Coats, sheens, thin-walled transmission and diffuse
+    transmission are written by mitsuba_gltf_layers (a solid entered by diffuse
+    transmission alone keeps the export's interior medium)."""
     import mitsuba_gltf_layers
     with open(os.path.join(export_dir, "lanterna_export.json")) as f:
         manifest = json.load(f)

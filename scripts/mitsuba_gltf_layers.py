@@ -1,5 +1,6 @@
 """KHR_materials_clearcoat and KHR_materials_sheen (and thin-walled rough
-KHR_materials_transmission, the sample viewer's model) on top of the glTF BRDF of
+KHR_materials_transmission, the sample viewer's model, and
+KHR_materials_diffuse_transmission, as `gltf_thin`) on top of the glTF BRDF of
 mitsuba_gltf_bsdf.py, as a Mitsuba 3 plugin `gltf_layered`, written from the Khronos
 extension texts (ratified versions, KhronosGroup/glTF commit 60ad0f83):
 
