@@ -47,6 +47,11 @@ KHR_materials_anisotropy (factors only), which `mitsuba_compare.py --gltf-bsdf` 
 exactly through the glTF BSDF plugin (Mitsuba's own anisotropic GGX). Don't combine it
 with `--materials` there: the plugin refuses textures.
 
+`--diffuse-transmission` makes about half of the opaque Lambertian materials diffusely
+transmitting (KHR_materials_diffuse_transmission, factors only), half of those with a
+specular lobe too, which `mitsuba_compare.py --gltf-bsdf` renders exactly through the
+glTF BSDF plugin. Don't combine it with `--materials` there either.
+
 `--alpha` makes about half of the opaque non-emissive Lambertian materials BLEND (alpha
 0.2-0.9) or MASK (a nearest RGBA texture where the mesh has UVs, else a constant alpha
 either side of the cutoff), which the export writes exactly as Mitsuba's `mask` under
@@ -215,8 +220,31 @@ def add_anisotropy(s, seed):
     return count
 
 
+def add_diffuse_transmission(s, seed):
+    """KHR_materials_diffuse_transmission on about half of the opaque Lambertian
+    materials (factors only: a share of 0.2-1 in a colour of 0.3-1), half of them given
+    a specular lobe too (roughness 0.2-1). Drawn from a generator of their own, so that
+    the scene is otherwise the one the seed gives without them."""
+    r = random.Random(seed + 4_000_003)
+    count = 0
+    for index in sorted(opaque_lambertian_materials(s)):
+        if r.random() >= 0.5:
+            continue
+        m = s.materials[index]
+        if r.random() < 0.5:
+            m["extensions"].pop("KHR_materials_specular", None)
+            m.setdefault("pbrMetallicRoughness", {})["roughnessFactor"] = r.uniform(0.2, 1.0)
+        m["extensions"]["KHR_materials_diffuse_transmission"] = {
+            "diffuseTransmissionFactor": r.uniform(0.2, 1.0),
+            "diffuseTransmissionColorFactor": rgb_of(r, 0.3, 1.0)}
+        count += 1
+    if count and "KHR_materials_diffuse_transmission" not in s.used:
+        s.used.append("KHR_materials_diffuse_transmission")
+    return count
+
+
 def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=False,
-             anisotropy=False):
+             anisotropy=False, diffuse_transmission=False):
     r = random.Random(seed)
     s = Builder()
     rgb = lambda lo, hi: [r.uniform(lo, hi) for _ in range(3)]  # noqa: E731
@@ -315,6 +343,8 @@ def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=Fa
         kinds.append(f"alpha: {', '.join(alphas) or 'none'}")
     if anisotropy:
         kinds.append(f"{add_anisotropy(s, seed)} anisotropic materials")
+    if diffuse_transmission:
+        kinds.append(f"{add_diffuse_transmission(s, seed)} diffusely transmitting materials")
     return s, kinds
 
 
@@ -336,11 +366,14 @@ def main():
     ap.add_argument("--anisotropy", action="store_true",
                     help="anisotropic glossy metals and plastics on about half of the opaque "
                     "Lambertian materials with UVs")
+    ap.add_argument("--diffuse-transmission", action="store_true",
+                    help="diffuse transmission on about half of the opaque Lambertian "
+                    "materials, half of them glossy too")
     ap.add_argument("--two-sided-boxes", action="store_true",
                     help="let emissive boxes be two-sided too (Mitsuba's references leak there)")
     a = ap.parse_args()
     scene, kinds = generate(a.seed, a.two_sided_boxes, a.materials, a.normal_maps, a.alpha,
-                            a.anisotropy)
+                            a.anisotropy, a.diffuse_transmission)
     scene.write(os.path.abspath(a.output))  # an absolute name: not next to make_scenes.py
     print(f"{a.output}: {', '.join(kinds)}")
     return 0
