@@ -23,8 +23,8 @@ layout(constant_id = 6) const bool SHEEN = false;
 // without, the anisotropy's frame compiles away (lavapipe: 8 % of a `pt` sample on
 // `cornell-lights`, whose kernels are otherwise the Lambertian lobe alone).
 layout(constant_id = 11) const bool ANISOTROPY = false;
-// The scene has diffusely transmitting materials (KHR_materials_diffuse_transmission)
-// that are not wholly metallic: without, that lobe compiles away.
+// The scene has diffusely transmitting materials (KHR_materials_diffuse_transmission):
+// without, that lobe compiles away.
 layout(constant_id = 12) const bool DIFFUSE_TRANSMISSION = false;
 // Where the kernels take the Lambertian lobe alone (BSDF_KERNEL_*): at Lambertian
 // surfaces (metallic 0, specular 0, no transmission of either kind, coat or sheen), or everywhere when

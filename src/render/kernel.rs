@@ -29,7 +29,7 @@ pub(super) struct Variant {
     /// The scene has anisotropic materials that are not Lambertian
     /// (KHR_materials_anisotropy).
     pub anisotropy: bool,
-    /// The scene has diffusely transmitting materials that are not wholly metallic
+    /// The scene has diffusely transmitting materials
     /// (KHR_materials_diffuse_transmission).
     pub diffuse_transmission: bool,
     /// Where the kernels take the Lambertian lobe alone (`gpu::BSDF_KERNEL_*`).

@@ -176,8 +176,8 @@ pub struct Renderer {
     /// Whether any material is anisotropic and not Lambertian (the kernels' ANISOTROPY
     /// constant).
     has_anisotropy: bool,
-    /// Whether any material transmits diffusely and is not wholly metallic (the kernels'
-    /// DIFFUSE_TRANSMISSION constant).
+    /// Whether any material transmits diffusely (the kernels' DIFFUSE_TRANSMISSION
+    /// constant; a metallic factor of 1 may still be lowered by its texture).
     has_diffuse_transmission: bool,
     /// Whether every material in use is Lambertian (the kernels' BSDF_KERNEL constant:
     /// `Renderer::bsdf_kernel`).
@@ -312,7 +312,7 @@ impl Renderer {
             has_diffuse_transmission: scene
                 .materials
                 .iter()
-                .any(|m| m.diffuse_transmission > 0.0 && m.metallic < 1.0),
+                .any(|m| m.diffuse_transmission > 0.0),
             only_lambertian: scene.only_lambertian(),
             guide,
             reuse_cells,
