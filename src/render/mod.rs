@@ -309,10 +309,7 @@ impl Renderer {
                 .materials
                 .iter()
                 .any(|m| m.anisotropy_strength > 0.0 && !crate::scene::is_lambertian(m)),
-            has_diffuse_transmission: scene
-                .materials
-                .iter()
-                .any(|m| m.diffuse_transmission > 0.0),
+            has_diffuse_transmission: scene.materials.iter().any(|m| m.diffuse_transmission > 0.0),
             only_lambertian: scene.only_lambertian(),
             guide,
             reuse_cells,
