@@ -376,28 +376,6 @@ def layered_dict(mat):
 # sample viewer does). With KHR_materials_volume (thickness > 0, no transmission) the
 # light it passes enters the solid: the export's interior medium absorbs it (volpath).
 
-def np_thin(p, v, l):
-    """Thin-walled transmission material (no coat/sheen), l on either side; BSDF without cosine."""
-    t = p["transmission"]
-    dt = p.get("diffuse_transmission", 0.0)
-    dtc = np.array(p.get("dt_color", (1.0, 1.0, 1.0)))[None]
-    a = max(p["roughness"] ** 2, 1e-4)
-    f0i = ((1 - p["ior"]) / (1 + p["ior"])) ** 2
-    f0 = np.array([min(f0i * c, 1.0) * p["specular"] for c in p["spec_color"]])
-    base = np.array(p["base"])[None]
-    up = l[:, 2] > 0
-    lm = l.copy(); lm[:, 2] = np.abs(lm[:, 2])
-    h = v + lm; h /= np.linalg.norm(h, axis=-1, keepdims=True)
-    vh = np.abs(np.sum(v * h, -1)); fw = (1 - vh) ** 5
-    F = f0[None] + (p["specular"] - f0[None]) * fw[:, None]
-    spec = np_ggx_D(h[:, 2], a) * np_ggx_Vis(lm[:, 2], v[:, 2], a)
-    refl_d = F * spec[:, None] + (1 - F.max(1, keepdims=True)) * (1 - t) * (1 - dt) * base / math.pi
-    refl_m = (base + (1 - base) * fw[:, None]) * spec[:, None]
-    refl = (1 - p["metallic"]) * refl_d + p["metallic"] * refl_m
-    trans = (1 - p["metallic"]) * (t * (1 - F) * base * spec[:, None]
-                                   + (1 - F.max(1, keepdims=True)) * (1 - t) * dt * dtc / math.pi)
-    return np.where(up[:, None], refl, trans)
-
 
 class GltfThin(base_mod.GltfBSDF):
     def __init__(self, props):
