@@ -26,6 +26,13 @@
 // the Fresnel term at wi mirrored above the surface (as the thin transmission lobe).
 // Sampling sends that share of the cosine samples below.
 //
+// KHR_materials_iridescence puts a thin dielectric film on the base: its Fresnel term
+// (thin_film_fresnel below) replaces Schlick's, by the weight `iridescence`, for the
+// dielectric (whose base F0 is f0_dielectric) and the metal (the base colour), wherever
+// the term appears: the specular lobe, the 1 − max(F) of the diffuse and thin
+// transmission lobes. Under a coat the film's outside index is the coat's 1.5. A solid's
+// refracting interface keeps its exact Fresnel term (the film is on its opaque rest).
+//
 // KHR_materials_clearcoat lays a GGX coat over all of it (the spec's fresnel_coat): with
 // w = clearcoat·F(ωo·nc), F Schlick's with F0 = 0.04 at the coat normal nc, the BSDF is
 // (1 − w)·base + w·D·G2/(4|ωo·nc||ωi·nc|) with the coat's own α and normal, the coat's
@@ -65,6 +72,9 @@ struct BsdfParams {
     float diffuse_transmission;       // KHR_materials_diffuse_transmission: share of the
                                       // diffuse lobe (what `transmission` leaves) that
     vec3 diffuse_transmission_color;  // leaves below the surface, tinted by this colour
+    float iridescence;            // KHR_materials_iridescence: the thin film's weight (0: none),
+    float iridescence_ior;        // its index of refraction
+    float iridescence_thickness;  // and its thickness in nanometres
 };
 
 // GGX's D of a unit microfacet normal whose cosine from the macro normal is `c` and
@@ -120,6 +130,71 @@ float schlick_weight(float c) {
     float m2 = m * m;
     return m2 * m2 * m;
 }
+
+// ---- the thin film (KHR_materials_iridescence, p.iridescence > 0) ----
+// Belcour & Barla 2017, "A practical extension to microfacet theory for the modeling of
+// varying iridescence", as the extension's implementation notes simplify it: Schlick's
+// reflectance at both interfaces of the film, phase shifts of 0 or π (no polarisation),
+// the base's index taken from its F0 (a metal's extinction ignored), and the Airy
+// series' interference terms up to the second integrated analytically against Gaussian
+// fits of the CIE 1931 matching functions, then taken from XYZ to linear Rec. 709.
+
+// The spectral integral of an interference term of optical path difference `opd` (nm) and
+// phase shift `shift`, per colour channel.
+vec3 thin_film_sensitivity(float opd, vec3 shift) {
+    float phase = 2.0 * PI * opd * 1e-9;
+    const vec3 amplitude = vec3(5.4856e-13, 4.4201e-13, 5.2481e-13);
+    const vec3 centre = vec3(1.6810e+06, 1.7953e+06, 2.2084e+06);
+    const vec3 variance = vec3(4.3278e+09, 9.3046e+09, 6.6121e+09);
+    vec3 xyz = amplitude * sqrt(2.0 * PI * variance) * cos(centre * phase + shift) * exp(-phase * phase * variance);
+    // X's second lobe.
+    xyz.x += 9.7470e-14 * sqrt(2.0 * PI * 4.5282e+09) * cos(2.2399e+06 * phase + shift.x) * exp(-4.5282e+09 * phase * phase);
+    xyz /= 1.0685e-7;
+    const mat3 xyz_to_rec709 = mat3(3.2404542, -0.9692660, 0.0556434,
+                                    -1.5371385, 1.8760108, -0.2040259,
+                                    -0.4985314, 0.0415560, 1.0572252);
+    return xyz_to_rec709 * xyz;
+}
+
+// The film's reflectance at cosine `cos1` (from the microfacet normal) for a film of index
+// `film_ior` and `thickness` nm between a medium of index `outside_ior` and a base of
+// normal-incidence reflectance `base_f0`, clamped to [0, 1].
+vec3 thin_film_fresnel(float outside_ior, float film_ior, float thickness, float cos1, vec3 base_f0) {
+    // A film of no thickness is no film: its index goes to the outside's.
+    float n2 = mix(outside_ior, film_ior, smoothstep(0.0, 0.03, thickness));
+    float sin2_sq = sqr(outside_ior / n2) * (1.0 - cos1 * cos1);
+    if (sin2_sq >= 1.0) return vec3(1.0);  // total internal reflection at the film
+    float cos2 = sqrt(1.0 - sin2_sq);
+    // The outside–film interface, both ways.
+    float r0 = sqr((n2 - outside_ior) / (n2 + outside_ior));
+    float r12 = r0 + (1.0 - r0) * schlick_weight(cos1);
+    float t121 = 1.0 - r12;
+    float phi12 = n2 < outside_ior ? PI : 0.0;
+    float phi21 = PI - phi12;
+    // The film–base interface; the base's index from its F0 (kept below 1).
+    vec3 s = sqrt(min(base_f0 + 1e-4, vec3(0.9999)));
+    vec3 n3 = (1.0 + s) / (1.0 - s);
+    vec3 q = (n3 - n2) / (n3 + n2);
+    vec3 r1 = q * q;
+    vec3 r23 = r1 + (1.0 - r1) * schlick_weight(cos2);
+    vec3 phi23 = vec3(n3.x < n2 ? PI : 0.0, n3.y < n2 ? PI : 0.0, n3.z < n2 ? PI : 0.0);
+    vec3 phi = phi21 + phi23;
+    float opd = 2.0 * n2 * thickness * cos2;
+    // The Airy series: its mean and its first two interference terms.
+    vec3 r123 = clamp(r12 * r23, 1e-5, 0.9999);
+    vec3 r = sqrt(r123);
+    vec3 rs = t121 * t121 * r23 / (1.0 - r123);
+    vec3 result = r12 + rs;
+    vec3 cm = rs - t121;
+    for (int m = 1; m <= 2; ++m) {
+        cm *= r;
+        result += cm * 2.0 * thin_film_sensitivity(float(m) * opd, float(m) * phi);
+    }
+    return clamp(result, 0.0, 1.0);
+}
+
+// The film's outside index: air, or the coat's 1.5 under a coat.
+float thin_film_outside_ior(BsdfParams p) { return p.coat > 0.0 ? 1.5 : 1.0; }
 
 // Probability of sampling the specular lobe for outgoing direction wo.
 float bsdf_specular_probability(BsdfParams p, vec3 wo) {
@@ -350,6 +425,17 @@ vec3 bsdf_eval_pdf_walls(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
     float w = schlick_weight(dot(wo, h));
     float spec = d / (1.0 + c.lambda_wo + ggx_lambda(wr, ggx_alphas(p))) / (4.0 * wo.z * wr.z);
     vec3 fd = p.f0_dielectric + (vec3(p.specular) - p.f0_dielectric) * w;
+    vec3 fm = p.base_color + (1.0 - p.base_color) * w;
+    if (p.iridescence > 0.0) {
+        float outside = thin_film_outside_ior(p);
+        float ho = dot(wo, h);
+        if (p.metallic < 1.0)
+            fd = mix(fd, thin_film_fresnel(outside, p.iridescence_ior, p.iridescence_thickness, ho, p.f0_dielectric),
+                     p.iridescence);
+        if (p.metallic > 0.0)
+            fm = mix(fm, thin_film_fresnel(outside, p.iridescence_ior, p.iridescence_thickness, ho, p.base_color),
+                     p.iridescence);
+    }
     // Specular and transmission lobes: visible normals, g1·D/(4 cosθo) (reflection of
     // the sampled normal; mirrored below the surface for transmission).
     float ps = c.spec_prob;
@@ -370,7 +456,7 @@ vec3 bsdf_eval_pdf_walls(BsdfParams p, BsdfWo c, vec3 wi, out float pdf) {
     vec3 diffuse = p.base_color * INV_PI * (1.0 - p.transmission);
     if (dt > 0.0) diffuse *= 1.0 - dt;
     vec3 dielectric = diffuse * (1.0 - max3(fd)) + spec * fd;
-    vec3 metal = spec * (p.base_color + (1.0 - p.base_color) * w);
+    vec3 metal = spec * fm;
     float diffuse_share = dt > 0.0 ? (1.0 - p.transmission) * (1.0 - dt) : 1.0 - p.transmission;
     pdf = (1.0 - ps) * diffuse_share * wi.z * INV_PI + ps * spec_pdf;
     return mix(dielectric, metal, p.metallic) * wi.z;

@@ -258,9 +258,28 @@ Surface make_surface(Hit h, vec3 ray_dir) {
         s.bsdf.sheen_color = clamp(sheen, 0.0, 1.0);
         s.bsdf.sheen_roughness = clamp(r, 0.0, 1.0);
     }
+    // KHR_materials_iridescence: the thin film's weight (factor × texture R) and thickness
+    // (the maximum, or mix(minimum, maximum, texture G)).
+    s.bsdf.iridescence = 0.0;
+    s.bsdf.iridescence_ior = 1.3;
+    s.bsdf.iridescence_thickness = 0.0;
+    if (IRIDESCENCE && m.iridescence > 0.0) {
+        float weight = m.iridescence;
+        if (m.iridescence_tex.index >= 0)
+            weight *= sample_texture(m.iridescence_tex, m.iridescence_tex.uv_set == 1u ? s.uv1 : s.uv0).r;
+        float thickness = m.iridescence_thickness_max;
+        if (m.iridescence_thickness_tex.index >= 0)
+            thickness = mix(m.iridescence_thickness_min, m.iridescence_thickness_max,
+                            sample_texture(m.iridescence_thickness_tex,
+                                           m.iridescence_thickness_tex.uv_set == 1u ? s.uv1 : s.uv0).g);
+        s.bsdf.iridescence = clamp(weight, 0.0, 1.0);
+        s.bsdf.iridescence_ior = m.iridescence_ior;
+        s.bsdf.iridescence_thickness = max(thickness, 0.0);
+    }
     // With these at 0 every lobe but the Lambertian one has weight 0 (inc/bsdf.glsl).
     s.lambertian = s.bsdf.metallic == 0.0 && s.bsdf.specular == 0.0 && s.bsdf.transmission == 0.0
-        && s.bsdf.diffuse_transmission == 0.0 && s.bsdf.coat == 0.0 && max3(s.bsdf.sheen_color) == 0.0;
+        && s.bsdf.diffuse_transmission == 0.0 && s.bsdf.coat == 0.0 && max3(s.bsdf.sheen_color) == 0.0
+        && s.bsdf.iridescence == 0.0;
 
     // Emission: front face only unless the material is double-sided.
     bool emits = s.front || (m.flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;

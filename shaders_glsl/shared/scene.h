@@ -99,6 +99,17 @@ struct Material {
     vec3 diffuse_transmission_color;
     TextureRef diffuse_transmission_tex;
     TextureRef diffuse_transmission_color_tex;
+    // KHR_materials_iridescence: a thin dielectric film over the base whose Fresnel term
+    // (Belcour & Barla 2017, as the extension simplifies it) replaces Schlick's by this
+    // weight (factor × texture R); the film's index and its thickness in nanometres (the
+    // maximum, or mix(minimum, maximum, thickness texture G)). Counted in the content
+    // hash only where a material has it.
+    float iridescence;
+    float iridescence_ior;
+    float iridescence_thickness_min;
+    float iridescence_thickness_max;
+    TextureRef iridescence_tex;
+    TextureRef iridescence_thickness_tex;
 };
 
 // One emissive triangle in world space.

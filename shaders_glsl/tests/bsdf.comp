@@ -24,6 +24,9 @@ struct BsdfCase {
     float alpha_t;
     float diffuse_transmission;
     vec3 diffuse_transmission_color;
+    float iridescence;
+    float iridescence_ior;
+    float iridescence_thickness;
 };
 
 layout(local_size_x = 64) in;
@@ -51,6 +54,9 @@ void main() {
     p.sheen_roughness = bsdf_case.sheen_roughness;
     p.diffuse_transmission = bsdf_case.diffuse_transmission;
     p.diffuse_transmission_color = bsdf_case.diffuse_transmission_color;
+    p.iridescence = bsdf_case.iridescence;
+    p.iridescence_ior = bsdf_case.iridescence_ior;
+    p.iridescence_thickness = bsdf_case.iridescence_thickness;
     bool lambertian = pc.mode >= 2u;
     BsdfWo c = lambertian ? bsdf_at_lambertian(bsdf_case.wo) : bsdf_at(p, bsdf_case.wo);
     vec3 wi = items[t].xyz;

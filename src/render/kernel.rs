@@ -32,6 +32,8 @@ pub(super) struct Variant {
     /// The scene has diffusely transmitting materials
     /// (KHR_materials_diffuse_transmission).
     pub diffuse_transmission: bool,
+    /// The scene has iridescent materials (KHR_materials_iridescence).
+    pub iridescence: bool,
     /// Where the kernels take the Lambertian lobe alone (`gpu::BSDF_KERNEL_*`).
     pub bsdf: u32,
     /// World-space light reuse (`light_reuse.rs`; RIS methods).
@@ -193,16 +195,17 @@ impl Renderer {
                 v.visibility as u32,
                 v.anisotropy as u32,
                 v.diffuse_transmission as u32,
+                v.iridescence as u32,
             ];
             let name = format!(
-                "render (ris={}, guiding={}, training={}, aovs={}, solids={}, clearcoat={}, sheen={}, anisotropy={}, diffuse_transmission={}, bsdf={}, reuse={}, visibility={}, debug={}, lanes={}, traversal={})",
-                v.ris, v.guiding, v.training, v.aovs, v.solids, v.clearcoat, v.sheen, v.anisotropy, v.diffuse_transmission, v.bsdf, v.reuse, v.visibility, v.debug, v.lanes, self.traversal.kind
+                "render (ris={}, guiding={}, training={}, aovs={}, solids={}, clearcoat={}, sheen={}, anisotropy={}, diffuse_transmission={}, iridescence={}, bsdf={}, reuse={}, visibility={}, debug={}, lanes={}, traversal={})",
+                v.ris, v.guiding, v.training, v.aovs, v.solids, v.clearcoat, v.sheen, v.anisotropy, v.diffuse_transmission, v.iridescence, v.bsdf, v.reuse, v.visibility, v.debug, v.lanes, self.traversal.kind
             );
             requests.push((v, spirv, spec, name));
         }
         let bindings = self.bindings();
         let device = &self.device;
-        let create = |(v, spirv, spec, name): &(Variant, Vec<u32>, [u32; 13], String)| {
+        let create = |(v, spirv, spec, name): &(Variant, Vec<u32>, [u32; 14], String)| {
             let started = Instant::now();
             let p = ComputePipeline::new(
                 device,
@@ -342,6 +345,7 @@ impl Renderer {
             sheen: self.has_sheen,
             anisotropy: self.has_anisotropy,
             diffuse_transmission: self.has_diffuse_transmission,
+            iridescence: self.has_iridescence,
             bsdf: self.bsdf_kernel(),
             reuse: self.settings.light_reuse.world && method.uses_ris(),
             visibility: self.settings.light_visibility.learned && method.uses_ris(),

@@ -179,6 +179,8 @@ pub struct Renderer {
     /// Whether any material transmits diffusely (the kernels' DIFFUSE_TRANSMISSION
     /// constant; a metallic factor of 1 may still be lowered by its texture).
     has_diffuse_transmission: bool,
+    /// Whether any material has a thin film (the kernels' IRIDESCENCE constant).
+    has_iridescence: bool,
     /// Whether every material in use is Lambertian (the kernels' BSDF_KERNEL constant:
     /// `Renderer::bsdf_kernel`).
     only_lambertian: bool,
@@ -310,6 +312,7 @@ impl Renderer {
                 .iter()
                 .any(|m| m.anisotropy_strength > 0.0 && !crate::scene::is_lambertian(m)),
             has_diffuse_transmission: scene.materials.iter().any(|m| m.diffuse_transmission > 0.0),
+            has_iridescence: scene.materials.iter().any(|m| m.iridescence > 0.0),
             only_lambertian: scene.only_lambertian(),
             guide,
             reuse_cells,

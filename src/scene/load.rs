@@ -145,6 +145,11 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
                 mark(t.map(|t| t.texture));
             }
         }
+        if let Ok(Some(i)) = material::Iridescence::read(&m, &document) {
+            for t in [i.texture, i.thickness_texture] {
+                mark(t.map(|t| t.texture));
+            }
+        }
     }
     let mut images = Vec::new();
     for img in document.images() {
@@ -720,8 +725,8 @@ fn parse(bytes: &[u8], warnings: &mut Vec<String>) -> Result<gltf::Gltf, gltf::E
 
 /// glTF extensions lanterna reads. A file may use others without requiring them (a
 /// required one it does not know is refused when the file is parsed); their data is then
-/// ignored, which a user should hear about: a `KHR_materials_iridescence` material
-/// renders without its iridescence, a `KHR_materials_unlit` material lit.
+/// ignored, which a user should hear about: a `KHR_materials_dispersion` material
+/// renders without its dispersion, a `KHR_materials_unlit` material lit.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
@@ -729,6 +734,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_diffuse_transmission",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
+    "KHR_materials_iridescence",
     "KHR_materials_pbrSpecularGlossiness",
     "KHR_materials_sheen",
     "KHR_materials_specular",
@@ -799,6 +805,7 @@ fn content_hash(scene: &Scene) -> String {
     let anisotropy_part = std::mem::offset_of!(crate::gpu::Material, anisotropy_strength);
     let diffuse_transmission_part =
         std::mem::offset_of!(crate::gpu::Material, diffuse_transmission);
+    let iridescence_part = std::mem::offset_of!(crate::gpu::Material, iridescence);
     for m in &scene.materials {
         let bytes = bytemuck::bytes_of(m);
         eat(&bytes[..opaque_part]);
@@ -815,7 +822,10 @@ fn content_hash(scene: &Scene) -> String {
             eat(&bytes[anisotropy_part..diffuse_transmission_part]);
         }
         if m.diffuse_transmission > 0.0 {
-            eat(&bytes[diffuse_transmission_part..]);
+            eat(&bytes[diffuse_transmission_part..iridescence_part]);
+        }
+        if m.iridescence > 0.0 {
+            eat(&bytes[iridescence_part..]);
         }
     }
     for i in &scene.instances {

@@ -186,6 +186,12 @@ pub fn default_material() -> gpu::Material {
         diffuse_transmission_color: [1.0; 3],
         diffuse_transmission_tex: no_texture(),
         diffuse_transmission_color_tex: no_texture(),
+        iridescence: 0.0,
+        iridescence_ior: 1.3,
+        iridescence_thickness_min: 100.0,
+        iridescence_thickness_max: 400.0,
+        iridescence_tex: no_texture(),
+        iridescence_thickness_tex: no_texture(),
     }
 }
 
@@ -283,6 +289,18 @@ pub fn convert(
             out.diffuse_transmission_color_tex = t.reference(reg, TextureFormat::Srgb);
         }
     }
+    if let Some(i) = Iridescence::read(m, doc)? {
+        out.iridescence = i.factor;
+        out.iridescence_ior = i.ior;
+        out.iridescence_thickness_min = i.thickness_min;
+        out.iridescence_thickness_max = i.thickness_max;
+        if let Some(t) = &i.texture {
+            out.iridescence_tex = t.reference(reg, TextureFormat::Linear);
+        }
+        if let Some(t) = &i.thickness_texture {
+            out.iridescence_thickness_tex = t.reference(reg, TextureFormat::Linear);
+        }
+    }
     if let Some(ior) = m
         .extension_value("KHR_materials_ior")
         .and_then(|v| v.get("ior"))
@@ -347,6 +365,7 @@ pub fn convert(
         out.anisotropy_rotation[0],
         out.anisotropy_rotation[1],
         out.diffuse_transmission,
+        out.iridescence,
     ];
     let finite = out
         .base_color
@@ -378,6 +397,7 @@ pub fn convert(
     out.anisotropy_strength = out.anisotropy_strength.clamp(0.0, 1.0);
     out.diffuse_transmission = out.diffuse_transmission.clamp(0.0, 1.0);
     out.diffuse_transmission_color = out.diffuse_transmission_color.map(|c| c.clamp(0.0, 1.0));
+    out.iridescence = out.iridescence.clamp(0.0, 1.0);
     Ok(out)
 }
 
@@ -603,6 +623,47 @@ impl<'a> DiffuseTransmission<'a> {
     }
 }
 
+/// KHR_materials_iridescence of one material.
+pub struct Iridescence<'a> {
+    factor: f32,
+    ior: f32,
+    thickness_min: f32,
+    thickness_max: f32,
+    pub texture: Option<RawTexture<'a>>,
+    pub thickness_texture: Option<RawTexture<'a>>,
+}
+
+impl<'a> Iridescence<'a> {
+    /// The material's thin film, if it has the extension; malformed values (non-finite
+    /// numbers, an index below 1, a negative thickness: the extension's schema) and
+    /// texture references are errors naming the material.
+    pub fn read(m: &gltf::Material<'_>, doc: &'a gltf::Document) -> Result<Option<Self>, String> {
+        const NAME: &str = "KHR_materials_iridescence";
+        let Some(r) = ExtensionReader::of(m, doc, NAME) else {
+            return Ok(None);
+        };
+        let ior = r.number("iridescenceIor", 1.3)?;
+        if ior < 1.0 {
+            return Err(r.bad(format!("iridescenceIor {ior} is below 1")));
+        }
+        let thickness = |key: &str, default: f32| -> Result<f32, String> {
+            let t = r.number(key, default)?;
+            if t < 0.0 {
+                return Err(r.bad(format!("{key} {t} is negative")));
+            }
+            Ok(t)
+        };
+        Ok(Some(Iridescence {
+            factor: r.number("iridescenceFactor", 0.0)?,
+            ior,
+            thickness_min: thickness("iridescenceThicknessMinimum", 100.0)?,
+            thickness_max: thickness("iridescenceThicknessMaximum", 400.0)?,
+            texture: r.texture("iridescenceTexture")?,
+            thickness_texture: r.texture("iridescenceThicknessTexture")?,
+        }))
+    }
+}
+
 /// Whether a material bounds a solid (KHR_materials_volume with a thickness, and a
 /// transmission or diffuse transmission factor: light goes into it, refracted or
 /// diffusely): what the kernels' SOLIDS constant, `lanterna info` and the Mitsuba export
@@ -615,13 +676,16 @@ pub fn bounds_solid(m: &gpu::Material) -> bool {
 /// Whether a material's BSDF is the Lambertian lobe alone, whatever its textures: no
 /// metal (the factor, which its texture only scales, at 0), no specular lobe
 /// (KHR_materials_specular's factor 0, which takes the dielectric's F0 and F90 to 0), no
-/// transmission (specular or diffuse), coat or sheen. The kernels compare these factors with 0 the same way
-/// (inc/material.glsl), and `Scene::only_lambertian` asks this of every material in use.
+/// transmission (specular or diffuse), coat, sheen or thin film (KHR_materials_iridescence,
+/// whose film reflects whatever the specular factor). The kernels compare these factors
+/// with 0 the same way (inc/material.glsl), and `Scene::only_lambertian` asks this of
+/// every material in use.
 pub fn is_lambertian(m: &gpu::Material) -> bool {
     m.metallic <= 0.0
         && m.specular == 0.0
         && m.transmission <= 0.0
         && m.diffuse_transmission <= 0.0
+        && m.iridescence <= 0.0
         && m.clearcoat <= 0.0
         && m.sheen_color.iter().all(|&c| c <= 0.0)
 }

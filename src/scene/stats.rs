@@ -26,6 +26,8 @@ pub struct SceneStats {
     /// Materials with diffuse transmission (KHR_materials_diffuse_transmission, factor
     /// above 0).
     pub diffuse_transmission_materials: u64,
+    /// Materials with a thin film (KHR_materials_iridescence, factor above 0).
+    pub iridescent_materials: u64,
     /// Every material in use is Lambertian (`Scene::only_lambertian`): the kernels take
     /// that lobe alone.
     pub only_lambertian: bool,
@@ -119,6 +121,11 @@ impl SceneStats {
                 .iter()
                 .filter(|m| m.diffuse_transmission > 0.0)
                 .count() as u64,
+            iridescent_materials: scene
+                .materials
+                .iter()
+                .filter(|m| m.iridescence > 0.0)
+                .count() as u64,
             only_lambertian: scene.only_lambertian(),
             textures: scene.textures.len() as u64,
             cameras: scene.cameras.len() as u64,
@@ -176,6 +183,9 @@ impl fmt::Display for SceneStats {
                 "{} diffusely transmitting",
                 self.diffuse_transmission_materials
             ));
+        }
+        if self.iridescent_materials > 0 {
+            kinds.push(format!("{} iridescent", self.iridescent_materials));
         }
         if self.only_lambertian {
             kinds.push("every one in use Lambertian".into());
