@@ -459,7 +459,7 @@ def main(argv=None):
             # now exact (materials they cannot write were refused above).
             exact_now = ("glTF metallic-roughness", "its clearcoat", "its sheen",
                          "KHR_materials_transmission (roughness", "its anisotropy (strength",
-                         "its diffuse transmission (factor")
+                         "its diffuse transmission (factor", "its iridescence (factor")
             approximations = [a for a in approximations
                               if not any(e in a for e in exact_now)]
         scene = mi.load_file(xml, max_depth=manifest["max_depth"])

@@ -23,6 +23,11 @@ height-correlated visibility 1 / ((1 + Λ(V) + Λ(L)) 4 |N.V| |N.L|) with Λ = 1
 its visible-normal sampling, so that lanterna's anisotropic GGX meets an implementation
 it does not share.
 
+KHR_materials_iridescence (factors only: `iridescence`, `irid_ior`, `irid_thickness` in
+nm): both Fresnel terms above become mix(F, F_iridescence, iridescence), the thin film's
+term of the extension's implementation notes (`thin_film` below), the film's outside
+index 1 (1.5 under a coat, mitsuba_gltf_layers).
+
 Two-sided (a view from the back sees the same BRDF, both directions mirrored), reflection
 only. Sampling is a one-sample mixture of GGX visible normals (Heitz 2018) and the cosine
 hemisphere; `pdf` is the mixture's density. Only constant factors (no textures):
@@ -55,7 +60,69 @@ def _params(props):
     p["spec_prob"] = g("spec_prob", default_ps)
     p["anisotropy"] = g("anisotropy", 0.0)
     p["anisotropy_rotation"] = g("anisotropy_rotation", 0.0)
+    p["iridescence"] = g("iridescence", 0.0)
+    p["irid_ior"] = g("irid_ior", 1.3)
+    p["irid_thickness"] = g("irid_thickness", 400.0)
     return p
+
+
+# KHR_materials_iridescence (its README, "Implementation Notes"): Belcour & Barla's thin-film
+# Fresnel term with Schlick reflectances at both interfaces, 0/pi phase shifts, and the
+# Airy series' first two interference terms integrated against Gaussian fits of the CIE
+# matching functions (evalSensitivity), in linear Rec. 709. A film of no thickness takes
+# the outside's index (the glTF sample viewer's smoothstep over 0-0.03 nm); the optical
+# path difference is 2 n_film d cos(theta_2), the angle inside the film (Belcour & Barla,
+# eq. 2); the result is clamped to [0, 1].
+_XYZ_TO_REC709 = ((3.2404542, -1.5371385, -0.4985314),
+                  (-0.9692660, 1.8760108, 0.0415560),
+                  (0.0556434, -0.2040259, 1.0572252))
+
+
+def _sensitivity(opd, shift):
+    """evalSensitivity: the spectral integral of an interference term, Rec. 709."""
+    phase = 2.0 * dr.pi * opd * 1e-9
+    val = (5.4856e-13, 4.4201e-13, 5.2481e-13)
+    pos = (1.6810e+06, 1.7953e+06, 2.2084e+06)
+    var = (4.3278e+09, 9.3046e+09, 6.6121e+09)
+    xyz = [val[k] * math.sqrt(2.0 * math.pi * var[k]) * dr.cos(pos[k] * phase + shift[k])
+           * dr.exp(-var[k] * phase * phase) for k in range(3)]
+    xyz[0] = xyz[0] + (9.7470e-14 * math.sqrt(2.0 * math.pi * 4.5282e+09)
+                       * dr.cos(2.2399e+06 * phase + shift[0]) * dr.exp(-4.5282e+09 * phase * phase))
+    xyz = [x / 1.0685e-7 for x in xyz]
+    return [sum(_XYZ_TO_REC709[r][c] * xyz[c] for c in range(3)) for r in range(3)]
+
+
+def thin_film(outside, film, thickness, cos1, base_f0):
+    """F_iridescence (a Color3f) at cosine cos1 for a base of normal-incidence
+    reflectance base_f0 (a 3-tuple of floats)."""
+    t = min(max(thickness / 0.03, 0.0), 1.0)
+    n2 = outside + (film - outside) * t * t * (3.0 - 2.0 * t)
+    sin2_sq = (outside / n2) ** 2 * (1.0 - cos1 * cos1)
+    tir = sin2_sq >= 1.0
+    cos2 = dr.sqrt(dr.maximum(1.0 - sin2_sq, 0.0))
+    schlick = lambda f0, c: f0 + (1.0 - f0) * (1.0 - c) ** 5
+    r12 = schlick(((n2 - outside) / (n2 + outside)) ** 2, cos1)
+    t121 = 1.0 - r12
+    phi21 = math.pi - (math.pi if n2 < outside else 0.0)
+    opd = 2.0 * n2 * thickness * cos2
+    out = []
+    phis, r23s = [], []
+    for k in range(3):
+        sq = math.sqrt(min(base_f0[k] + 1e-4, 0.9999))
+        n3 = (1.0 + sq) / (1.0 - sq)
+        r23s.append(schlick(((n3 - n2) / (n3 + n2)) ** 2, cos2))
+        phis.append(phi21 + (math.pi if n3 < n2 else 0.0))
+    terms = [_sensitivity(m * opd, [m * ph for ph in phis]) for m in (1, 2)]
+    for k in range(3):
+        r123 = dr.clip(r12 * r23s[k], 1e-5, 0.9999)
+        rs = t121 * t121 * r23s[k] / (1.0 - r123)
+        i = r12 + rs
+        cm = rs - t121
+        for m in (1, 2):
+            cm = cm * dr.sqrt(r123)
+            i = i + cm * 2.0 * terms[m - 1][k]
+        out.append(dr.select(tir, 1.0, dr.clip(i, 0.0, 1.0)))
+    return mi.Color3f(*out)
 
 
 def sample_result(wo, sgn, pdf, f, valid, sampled_type):
@@ -83,7 +150,10 @@ class GltfBSDF(mi.BSDF):
         f0_ior = ((1.0 - p["ior"]) / (1.0 + p["ior"])) ** 2
         self.f0d = mi.Color3f(*[min(f0_ior * c, 1.0) * p["specular"] for c in p["spec_color"]])
         self.f90d = p["specular"]
+        self.f0d_tuple = tuple(min(f0_ior * c, 1.0) * p["specular"] for c in p["spec_color"])
         self.ps = p["spec_prob"]
+        self.irid = p["iridescence"]
+        self.irid_outside = 1.0  # the film's outside index (a coat's 1.5 under a coat)
         # KHR_materials_anisotropy: Mitsuba's anisotropic GGX in the frame turned by the
         # rotation (None: isotropic, the formulas below).
         self.distr = None
@@ -136,6 +206,18 @@ class GltfBSDF(mi.BSDF):
         vis = 1.0 / ((1.0 + lam(g1i) + lam(g1o)) * 4.0 * wi.z * wo.z)
         return dr.select(ok, self.distr.eval(h) * vis, 0.0)
 
+    def fresnel(self, vh, fw):
+        """The dielectric's and the metal's Fresnel terms at |V.H| = vh (fw = (1 - vh)^5):
+        Schlick's, mixed with the thin film's by the iridescence factor."""
+        Fd = self.f0d + (self.f90d - self.f0d) * fw
+        Fm = self.base + (1.0 - self.base) * fw
+        if self.irid > 0.0:
+            p = self.p
+            film = lambda f0: thin_film(self.irid_outside, p["irid_ior"], p["irid_thickness"], vh, f0)
+            Fd = Fd + (film(self.f0d_tuple) - Fd) * self.irid
+            Fm = Fm + (film(tuple(p["base"])) - Fm) * self.irid
+        return Fd, Fm
+
     def brdf(self, wi, wo):
         """f(wi, wo) for wi, wo in the upper local hemisphere (wi = view V, wo = light L)."""
         h = dr.normalize(wi + wo)
@@ -145,10 +227,9 @@ class GltfBSDF(mi.BSDF):
             spec = self.anisotropic_spec(wi, wo, h)
         else:
             spec = self.D(h.z) * self.Vis(wo.z, wi.z)
-        Fd = self.f0d + (self.f90d - self.f0d) * fw
+        Fd, Fm = self.fresnel(vh, fw)
         Fd_max = dr.maximum(dr.maximum(Fd.x, Fd.y), Fd.z)
         dielectric = Fd * spec + (1.0 - Fd_max) * self.base * dr.inv_pi
-        Fm = self.base + (1.0 - self.base) * fw
         metal = Fm * spec
         return (1.0 - self.metallic) * dielectric + self.metallic * metal
 
@@ -247,6 +328,12 @@ def plugin_dict(mat):
     ior = mat.get("extensions", {}).get("KHR_materials_ior", {}).get("ior")
     if ior is not None:
         d["ior"] = ior
+    ir = mat.get("extensions", {}).get("KHR_materials_iridescence", {})
+    if ir.get("iridescenceFactor", 0.0) > 0.0:
+        d["iridescence"] = min(float(ir["iridescenceFactor"]), 1.0)
+        d["irid_ior"] = float(ir.get("iridescenceIor", 1.3))
+        # No thickness texture: the maximum.
+        d["irid_thickness"] = float(ir.get("iridescenceThicknessMaximum", 400.0))
     an = mat.get("extensions", {}).get("KHR_materials_anisotropy", {})
     if an.get("anisotropyStrength", 0.0) > 0.0:
         d["anisotropy"] = min(float(an["anisotropyStrength"]), 1.0)
@@ -299,6 +386,9 @@ def _refusal(index, mat, wrappers=()):
         return f"material {index} has a specular texture"
     if "anisotropyTexture" in mat.get("extensions", {}).get("KHR_materials_anisotropy", {}):
         return f"material {index} has an anisotropyTexture"
+    for t in ("iridescenceTexture", "iridescenceThicknessTexture"):
+        if t in ext.get("KHR_materials_iridescence", {}):
+            return f"material {index} has an {t}"
     for e in ("KHR_materials_clearcoat", "KHR_materials_sheen"):
         for t in _LAYER_TEXTURES:
             if t in mat.get("extensions", {}).get(e, {}):

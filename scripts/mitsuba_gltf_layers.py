@@ -179,6 +179,8 @@ class GltfLayered(base_mod.GltfBSDF):
         p = params(props)
         self.p = p
         self.cc = p["clearcoat"]
+        # KHR_materials_iridescence: under a coat the film's outside is the coat (1.5).
+        self.irid_outside = 1.5 if self.cc > 0 else 1.0
         self.alpha_c = max(p["cc_rough"] ** (1 if base_mod._DEFECT == "coat-alpha" else 2), 1e-4)
         self.C = mi.Color3f(*p["sheen"])
         self.Cmax = max(p["sheen"])
@@ -407,12 +409,14 @@ class GltfThin(base_mod.GltfBSDF):
         vh = dr.abs(dr.dot(wi, h))
         fw = dr.power(1.0 - vh, 5.0)
         spec = self.D(h.z) * self.Vis(lm.z, wi.z)
-        Fd = self.f0d + (self.f90d - self.f0d) * fw
+        Fd, Fm = self.fresnel(vh, fw)
         Fd_max = dr.maximum(dr.maximum(Fd.x, Fd.y), Fd.z)
         refl_d = Fd * spec + (1.0 - Fd_max) * (1.0 - self.t) * (1.0 - self.dt) * self.base * dr.inv_pi
-        refl_m = (self.base + (1.0 - self.base) * fw) * spec
+        refl_m = Fm * spec
         refl = (1.0 - self.metallic) * refl_d + self.metallic * refl_m
-        trans = (1.0 - self.metallic) * (self.t * (1.0 - Fd) * self.base * spec
+        # The transmission lobe is part of fresnel_mix's base: 1 - max(F) (KHR_materials_
+        # specular), as the diffuse lobe.
+        trans = (1.0 - self.metallic) * (self.t * (1.0 - Fd_max) * self.base * spec
                                          + (1.0 - Fd_max) * (1.0 - self.t) * self.dt * self.dtc * dr.inv_pi)
         return dr.select(up, refl, trans)
 

@@ -188,6 +188,12 @@ impl Writer<'_> {
                 mat.diffuse_transmission
             ));
         }
+        if mat.iridescence > 0.0 {
+            self.approximations.push(format!(
+                "material `{name}`: its iridescence (factor {}) is left out: Mitsuba has no thin-film Fresnel term (the glTF BSDF plugin of scripts/mitsuba_gltf_bsdf.py renders it)",
+                mat.iridescence
+            ));
+        }
         let transmits = mat.transmission > 0.0 && mat.metallic < 1.0;
         let solid = transmits && is_solid(&mat);
         let share = (1.0 - mat.metallic) * mat.transmission.min(1.0);
@@ -224,7 +230,12 @@ impl Writer<'_> {
         }
         // glTF with specularFactor 0 and metallic 0 is exactly Lambertian (albedo/π).
         let sheen = mat.sheen_color.iter().cloned().fold(0.0, f32::max);
-        if mat.specular == 0.0 && mat.metallic == 0.0 && mat.clearcoat == 0.0 && sheen == 0.0 {
+        if mat.specular == 0.0
+            && mat.metallic == 0.0
+            && mat.clearcoat == 0.0
+            && sheen == 0.0
+            && mat.iridescence == 0.0
+        {
             s.push_str("    <bsdf type=\"diffuse\">\n");
             s.push_str(&colour);
             s.push_str("    </bsdf>\n");

@@ -26,6 +26,13 @@ agree up to noise.
                   absorbing) that light enters diffusely, 5 cm above the floor (a face
                   in the floor's plane would leave to each renderer which of the two a
                   ray meets), under a ceiling lamp (checked through the glTF BSDF plugin)
+  iridescence.gltf  KHR_materials_iridescence: a dark glossy floor under a soap-like
+                  film (index 1.33, 380 nm), a metal wall under a film (index 1.8, 450 nm,
+                  factor 0.8) that mirrors a white wall lit behind the camera, a coated box whose film (index 1.3, 300 nm) lies
+                  under the coat's 1.5 (phase shift and total internal reflection in the
+                  film), and a thin rough pane that transmits (film 1.4, 500 nm) in
+                  front of a point light, under a ceiling lamp (checked through the glTF
+                  BSDF plugin)
   alpha.gltf      alpha between a lamp and a floor: a fence cut out (MASK) by a
                   nearest RGBA texture, a BLEND panel whose alpha runs across a bilinear
                   texture (times 0.8), a constant BLEND of 0.4, a MASK under its cutoff
@@ -515,6 +522,46 @@ def diffuse_transmission_scene():
     b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
            rotation=look_at_rotation(eye, (-0.1, 0.7, -0.2)))
     b.write("diffuse_transmission.gltf")
+
+
+def iridescent(b, rgb, metallic, roughness, factor, ior, thickness, coat=None, transmission=None):
+    """A material with KHR_materials_iridescence (factors only: no thickness texture, so
+    the film is `thickness` nm, its maximum)."""
+    ext = {"KHR_materials_iridescence": {"iridescenceFactor": factor, "iridescenceIor": ior,
+                                         "iridescenceThicknessMaximum": thickness}}
+    if coat is not None:
+        ext["KHR_materials_clearcoat"] = {"clearcoatFactor": coat[0],
+                                          "clearcoatRoughnessFactor": coat[1]}
+    if transmission is not None:
+        ext["KHR_materials_transmission"] = {"transmissionFactor": transmission}
+    return b.extend(b.pbr(rgb, metallic, roughness), ext)
+
+
+def iridescence_scene():
+    """iridescence.gltf: thin films on four materials under a ceiling lamp and a point
+    light (see the module's docstring)."""
+    b = Builder()
+    floor = iridescent(b, (0.05, 0.05, 0.08), 0.0, 0.35, 1.0, 1.33, 380.0)
+    wall = iridescent(b, (0.9, 0.85, 0.8), 1.0, 0.3, 0.8, 1.8, 450.0)
+    b.node(mesh=b.quad((-2, 0, 2), (2, 0, 2), (2, 0, -1.2), (-2, 0, -1.2), floor))
+    b.node(mesh=b.quad((-2, 0, -1.2), (2, 0, -1.2), (2, 2.5, -1.2), (-2, 2.5, -1.2), wall,
+                       uv=False))
+    # A white wall behind the camera, lit by the lamp, for the metal to mirror.
+    white = b.lambert((0.8, 0.8, 0.8))
+    b.node(mesh=b.quad((2, 0, 3.8), (-2, 0, 3.8), (-2, 2.5, 3.8), (2, 2.5, 3.8), white, uv=False))
+    ceiling_lamp(b)
+    coated = iridescent(b, (0.5, 0.3, 0.2), 0.0, 0.5, 1.0, 1.3, 300.0, coat=(1.0, 0.1))
+    b.node(mesh=b.box(coated), translation=[-0.6, 0.3, 0.2], scale=[0.6, 0.6, 0.6],
+           rotation=[0, 0.3826834, 0, 0.9238795])
+    pane = iridescent(b, (0.8, 0.9, 0.95), 0.0, 0.25, 1.0, 1.4, 500.0, transmission=0.7)
+    b.node(mesh=b.quad((0.3, 0.1, 0.6), (1.1, 0.1, 0.4), (1.1, 1.1, 0.4), (0.3, 1.1, 0.6), pane,
+                       uv=False))
+    b.point_light([1, 0.95, 0.85], 3.0, [0.8, 0.6, -0.3])
+    b.point_light([1, 1, 1], 6.0, [0.0, 2.2, 3.3])
+    eye = (0.2, 1.5, 3.4)
+    b.node(camera=b.camera(yfov=0.9, aspect=4 / 3), translation=list(eye),
+           rotation=look_at_rotation(eye, (0.0, 0.5, -0.3)))
+    b.write("iridescence.gltf")
 
 
 def anisotropy_scene():
@@ -1036,3 +1083,4 @@ if __name__ == "__main__":
     alpha_scene()
     anisotropy_scene()
     diffuse_transmission_scene()
+    iridescence_scene()
