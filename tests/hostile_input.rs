@@ -766,6 +766,24 @@ fn wrong_values_are_refused() {
             }),
             "KHR_materials_diffuse_transmission diffuseTransmissionTexture refers to texture 9, which does not exist",
         ),
+        // KHR_materials_iridescence: a film index below 1, a negative thickness (the
+        // extension's schema).
+        (
+            scene_with(|j| {
+                j["extensionsUsed"] = json!(["KHR_materials_iridescence"]);
+                j["materials"][0]["extensions"] = json!({"KHR_materials_iridescence":
+                    {"iridescenceFactor": 1, "iridescenceIor": 0.5}});
+            }),
+            "KHR_materials_iridescence iridescenceIor 0.5 is below 1",
+        ),
+        (
+            scene_with(|j| {
+                j["extensionsUsed"] = json!(["KHR_materials_iridescence"]);
+                j["materials"][0]["extensions"] = json!({"KHR_materials_iridescence":
+                    {"iridescenceFactor": 1, "iridescenceThicknessMinimum": -20}});
+            }),
+            "KHR_materials_iridescence iridescenceThicknessMinimum -20 is negative",
+        ),
         // KHR_materials_anisotropy: a rotation that is not a number, a texture that
         // does not exist.
         (

@@ -205,20 +205,20 @@ fn emissive_factor_above_one_loads_with_a_warning() {
 #[test]
 fn an_unsupported_extension_loads_with_a_warning_naming_it() {
     // Used, not required: the file stays loadable, and the user hears that the
-    // iridescence it describes is not rendered.
+    // dispersion it describes is not rendered.
     let dir = tempfile::tempdir().unwrap();
     let src = root().join("scenes/cornell-lights.gltf");
     let mut json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&src).unwrap()).unwrap();
     json["extensionsUsed"].as_array_mut().unwrap().extend([
-        serde_json::json!("KHR_materials_iridescence"),
+        serde_json::json!("KHR_materials_dispersion"),
         serde_json::json!("KHR_materials_variants"),
     ]);
-    json["materials"][0]["extensions"]["KHR_materials_iridescence"] =
-        serde_json::json!({ "iridescenceFactor": 1 });
+    json["materials"][0]["extensions"]["KHR_materials_dispersion"] =
+        serde_json::json!({ "dispersion": 0.5 });
     let (_, stderr) = info_of_edited_cornell(dir.path(), &json);
     assert!(
-        stderr.contains("KHR_materials_iridescence, which lanterna does not support"),
+        stderr.contains("KHR_materials_dispersion, which lanterna does not support"),
         "no warning:\n{stderr}"
     );
     // Extensions lanterna reads (the shipped file's emissive strength) and inert ones are
@@ -244,6 +244,7 @@ fn required_extensions_lanterna_reads_load_and_others_are_refused_by_name() {
         "KHR_materials_clearcoat",
         "KHR_materials_diffuse_transmission",
         "KHR_materials_ior",
+        "KHR_materials_iridescence",
         "KHR_materials_sheen",
         "KHR_materials_specular",
         "KHR_materials_volume",
@@ -809,6 +810,48 @@ fn diffuse_transmission_textures_act_like_their_factors() {
     let stats = lanterna::scene::SceneStats::new(&textured, &LightTable::build(&textured).unwrap());
     assert_eq!(stats.diffuse_transmission_materials, 3);
     assert_same_image(&textured, &factor);
+}
+
+/// The thin film's textures act on its factors (KHR_materials_iridescence): the weight is
+/// the factor × the texture's R, the thickness mix(minimum, maximum, texture G) (linear
+/// data). On `iridescence.gltf`'s four films, with factor 1 and thicknesses 100–600 nm,
+/// constant textures of (51, 90, 0) and (230, 20, 0) render like weights of 51/255 and
+/// 230/255 and thicknesses of 100 + 500·90/255 and 100 + 500·20/255 nm. Seen to fail with
+/// the weight's texture ignored (the first texel) and with the thickness taken from the
+/// texture's R (the second).
+#[test]
+fn iridescence_textures_act_like_their_factors() {
+    let films = [0usize, 1, 4, 5];
+    for texel in [[51u8, 90, 0, 255], [230, 20, 0, 255]] {
+        let dir = tempfile::tempdir().unwrap();
+        image::RgbaImage::from_pixel(2, 2, image::Rgba(texel))
+            .save(dir.path().join("t.png"))
+            .unwrap();
+        let textured = edited_scene(dir.path(), "iridescence.gltf", "textured", |j| {
+            j["images"] = serde_json::json!([{ "uri": "t.png" }]);
+            j["textures"] = serde_json::json!([{ "source": 0 }]);
+            for &m in &films {
+                let film = &mut j["materials"][m]["extensions"]["KHR_materials_iridescence"];
+                film["iridescenceFactor"] = serde_json::json!(1.0);
+                film["iridescenceTexture"] = serde_json::json!({ "index": 0 });
+                film["iridescenceThicknessMinimum"] = serde_json::json!(100.0);
+                film["iridescenceThicknessMaximum"] = serde_json::json!(600.0);
+                film["iridescenceThicknessTexture"] = serde_json::json!({ "index": 0 });
+            }
+        });
+        let factor = edited_scene(dir.path(), "iridescence.gltf", "factor", |j| {
+            for &m in &films {
+                let film = &mut j["materials"][m]["extensions"]["KHR_materials_iridescence"];
+                film["iridescenceFactor"] = serde_json::json!(texel[0] as f64 / 255.0);
+                film["iridescenceThicknessMaximum"] =
+                    serde_json::json!(100.0 + 500.0 * texel[1] as f64 / 255.0);
+            }
+        });
+        let stats =
+            lanterna::scene::SceneStats::new(&textured, &LightTable::build(&textured).unwrap());
+        assert_eq!(stats.iridescent_materials, 4);
+        assert_same_image(&textured, &factor);
+    }
 }
 
 /// Morph targets at their default weights (a static scene shows the posed mesh): a quad
