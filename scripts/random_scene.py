@@ -52,6 +52,11 @@ transmitting (KHR_materials_diffuse_transmission, factors only), half of those w
 specular lobe too, which `mitsuba_compare.py --gltf-bsdf` renders exactly through the
 glTF BSDF plugin. Don't combine it with `--materials` there either.
 
+`--iridescence` gives about half of the opaque Lambertian materials a thin film
+(KHR_materials_iridescence, factors only: weight 0.3-1, index 1.2-2, 100-800 nm) and a
+specular lobe (roughness 0.1-0.7), a third of them metals, which `mitsuba_compare.py
+--gltf-bsdf` renders exactly through the glTF BSDF plugin. Not with `--materials` there.
+
 `--alpha` makes about half of the opaque non-emissive Lambertian materials BLEND (alpha
 0.2-0.9) or MASK (a nearest RGBA texture where the mesh has UVs, else a constant alpha
 either side of the cutoff), which the export writes exactly as Mitsuba's `mask` under
@@ -243,8 +248,36 @@ def add_diffuse_transmission(s, seed):
     return count
 
 
+def add_iridescence(s, seed):
+    """KHR_materials_iridescence on about half of the opaque Lambertian materials
+    (factors only: weight 0.3-1, film index 1.2-2, thickness 100-800 nm), each given a
+    specular lobe (roughness 0.1-0.7) and a third of them made metals (base colour
+    0.5-1). Drawn from a generator of their own, so that the scene is otherwise the one
+    the seed gives without them."""
+    r = random.Random(seed + 5_000_003)
+    count = 0
+    for index in sorted(opaque_lambertian_materials(s)):
+        if r.random() >= 0.5:
+            continue
+        m = s.materials[index]
+        pbr = m.setdefault("pbrMetallicRoughness", {})
+        m["extensions"].pop("KHR_materials_specular", None)
+        pbr["roughnessFactor"] = r.uniform(0.1, 0.7)
+        if r.random() < 1 / 3:
+            pbr["metallicFactor"] = 1.0
+            pbr["baseColorFactor"] = rgb_of(r, 0.5, 1.0) + [1.0]
+        m["extensions"]["KHR_materials_iridescence"] = {
+            "iridescenceFactor": r.uniform(0.3, 1.0),
+            "iridescenceIor": r.uniform(1.2, 2.0),
+            "iridescenceThicknessMaximum": r.uniform(100.0, 800.0)}
+        count += 1
+    if count and "KHR_materials_iridescence" not in s.used:
+        s.used.append("KHR_materials_iridescence")
+    return count
+
+
 def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=False,
-             anisotropy=False, diffuse_transmission=False):
+             anisotropy=False, diffuse_transmission=False, iridescence=False):
     r = random.Random(seed)
     s = Builder()
     rgb = lambda lo, hi: [r.uniform(lo, hi) for _ in range(3)]  # noqa: E731
@@ -345,6 +378,8 @@ def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=Fa
         kinds.append(f"{add_anisotropy(s, seed)} anisotropic materials")
     if diffuse_transmission:
         kinds.append(f"{add_diffuse_transmission(s, seed)} diffusely transmitting materials")
+    if iridescence:
+        kinds.append(f"{add_iridescence(s, seed)} iridescent materials")
     return s, kinds
 
 
@@ -369,11 +404,14 @@ def main():
     ap.add_argument("--diffuse-transmission", action="store_true",
                     help="diffuse transmission on about half of the opaque Lambertian "
                     "materials, half of them glossy too")
+    ap.add_argument("--iridescence", action="store_true",
+                    help="thin films on about half of the opaque Lambertian materials, "
+                    "made glossy (a third of them metals)")
     ap.add_argument("--two-sided-boxes", action="store_true",
                     help="let emissive boxes be two-sided too (Mitsuba's references leak there)")
     a = ap.parse_args()
     scene, kinds = generate(a.seed, a.two_sided_boxes, a.materials, a.normal_maps, a.alpha,
-                            a.anisotropy, a.diffuse_transmission)
+                            a.anisotropy, a.diffuse_transmission, a.iridescence)
     scene.write(os.path.abspath(a.output))  # an absolute name: not next to make_scenes.py
     print(f"{a.output}: {', '.join(kinds)}")
     return 0
