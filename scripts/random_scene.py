@@ -152,6 +152,14 @@ def opaque_lambertian_materials(s):
     return uvs
 
 
+def listed_if_used(s, extension, count):
+    """Lists `extension` in the file's extensionsUsed (once) when `count` materials use it;
+    returns `count`."""
+    if count and extension not in s.used:
+        s.used.append(extension)
+    return count
+
+
 def add_normal_maps(s, seed):
     """Normal maps (tilts up to 35°, scales 0.3-1) on about half of the opaque Lambertian
     materials of meshes with texture coordinates, drawn from a generator of their own so
@@ -220,9 +228,7 @@ def add_anisotropy(s, seed):
             "anisotropyStrength": r.uniform(0.3, 1.0),
             "anisotropyRotation": r.uniform(0.0, 2 * math.pi)}
         count += 1
-    if count and "KHR_materials_anisotropy" not in s.used:
-        s.used.append("KHR_materials_anisotropy")
-    return count
+    return listed_if_used(s, "KHR_materials_anisotropy", count)
 
 
 def add_diffuse_transmission(s, seed):
@@ -243,9 +249,7 @@ def add_diffuse_transmission(s, seed):
             "diffuseTransmissionFactor": r.uniform(0.2, 1.0),
             "diffuseTransmissionColorFactor": rgb_of(r, 0.3, 1.0)}
         count += 1
-    if count and "KHR_materials_diffuse_transmission" not in s.used:
-        s.used.append("KHR_materials_diffuse_transmission")
-    return count
+    return listed_if_used(s, "KHR_materials_diffuse_transmission", count)
 
 
 def add_iridescence(s, seed):
@@ -271,9 +275,7 @@ def add_iridescence(s, seed):
             "iridescenceIor": r.uniform(1.2, 2.0),
             "iridescenceThicknessMaximum": r.uniform(100.0, 800.0)}
         count += 1
-    if count and "KHR_materials_iridescence" not in s.used:
-        s.used.append("KHR_materials_iridescence")
-    return count
+    return listed_if_used(s, "KHR_materials_iridescence", count)
 
 
 def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=False,
