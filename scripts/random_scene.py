@@ -152,6 +152,15 @@ def opaque_lambertian_materials(s):
     return uvs
 
 
+def about_half_of_the_matte(s, seed):
+    """(generator, material) for about half of the opaque Lambertian materials, drawn
+    with a generator seeded by `seed` that the caller goes on drawing from."""
+    r = random.Random(seed)
+    for index in sorted(opaque_lambertian_materials(s)):
+        if r.random() < 0.5:
+            yield r, s.materials[index]
+
+
 def listed_if_used(s, extension, count):
     """Lists `extension` in the file's extensionsUsed (once) when `count` materials use it;
     returns `count`."""
@@ -236,12 +245,8 @@ def add_diffuse_transmission(s, seed):
     materials (factors only: a share of 0.2-1 in a colour of 0.3-1), half of them given
     a specular lobe too (roughness 0.2-1). Drawn from a generator of their own, so that
     the scene is otherwise the one the seed gives without them."""
-    r = random.Random(seed + 4_000_003)
     count = 0
-    for index in sorted(opaque_lambertian_materials(s)):
-        if r.random() >= 0.5:
-            continue
-        m = s.materials[index]
+    for r, m in about_half_of_the_matte(s, seed + 4_000_003):
         if r.random() < 0.5:
             m["extensions"].pop("KHR_materials_specular", None)
             m.setdefault("pbrMetallicRoughness", {})["roughnessFactor"] = r.uniform(0.2, 1.0)
@@ -258,12 +263,8 @@ def add_iridescence(s, seed):
     specular lobe (roughness 0.1-0.7) and a third of them made metals (base colour
     0.5-1). Drawn from a generator of their own, so that the scene is otherwise the one
     the seed gives without them."""
-    r = random.Random(seed + 5_000_003)
     count = 0
-    for index in sorted(opaque_lambertian_materials(s)):
-        if r.random() >= 0.5:
-            continue
-        m = s.materials[index]
+    for r, m in about_half_of_the_matte(s, seed + 5_000_003):
         pbr = m.setdefault("pbrMetallicRoughness", {})
         m["extensions"].pop("KHR_materials_specular", None)
         pbr["roughnessFactor"] = r.uniform(0.1, 0.7)
