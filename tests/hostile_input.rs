@@ -189,6 +189,20 @@ fn scene_with(edit: impl FnOnce(&mut Value)) -> Scene {
     Scene { dir, gltf }
 }
 
+/// The quad scene with its mesh node instanced by `EXT_mesh_gpu_instancing` with
+/// `attributes`, the accessors `extra` appended (from index 2).
+fn instanced(attributes: Value, extra: &[Value]) -> Scene {
+    scene_with(|j| {
+        j["extensionsUsed"] = json!(["EXT_mesh_gpu_instancing"]);
+        j["accessors"]
+            .as_array_mut()
+            .unwrap()
+            .extend_from_slice(extra);
+        j["nodes"][0]["extensions"] =
+            json!({"EXT_mesh_gpu_instancing": {"attributes": attributes}});
+    })
+}
+
 fn scene() -> Scene {
     scene_with(|_| {})
 }
@@ -783,6 +797,43 @@ fn wrong_values_are_refused() {
                     {"iridescenceFactor": 1, "iridescenceThicknessMinimum": -20}});
             }),
             "KHR_materials_iridescence iridescenceThicknessMinimum -20 is negative",
+        ),
+        // EXT_mesh_gpu_instancing: attributes of different counts, a rotation of
+        // integers not normalised, a zero quaternion (normalised bytes over the zeros
+        // of a float 0.0), an accessor that does not exist, a rotation of the wrong type.
+        (
+            instanced(
+                json!({"TRANSLATION": 2, "SCALE": 3}),
+                &[json!({"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"}),
+                  json!({"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"})],
+            ),
+            "EXT_mesh_gpu_instancing: TRANSLATION has 4 elements but SCALE has 3",
+        ),
+        (
+            instanced(
+                json!({"ROTATION": 2}),
+                &[json!({"bufferView": 0, "componentType": 5120, "count": 4, "type": "VEC4"})],
+            ),
+            "EXT_mesh_gpu_instancing ROTATION: accessor 2 (ROTATION) is byte but not normalized",
+        ),
+        (
+            instanced(
+                json!({"ROTATION": 2}),
+                &[json!({"bufferView": 0, "byteOffset": 8, "componentType": 5120,
+                         "normalized": true, "count": 1, "type": "VEC4"})],
+            ),
+            "EXT_mesh_gpu_instancing ROTATION 0 is [0.0, 0.0, 0.0, 0.0], not a rotation",
+        ),
+        (
+            instanced(json!({"TRANSLATION": 9}), &[]),
+            "EXT_mesh_gpu_instancing TRANSLATION: accessor 9 (TRANSLATION) does not exist",
+        ),
+        (
+            instanced(
+                json!({"ROTATION": 2}),
+                &[json!({"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"})],
+            ),
+            "ROTATION must be VEC4 of float, normalized byte or normalized short",
         ),
         // KHR_materials_anisotropy: a rotation that is not a number, a texture that
         // does not exist.

@@ -240,6 +240,7 @@ fn required_extensions_lanterna_reads_load_and_others_are_refused_by_name() {
     let mut json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&src).unwrap()).unwrap();
     let read = [
+        "EXT_mesh_gpu_instancing",
         "KHR_materials_anisotropy",
         "KHR_materials_clearcoat",
         "KHR_materials_diffuse_transmission",
@@ -928,6 +929,161 @@ fn morph_targets_pose_meshes_by_node_or_mesh_weights() {
                 (b[c] - want_b[c]).abs() < 1e-5,
                 "node weights: {b:?}, want {want_b:?}"
             );
+        }
+    }
+}
+
+/// `EXT_mesh_gpu_instancing` against the same copies written as nodes (whose transforms
+/// the gltf crate composes): an instanced node with its own translation, rotation and
+/// non-uniform scale, whose instances give all three (rotations as normalised shorts),
+/// and a child that is not instanced; a second node with translations alone and a custom
+/// `_ID` attribute. Every copy's world-space vertices must match. Seen to fail with the
+/// instance transform applied before the node's, with the node's transform left out of
+/// its copies, and with the rotations left out.
+#[test]
+fn gpu_instancing_places_copies_like_nodes() {
+    use base64::Engine as _;
+    use serde_json::json;
+    let translations = [[0.0f32, 0.0, 0.0], [2.0, -1.0, 0.5], [-1.5, 3.0, 1.0]];
+    let rotations: [[f32; 4]; 3] = [
+        [0.0, 0.0, 0.0, 1.0],
+        [
+            0.0,
+            std::f32::consts::FRAC_1_SQRT_2,
+            0.0,
+            std::f32::consts::FRAC_1_SQRT_2,
+        ],
+        [0.3, -0.5, 0.1, 0.8],
+    ];
+    let scales = [[1.0f32, 1.0, 1.0], [0.5, 2.0, 1.0], [1.5, 1.5, 0.25]];
+    let more = [[4.0f32, 0.0, 0.0], [0.0, 0.0, -4.0]];
+    // Rotations as the file stores them, normalised shorts, and as floats for the nodes.
+    let norm = |q: [f32; 4]| {
+        let l = q.iter().map(|c| c * c).sum::<f32>().sqrt();
+        q.map(|c| c / l)
+    };
+    let shorts: Vec<[i16; 4]> = rotations
+        .iter()
+        .map(|&q| norm(q).map(|c| (c * 32767.0).round() as i16))
+        .collect();
+    let dequantized: Vec<[f32; 4]> = shorts
+        .iter()
+        .map(|q| norm(q.map(|c| f32::from(c) / 32767.0)))
+        .collect();
+
+    let mut bin: Vec<u8> = Vec::new();
+    let floats = |bin: &mut Vec<u8>, v: &[f32]| {
+        v.iter()
+            .for_each(|x| bin.extend_from_slice(&x.to_le_bytes()))
+    };
+    floats(&mut bin, &[0., 0., 0., 1., 0., 0., 1., 0.5, 0., 0., 2., 0.]); // 0..48
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        bin.extend_from_slice(&i.to_le_bytes()); // 48..60
+    }
+    floats(&mut bin, translations.as_flattened()); // 60..96
+    for c in shorts.as_flattened() {
+        bin.extend_from_slice(&c.to_le_bytes()); // 96..120
+    }
+    floats(&mut bin, scales.as_flattened()); // 120..156
+    floats(&mut bin, more.as_flattened()); // 156..180
+    floats(&mut bin, &[7.0, 8.0]); // 180..188
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bin)
+    );
+    let view = |offset: usize, length: usize| json!({"buffer": 0, "byteOffset": offset, "byteLength": length});
+    let node_trs = json!({"translation": [0.5, -1.0, 2.0],
+                          "rotation": [0.0, 0.0, 0.25881904, 0.9659258],
+                          "scale": [1.0, 2.0, 0.5]});
+    let base = |nodes: serde_json::Value, roots: serde_json::Value| {
+        json!({
+            "asset": {"version": "2.0"},
+            "buffers": [{"uri": uri, "byteLength": bin.len()}],
+            "bufferViews": [view(0, 48), view(48, 12), view(60, 36), view(96, 24),
+                            view(120, 36), view(156, 24), view(180, 8)],
+            "accessors": [
+                {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                 "min": [0, 0, 0], "max": [1, 2, 0]},
+                {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"},
+                {"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC3"},
+                {"bufferView": 3, "componentType": 5122, "normalized": true, "count": 3, "type": "VEC4"},
+                {"bufferView": 4, "componentType": 5126, "count": 3, "type": "VEC3"},
+                {"bufferView": 5, "componentType": 5126, "count": 2, "type": "VEC3"},
+                {"bufferView": 6, "componentType": 5126, "count": 2, "type": "SCALAR"}
+            ],
+            "materials": [{"emissiveFactor": [1, 1, 1], "doubleSided": true}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+            "nodes": nodes,
+            "scenes": [{"nodes": roots}],
+            "scene": 0
+        })
+    };
+    let mut parent = node_trs.clone();
+    parent["mesh"] = json!(0);
+    parent["children"] = json!([1]);
+    parent["extensions"] = json!({"EXT_mesh_gpu_instancing":
+        {"attributes": {"TRANSLATION": 2, "ROTATION": 3, "SCALE": 4}}});
+    let mut instanced = base(
+        json!([parent,
+               {"mesh": 0, "translation": [0, 0, -3]},
+               {"mesh": 0, "extensions": {"EXT_mesh_gpu_instancing":
+                   {"attributes": {"TRANSLATION": 5, "_ID": 6}}}}]),
+        json!([0, 2]),
+    );
+    instanced["extensionsUsed"] = json!(["EXT_mesh_gpu_instancing"]);
+    instanced["extensionsRequired"] = json!(["EXT_mesh_gpu_instancing"]);
+
+    let mut parent = node_trs;
+    parent["children"] = json!([1, 2, 3, 4]);
+    let mut nodes = vec![parent, json!({"mesh": 0, "translation": [0, 0, -3]})];
+    for i in 0..3 {
+        nodes.push(json!({"mesh": 0, "translation": translations[i],
+                          "rotation": dequantized[i], "scale": scales[i]}));
+    }
+    nodes.push(json!({"children": [6, 7]}));
+    for t in more {
+        nodes.push(json!({"mesh": 0, "translation": t}));
+    }
+    let expanded = base(json!(nodes), json!([0, 5]));
+
+    let dir = tempfile::tempdir().unwrap();
+    let copies = |name: &str, json: &serde_json::Value| -> Vec<Vec<f32>> {
+        let path = dir.path().join(name);
+        std::fs::write(&path, serde_json::to_vec(json).unwrap()).unwrap();
+        let scene = load(&path);
+        let mut out: Vec<Vec<f32>> = scene
+            .instances
+            .iter()
+            .map(|inst| {
+                let p = &scene.primitives[inst.primitive as usize];
+                let range = p.vertex_offset as usize..(p.vertex_offset + p.vertex_count) as usize;
+                scene.vertices[range]
+                    .iter()
+                    .flat_map(|v| {
+                        let w = inst
+                            .transform
+                            .transform_point3(glam::Vec3::from(v.position));
+                        w.to_array()
+                    })
+                    .collect()
+            })
+            .collect();
+        out.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        out
+    };
+    let (a, b) = (
+        copies("instanced.gltf", &instanced),
+        copies("expanded.gltf", &expanded),
+    );
+    assert_eq!(
+        a.len(),
+        6,
+        "three instances, a child and two more instances"
+    );
+    assert_eq!(b.len(), 6);
+    for (a, b) in a.iter().zip(&b) {
+        for (x, y) in a.iter().zip(b) {
+            assert!((x - y).abs() < 1e-4, "instanced {a:?}\nas nodes  {b:?}");
         }
     }
 }

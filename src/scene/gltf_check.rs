@@ -80,6 +80,10 @@ pub(super) enum Role {
     Joints,
     Weights,
     InverseBind,
+    /// `EXT_mesh_gpu_instancing`'s attributes.
+    InstanceTranslation,
+    InstanceRotation,
+    InstanceScale,
 }
 
 impl Role {
@@ -94,6 +98,9 @@ impl Role {
             Role::Joints => "JOINTS",
             Role::Weights => "WEIGHTS",
             Role::InverseBind => "inverseBindMatrices",
+            Role::InstanceTranslation => "TRANSLATION",
+            Role::InstanceRotation => "ROTATION",
+            Role::InstanceScale => "SCALE",
         }
     }
 
@@ -118,6 +125,13 @@ impl Role {
             Role::Joints => ty == Type::Vec4 && matches!(ct, U8 | U16),
             Role::Weights => ty == Type::Vec4 && matches!(ct, F32 | U8 | U16),
             Role::InverseBind => ty == Type::Mat4 && ct == F32,
+            // EXT_mesh_gpu_instancing: float, and with KHR_mesh_quantization (normalised
+            // or not) bytes and shorts for translation and scale.
+            Role::InstanceTranslation | Role::InstanceScale if quantized => {
+                ty == Type::Vec3 && matches!(ct, F32 | I8 | I16)
+            }
+            Role::InstanceTranslation | Role::InstanceScale => ty == Type::Vec3 && ct == F32,
+            Role::InstanceRotation => ty == Type::Vec4 && matches!(ct, F32 | I8 | I16),
         }
     }
 
@@ -139,6 +153,11 @@ impl Role {
             Role::Joints => "VEC4 of unsigned byte or unsigned short",
             Role::Weights => "VEC4 of float, unsigned byte or unsigned short",
             Role::InverseBind => "float MAT4",
+            Role::InstanceTranslation | Role::InstanceScale if quantized => {
+                "VEC3 of float, byte or short"
+            }
+            Role::InstanceTranslation | Role::InstanceScale => "float VEC3",
+            Role::InstanceRotation => "VEC4 of float, normalized byte or normalized short",
         }
     }
 }
@@ -196,7 +215,13 @@ pub(super) fn check_accessor(
     }
     // Integer normals and tangents are unit vectors only as normalised integers.
     let integer = ct != ComponentType::F32;
-    if integer && matches!(role, Role::Normal | Role::Tangent | Role::Weights) && !acc.normalized {
+    if integer
+        && matches!(
+            role,
+            Role::Normal | Role::Tangent | Role::Weights | Role::InstanceRotation
+        )
+        && !acc.normalized
+    {
         return Err(format!(
             "{what} is {} but not normalized",
             component_name(ct)

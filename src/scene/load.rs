@@ -5,6 +5,7 @@
 
 use super::camera::{Camera, ClipPlanes, Projection};
 use super::gltf_check;
+use super::load_instancing;
 use super::load_light::convert_light;
 use super::load_primitive::{load_primitive, Geometry};
 use super::material::{self, TextureRegistry};
@@ -373,12 +374,42 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         } else {
             world
         };
-        let det = world.determinant();
-        if det.abs() < 1e-20 {
-            warnings.push(format!(
-                "node {} has a singular transform; skipped",
-                node_name(&node)
-            ));
+        // One transform per copy of the mesh: the node's, or with EXT_mesh_gpu_instancing
+        // one per instance, relative to the node's.
+        let copies: Vec<(Mat4, String)> =
+            match load_instancing::instance_transforms(&node, &document, &buffers, budget.left())
+                .map_err(|e| invalid(format!("node {}: {e}", node_name(&node))))?
+            {
+                None => vec![(world, node_name(&node))],
+                Some(local) => local
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, m)| (world * m, format!("{} [instance {i}]", node_name(&node))))
+                    .collect(),
+            };
+        let singular = copies
+            .iter()
+            .filter(|(m, _)| m.determinant().abs() < 1e-20)
+            .count();
+        if singular > 0 {
+            warnings.push(if copies.len() == 1 {
+                format!(
+                    "node {} has a singular transform; skipped",
+                    node_name(&node)
+                )
+            } else {
+                format!(
+                    "node {}: {singular} of its {} instances have a singular transform; skipped",
+                    node_name(&node),
+                    copies.len()
+                )
+            });
+        }
+        let copies: Vec<(Mat4, String)> = copies
+            .into_iter()
+            .filter(|(m, _)| m.determinant().abs() >= 1e-20)
+            .collect();
+        if copies.is_empty() {
             continue;
         }
         let morph_weights = node.weights().or(mesh.weights()).unwrap_or(&[]);
@@ -424,15 +455,26 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
                     id
                 }
             };
-            if let Some(id) = id {
-                let bytes = std::mem::size_of::<Instance>() + node_name(&node).len();
-                budget
-                    .take(bytes as u64, "the instances")
-                    .map_err(&invalid)?;
+            let Some(id) = id else { continue };
+            // Each copy's triangles are laid out in world space again wherever small
+            // primitives are flattened and in the software traversal's BVH (positions
+            // and a BVH share, 64 bytes a triangle): a few instance attributes must not
+            // expand a small file into unbounded memory.
+            let triangles = u64::from(primitives[id as usize].triangle_count);
+            for (transform, name) in &copies {
+                let bytes = (std::mem::size_of::<Instance>() + name.len()) as u64 + 64 * triangles;
+                budget.take(bytes, "the instances").map_err(&invalid)?;
+                if instances.len() >= MAX_INSTANCES {
+                    return Err(invalid(format!(
+                        "has more than {MAX_INSTANCES} mesh instances (nodes and \
+                         {} instances), the most a ray query's instance index can tell apart",
+                        load_instancing::EXTENSION
+                    )));
+                }
                 instances.push(Instance {
                     primitive: id,
-                    transform: world,
-                    node_name: node_name(&node),
+                    transform: *transform,
+                    node_name: name.clone(),
                 });
             }
         }
@@ -727,7 +769,11 @@ fn parse(bytes: &[u8], warnings: &mut Vec<String>) -> Result<gltf::Gltf, gltf::E
 /// required one it does not know is refused when the file is parsed); their data is then
 /// ignored, which a user should hear about: a `KHR_materials_dispersion` material
 /// renders without its dispersion, a `KHR_materials_unlit` material lit.
+/// The most mesh instances a scene may have: a TLAS instance's custom index has 24 bits.
+const MAX_INSTANCES: usize = (1 << 24) - 1;
+
 const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",

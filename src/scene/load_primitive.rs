@@ -318,7 +318,7 @@ fn morph<'a, 's>(
 /// formulas) or `assume_normalized`, and taken as they are otherwise (the node
 /// transform or a texture transform then scales them). `None` when the data cannot be
 /// read.
-fn read_floats<'a, 's, const N: usize>(
+pub(super) fn read_floats<'a, 's, const N: usize>(
     accessor: gltf::Accessor<'a>,
     get: impl Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
     assume_normalized: bool,

@@ -10,6 +10,7 @@ pub mod export_mitsuba;
 pub mod generate;
 mod gltf_check;
 mod load;
+mod load_instancing;
 mod load_light;
 mod load_primitive;
 mod material;
