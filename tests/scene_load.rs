@@ -241,6 +241,7 @@ fn required_extensions_lanterna_reads_load_and_others_are_refused_by_name() {
         serde_json::from_str(&std::fs::read_to_string(&src).unwrap()).unwrap();
     let read = [
         "EXT_mesh_gpu_instancing",
+        "EXT_texture_webp",
         "KHR_materials_anisotropy",
         "KHR_materials_clearcoat",
         "KHR_materials_diffuse_transmission",
@@ -931,6 +932,114 @@ fn morph_targets_pose_meshes_by_node_or_mesh_weights() {
             );
         }
     }
+}
+
+/// `EXT_texture_webp`: `tex.gltf` with each PNG re-encoded as lossless WebP must load
+/// the same texels, whether the WebP image stands beside a fallback `source` (here a
+/// different, grey image: the WebP one must win) or alone, the extension required and
+/// the texture without `source`, in a .gltf and in a GLB. Seen to fail with the fallback
+/// preferred, with WebP refused by the decoder, and (the GLB) with its JSON chunk not
+/// searched for the extension.
+#[test]
+fn webp_textures_load_the_texels_of_their_png_originals() {
+    use base64::Engine as _;
+    use serde_json::json;
+    let b64 = base64::engine::general_purpose::STANDARD;
+    let src = root().join("tests/data/mitsuba/tex.gltf");
+    let original: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&src).unwrap()).unwrap();
+    let data_uri = |mime: &str, bytes: &[u8]| format!("data:{mime};base64,{}", b64.encode(bytes));
+    let encode = |image: &image::DynamicImage, format: image::ImageFormat| {
+        let mut out = Vec::new();
+        image
+            .write_to(&mut std::io::Cursor::new(&mut out), format)
+            .unwrap();
+        out
+    };
+    let pngs: Vec<image::DynamicImage> = original["images"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|i| {
+            let uri = i["uri"].as_str().unwrap();
+            let bytes = b64.decode(uri.split_once(',').unwrap().1).unwrap();
+            image::load_from_memory(&bytes).unwrap()
+        })
+        .collect();
+    let grey = encode(
+        &image::DynamicImage::ImageRgb8(image::RgbImage::from_pixel(1, 1, image::Rgb([90; 3]))),
+        image::ImageFormat::Png,
+    );
+    let n = pngs.len();
+    // Images 0..n: the fallbacks (one grey PNG each); n..2n: the WebP re-encodings.
+    let mut images: Vec<serde_json::Value> = (0..n)
+        .map(|_| json!({"uri": data_uri("image/png", &grey)}))
+        .collect();
+    for png in &pngs {
+        let webp = encode(png, image::ImageFormat::WebP);
+        assert!(webp.starts_with(b"RIFF"), "not encoded as WebP");
+        images.push(json!({"uri": data_uri("image/webp", &webp)}));
+    }
+    let mut beside = original.clone();
+    beside["images"] = json!(images);
+    for (k, t) in beside["textures"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .enumerate()
+    {
+        t["source"] = json!(k);
+        t["extensions"] = json!({"EXT_texture_webp": {"source": n + k}});
+    }
+    beside["extensionsUsed"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!("EXT_texture_webp"));
+    let mut alone = beside.clone();
+    for t in alone["textures"].as_array_mut().unwrap() {
+        t.as_object_mut().unwrap().remove("source");
+    }
+    alone["extensionsRequired"] = json!(["EXT_texture_webp"]);
+
+    let dir = tempfile::tempdir().unwrap();
+    let texels = |name: &str, json: &serde_json::Value| -> Vec<(u32, u32, Vec<u8>)> {
+        // Beside the original, so that its relative URIs (none here) would resolve alike.
+        let path = dir.path().join(name);
+        std::fs::write(&path, serde_json::to_vec(json).unwrap()).unwrap();
+        load(&path)
+            .textures
+            .iter()
+            .map(|t| (t.width, t.height, t.texels.bytes().into_owned()))
+            .collect()
+    };
+    let want = texels("png.gltf", &original);
+    assert_eq!(want.len(), n);
+    assert!(want.iter().all(|(w, h, _)| w * h > 1));
+    assert!(
+        texels("beside.gltf", &beside) == want,
+        "WebP beside a fallback"
+    );
+    assert!(texels("alone.gltf", &alone) == want, "WebP alone");
+    // The same as a GLB (a JSON chunk alone, its buffers data URIs).
+    let mut text = serde_json::to_vec(&alone).unwrap();
+    while text.len() % 4 != 0 {
+        text.push(b' ');
+    }
+    let mut glb = Vec::new();
+    glb.extend_from_slice(b"glTF");
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&((12 + 8 + text.len()) as u32).to_le_bytes());
+    glb.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"JSON");
+    glb.extend_from_slice(&text);
+    let path = dir.path().join("alone.glb");
+    std::fs::write(&path, glb).unwrap();
+    let glb_texels: Vec<_> = load(&path)
+        .textures
+        .iter()
+        .map(|t| (t.width, t.height, t.texels.bytes().into_owned()))
+        .collect();
+    assert!(glb_texels == want, "WebP alone in a GLB");
 }
 
 /// `EXT_mesh_gpu_instancing` against the same copies written as nodes (whose transforms

@@ -729,15 +729,34 @@ fn rebase(scene: &mut Scene) {
     );
 }
 
-/// The file's JSON as the gltf crate reads it (not yet validated), and a GLB's binary
-/// chunk. Animations are never played (see the warning `load` gives for them), so a file
-/// whose animations the crate cannot read is read again without them: a
-/// `KHR_animation_pointer` channel targets a JSON pointer instead of a node, which the
-/// crate's types require. Any other fault reports the first reading's error.
+/// Parses the file without the crate's validation (the loader validates after its own
+/// checks). Two things the crate cannot read are mended through the JSON, and only when
+/// they are there, so that other files parse once:
+/// * `EXT_texture_webp`: a texture's WebP image is used in place of its `source` (a
+///   fallback for viewers without WebP, which the extension lets a file leave out, and
+///   the crate cannot read a texture without one);
+/// * animations the crate cannot read (`KHR_animation_pointer` channels have no node)
+///   are left out with a warning: lanterna does not play animations.
 fn parse(bytes: &[u8], warnings: &mut Vec<String>) -> Result<gltf::Gltf, gltf::Error> {
+    // The name in quotes anywhere in the JSON (a GLB's first chunk): it must be listed
+    // in `extensionsUsed` wherever it is used.
+    let json_part = match bytes.get(12..16) {
+        Some(len) if bytes.starts_with(b"glTF") => {
+            let len = u32::from_le_bytes(len.try_into().unwrap()) as usize;
+            bytes
+                .get(20..20usize.saturating_add(len))
+                .unwrap_or(&bytes[..])
+        }
+        _ => bytes,
+    };
+    let quoted = format!("\"{WEBP}\"");
+    let webp = json_part
+        .windows(quoted.len())
+        .any(|w| w == quoted.as_bytes());
     let first = match gltf::Gltf::from_slice_without_validation(bytes) {
-        Ok(g) => return Ok(g),
-        Err(e) => e,
+        Ok(g) if !webp => return Ok(g),
+        Ok(_) => None,
+        Err(e) => Some(e),
     };
     let (json, blob) = if bytes.starts_with(b"glTF") {
         let glb = gltf::binary::Glb::from_slice(bytes)?;
@@ -745,24 +764,53 @@ fn parse(bytes: &[u8], warnings: &mut Vec<String>) -> Result<gltf::Gltf, gltf::E
     } else {
         (std::borrow::Cow::Borrowed(bytes), None)
     };
-    let Ok(mut value) = serde_json::from_slice::<serde_json::Value>(&json) else {
-        return Err(first);
+    let mut value = match serde_json::from_slice::<serde_json::Value>(&json) {
+        Ok(v) => v,
+        Err(e) => return Err(first.unwrap_or(gltf::Error::Deserialize(e))),
     };
-    let Some(animations) = value.as_object_mut().and_then(|o| o.remove("animations")) else {
-        return Err(first);
+    if webp {
+        prefer_webp_sources(&mut value);
+    }
+    let root = match gltf::json::deserialize::from_value::<gltf::json::Root>(value.clone()) {
+        Ok(root) => root,
+        Err(e) => {
+            let first = first.unwrap_or(gltf::Error::Deserialize(e));
+            let Some(animations) = value.as_object_mut().and_then(|o| o.remove("animations"))
+            else {
+                return Err(first);
+            };
+            let Ok(root) = gltf::json::deserialize::from_value::<gltf::json::Root>(value) else {
+                return Err(first);
+            };
+            let count = animations.as_array().map_or(0, Vec::len);
+            warnings.push(format!(
+                "has {count} animation(s) that cannot be read ({first}); animations are not \
+                 played, so they are left out"
+            ));
+            root
+        }
     };
-    let Ok(root) = gltf::json::deserialize::from_value::<gltf::json::Root>(value) else {
-        return Err(first);
-    };
-    let count = animations.as_array().map_or(0, Vec::len);
-    warnings.push(format!(
-        "has {count} animation(s) that cannot be read ({first}); animations are not played, \
-         so they are left out"
-    ));
     Ok(gltf::Gltf {
         document: gltf::Document::from_json_without_validation(root),
         blob,
     })
+}
+
+const WEBP: &str = "EXT_texture_webp";
+
+/// Points every texture with an `EXT_texture_webp` image at it.
+fn prefer_webp_sources(value: &mut serde_json::Value) {
+    let Some(textures) = value.get_mut("textures").and_then(|t| t.as_array_mut()) else {
+        return;
+    };
+    for texture in textures {
+        let source = texture
+            .pointer(&format!("/extensions/{WEBP}/source"))
+            .cloned();
+        if let (Some(source), Some(t)) = (source, texture.as_object_mut()) {
+            t.insert("source".into(), source);
+        }
+    }
 }
 
 /// glTF extensions lanterna reads. A file may use others without requiring them (a
@@ -774,6 +822,7 @@ const MAX_INSTANCES: usize = (1 << 24) - 1;
 
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "EXT_mesh_gpu_instancing",
+    "EXT_texture_webp",
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",

@@ -179,18 +179,20 @@ fn percent_decode(s: &str) -> Result<String, String> {
     String::from_utf8(out).map_err(|_| format!("URI `{s}` does not decode to UTF-8"))
 }
 
-/// Decodes a PNG or JPEG into the crate's image data, allocating at most `max_bytes`.
+/// Decodes a PNG, JPEG or WebP (`EXT_texture_webp`) into the crate's image data,
+/// allocating at most `max_bytes`.
 pub(super) fn decode_image(bytes: &[u8], max_bytes: u64) -> Result<gltf::image::Data, String> {
     use gltf::image::Format;
     use image::DynamicImage as D;
+    use image::ImageFormat as F;
     let format = match image::guess_format(bytes) {
-        Ok(f @ (image::ImageFormat::Png | image::ImageFormat::Jpeg)) => f,
+        Ok(f @ (F::Png | F::Jpeg | F::WebP)) => f,
         Ok(f) => {
             return Err(format!(
-                "unsupported image encoding {f:?} (PNG or JPEG expected)"
+                "unsupported image encoding {f:?} (PNG, JPEG or WebP expected)"
             ))
         }
-        Err(_) => return Err("not a PNG or JPEG image".into()),
+        Err(_) => return Err("not a PNG, JPEG or WebP image".into()),
     };
     let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
     let mut limits = image::Limits::default();
