@@ -743,9 +743,7 @@ fn parse(bytes: &[u8], warnings: &mut Vec<String>) -> Result<gltf::Gltf, gltf::E
     let json_part = match bytes.get(12..16) {
         Some(len) if bytes.starts_with(b"glTF") => {
             let len = u32::from_le_bytes(len.try_into().unwrap()) as usize;
-            bytes
-                .get(20..20usize.saturating_add(len))
-                .unwrap_or(&bytes[..])
+            bytes.get(20..20usize.saturating_add(len)).unwrap_or(bytes)
         }
         _ => bytes,
     };
