@@ -238,7 +238,43 @@ fn compare(
 
 /// [`compare`] at level `alpha` (the script's, for each of its families), with `extra`
 /// arguments for the script.
+///
+/// Mitsuba's side is a fresh draw in every process (its LLVM renders with fixed seeds
+/// differ between processes), so every CI run re-rolls each peer test at its level,
+/// about 3·10⁻³ a comparison over the three families and some forty comparisons, and at
+/// small budgets Mitsuba's skew makes that optimistic. A comparison that disagrees is
+/// therefore decided by a second fresh Mitsuba draw against the same lanterna images
+/// (which are repeatable): a defect fails both, a false alarm of Mitsuba's draw fails
+/// both only at about the level squared. The first report is kept in the second's
+/// `first_draw` and printed.
 fn compare_at(
+    export_dir: &Path,
+    exrs: &[PathBuf],
+    mitsuba_spp: u64,
+    alpha: f64,
+    json: &Path,
+    extra: &[&str],
+) -> serde_json::Value {
+    let first = compare_once(export_dir, exrs, mitsuba_spp, alpha, json, extra);
+    if first["agree"].as_bool() != Some(false) {
+        return first;
+    }
+    eprintln!(
+        "{}: Mitsuba's first draw disagrees (mean p {}, blocks {} at p {}, pixels {} at \
+         p {}); a second fresh draw decides",
+        export_dir.display(),
+        first["mean"]["p"],
+        first["blocks"]["agree"],
+        first["blocks"]["min_p"],
+        first["pixels"]["agree"],
+        first["pixels"]["min_p"]
+    );
+    let mut second = compare_once(export_dir, exrs, mitsuba_spp, alpha, json, extra);
+    second["first_draw"] = first;
+    second
+}
+
+fn compare_once(
     export_dir: &Path,
     exrs: &[PathBuf],
     mitsuba_spp: u64,
