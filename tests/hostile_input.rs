@@ -798,6 +798,26 @@ fn wrong_values_are_refused() {
             }),
             "KHR_materials_iridescence iridescenceThicknessMinimum -20 is negative",
         ),
+        // EXT_meshopt_compression: a stream that is not one (the quad's float
+        // positions), an unknown mode.
+        (
+            scene_with(|j| {
+                j["extensionsUsed"] = json!(["EXT_meshopt_compression"]);
+                j["bufferViews"][0]["extensions"] = json!({"EXT_meshopt_compression":
+                    {"buffer": 0, "byteLength": 48, "byteStride": 12, "count": 4,
+                     "mode": "ATTRIBUTES"}});
+            }),
+            "buffer view 0 (EXT_meshopt_compression): ATTRIBUTES stream starts with 0x00, not 0xa0",
+        ),
+        (
+            scene_with(|j| {
+                j["extensionsUsed"] = json!(["EXT_meshopt_compression"]);
+                j["bufferViews"][0]["extensions"] = json!({"EXT_meshopt_compression":
+                    {"buffer": 0, "byteLength": 48, "byteStride": 12, "count": 4,
+                     "mode": "SPIRAL"}});
+            }),
+            "buffer view 0 (EXT_meshopt_compression): unknown mode \"SPIRAL\"",
+        ),
         // EXT_mesh_gpu_instancing: attributes of different counts, a rotation of
         // integers not normalised, a zero quaternion (normalised bytes over the zeros
         // of a float 0.0), an accessor that does not exist, a rotation of the wrong type.

@@ -9,6 +9,7 @@ use super::load_instancing;
 use super::load_light::convert_light;
 use super::load_primitive::{load_primitive, Geometry};
 use super::material::{self, TextureRegistry};
+use super::meshopt;
 use super::sources;
 use super::{Instance, MeshPrimitive, Scene, SceneError};
 use glam::{Mat4, Vec3};
@@ -76,9 +77,21 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let mut budget = sources::Budget::new(limit);
 
     // Buffers, one at a time so a failure names the buffer.
+    let meshopt_used = document.extensions_used().any(|e| e == meshopt::EXTENSION);
     let mut buffers = Vec::new();
     for b in document.buffers() {
         let (what, data) = match b.source() {
+            // EXT_meshopt_compression's placeholder for decompressed views: a buffer
+            // without a URI that is not the GLB chunk (which only the first may be).
+            gltf::buffer::Source::Bin if meshopt_used && (b.index() > 0 || blob.is_none()) => {
+                budget
+                    .take(b.length() as u64, "a buffer for decompressed data")
+                    .map_err(&invalid)?;
+                (
+                    format!("buffer {} (for decompressed data)", b.index()),
+                    Some(vec![0u8; b.length()]),
+                )
+            }
             gltf::buffer::Source::Bin => ("the GLB binary chunk".to_string(), blob.take()),
             gltf::buffer::Source::Uri(u) => {
                 let what = if u.starts_with("data:") {
@@ -106,6 +119,9 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
             data.push(0);
         }
         buffers.push(gltf::buffer::Data(data));
+    }
+    if meshopt_used {
+        decompress_views(&document, &mut buffers).map_err(&invalid)?;
     }
 
     // Images that materials use (decoded lazily: unused images are skipped).
@@ -586,6 +602,73 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     Ok(scene)
 }
 
+/// Decodes every buffer view compressed with `EXT_meshopt_compression` into the bytes the
+/// view itself spans (in a placeholder buffer, or over a fallback's uncompressed copy).
+fn decompress_views(
+    document: &gltf::Document,
+    buffers: &mut [gltf::buffer::Data],
+) -> Result<(), String> {
+    for view in document.views() {
+        let Some(ext) = view.extension_value(meshopt::EXTENSION) else {
+            continue;
+        };
+        let what = format!("buffer view {} ({})", view.index(), meshopt::EXTENSION);
+        let int = |key: &str, default: Option<u64>| -> Result<usize, String> {
+            match ext.get(key) {
+                None => default.ok_or_else(|| format!("{what} has no `{key}`")),
+                Some(v) => v.as_u64().ok_or_else(|| format!("{what}: `{key}` is {v}")),
+            }
+            .and_then(|v| usize::try_from(v).map_err(|_| format!("{what}: `{key}` is {v}")))
+        };
+        let (source, offset, length) = (
+            int("buffer", None)?,
+            int("byteOffset", Some(0))?,
+            int("byteLength", None)?,
+        );
+        let (stride, count) = (int("byteStride", None)?, int("count", None)?);
+        let mode = match ext.get("mode").and_then(|m| m.as_str()) {
+            Some("ATTRIBUTES") => meshopt::Mode::Attributes,
+            Some("TRIANGLES") => meshopt::Mode::Triangles,
+            Some("INDICES") => meshopt::Mode::Indices,
+            _ => {
+                return Err(match ext.get("mode") {
+                    Some(m) => format!("{what}: unknown mode {m}"),
+                    None => format!("{what} has no `mode`"),
+                })
+            }
+        };
+        let filter = match ext.get("filter").map(|f| f.as_str()) {
+            None | Some(Some("NONE")) => meshopt::Filter::None,
+            Some(Some("OCTAHEDRAL")) => meshopt::Filter::Octahedral,
+            Some(Some("QUATERNION")) => meshopt::Filter::Quaternion,
+            Some(Some("EXPONENTIAL")) => meshopt::Filter::Exponential,
+            Some(_) => return Err(format!("{what}: unknown filter {}", ext["filter"])),
+        };
+        if count.checked_mul(stride) != Some(view.length()) {
+            return Err(format!(
+                "{what}: {count} elements of {stride} bytes, but the view has {} bytes",
+                view.length()
+            ));
+        }
+        let data = buffers
+            .get(source)
+            .and_then(|b| b.0.get(offset..offset.checked_add(length)?))
+            .ok_or_else(|| {
+                format!("{what}: bytes {offset}..+{length} of buffer {source} do not exist")
+            })?
+            .to_vec();
+        let start = view.offset();
+        let target = view.buffer().index();
+        let out = buffers
+            .get_mut(target)
+            .and_then(|b| b.0.get_mut(start..start.checked_add(view.length())?))
+            .ok_or_else(|| format!("{what}: the view lies outside buffer {target}"))?;
+        meshopt::decode(out, count, stride, mode, filter, &data)
+            .map_err(|e| format!("{what}: {e}"))?;
+    }
+    Ok(())
+}
+
 /// World transforms of all nodes of the file (those outside the scene's trees too: a
 /// skin's joints may be anywhere), each its parents' product with its own.
 fn node_world_matrices(document: &gltf::Document) -> Result<Vec<Mat4>, String> {
@@ -820,6 +903,7 @@ const MAX_INSTANCES: usize = (1 << 24) - 1;
 
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "EXT_mesh_gpu_instancing",
+    "EXT_meshopt_compression",
     "EXT_texture_webp",
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",

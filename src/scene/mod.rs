@@ -14,6 +14,7 @@ mod load_instancing;
 mod load_light;
 mod load_primitive;
 mod material;
+mod meshopt;
 mod sources;
 pub mod spatial_order;
 mod stats;

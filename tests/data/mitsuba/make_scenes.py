@@ -1060,6 +1060,50 @@ def coat_sheen_scene():
     b.write("coat_sheen.gltf")
 
 
+def instanced_scene():
+    """EXT_mesh_gpu_instancing: twelve lamps along a wave under a turned node (every
+    fourth mirrored, which flips its winding) and five turned, stretched boxes. Also the
+    source of tests/data/meshopt/instanced-cc-mi.glb."""
+    b = Builder()
+    grey = b.lambert((0.6, 0.6, 0.6))
+    floor_and_wall(b, grey, size=3.0)
+    lamp = b.lambert((0.8, 0.8, 0.8), emission=(1.0, 0.8, 0.5), strength=8.0)
+    quad = b.quad((-0.05, 0, -0.05), (0.05, 0, -0.05), (0.05, 0, 0.05), (-0.05, 0, 0.05),
+                  lamp, uv=False)  # faces -Y
+    box = b.box(b.lambert((0.2, 0.7, 0.3)))
+
+    def floats(values, typ, count):
+        return b._acc(struct.pack("<%df" % len(values), *values), 5126, count, typ)
+
+    n = 12
+    t, r, s = [], [], []
+    for i in range(n):
+        x = -1.4 + 2.8 * i / (n - 1)
+        t += [x, 0.15 * math.sin(3 * x), 0.0]
+        a = 0.3 * math.sin(2 * i)
+        r += [math.sin(a / 2), 0, 0, math.cos(a / 2)]
+        s += [1.0 + 0.5 * (i % 3), 1.0, -1.0 if i % 4 == 1 else 1.0]
+    b.node(mesh=quad, translation=[0, 1.7, -1.2], rotation=[0, 0.0871557, 0, 0.9961947],
+           extensions={"EXT_mesh_gpu_instancing": {"attributes": {
+               "TRANSLATION": floats(t, "VEC3", n), "ROTATION": floats(r, "VEC4", n),
+               "SCALE": floats(s, "VEC3", n)}}})
+    t, r, s = [], [], []
+    for i in range(5):
+        t += [-1.2 + 0.6 * i, 0.0, 0.3 * (i % 2)]
+        r += [0, math.sin(0.2 * i), 0, math.cos(0.2 * i)]
+        k = 0.15 + 0.05 * i
+        s += [k, k * (1 + 0.3 * i), k]
+    b.node(mesh=box, translation=[0, 0.001, -1.0],
+           extensions={"EXT_mesh_gpu_instancing": {"attributes": {
+               "TRANSLATION": floats(t, "VEC3", 5), "ROTATION": floats(r, "VEC4", 5),
+               "SCALE": floats(s, "VEC3", 5)}}})
+    b.required.append("EXT_mesh_gpu_instancing")
+    eye = (0.0, 1.4, 2.6)
+    b.node(camera=b.camera(yfov=0.9), translation=list(eye),
+           rotation=look_at_rotation(eye, (0.0, 0.8, -1.0)))
+    b.write("instanced.gltf")
+
+
 if __name__ == "__main__":
     tex_scene()
     tex16_scene()
@@ -1084,3 +1128,4 @@ if __name__ == "__main__":
     anisotropy_scene()
     diffuse_transmission_scene()
     iridescence_scene()
+    instanced_scene()
