@@ -1078,8 +1078,10 @@ fn world_triangles(scene: &Scene) -> Vec<[[f32; 6]; 3]> {
 /// says how): `cornell-lights` compressed with float attributes (`-c -noq`) must load
 /// the very same world-space triangles and normals, and `instanced.gltf` compressed
 /// with quantized attributes, octahedral normals and instancing whose translations and
-/// scales pass the exponential filter and rotations the quaternion one (`-cc -mi`),
-/// triangles within the 14-bit positions' and 8-bit normals' rounding. Seen to fail
+/// scales pass the exponential filter and rotations the quaternion one (`-cc -mi`,
+/// with EXT and with KHR's version 1 attribute streams), triangles within the 14-bit
+/// positions' and 8-bit normals' rounding; and `colors.gltf` through KHR's colour
+/// filter, vertex colours within 0.02 (seen to fail with red and blue swapped). Seen to fail
 /// with the edge FIFO's entries pushed reversed after a triangle of new or explicit
 /// vertices, with the quaternion filter's components rotated one place, and with the
 /// octahedral filter's fold left out (the decoder's own tests, in
@@ -1096,14 +1098,51 @@ fn meshopt_compressed_scenes_load_their_originals_triangles() {
     );
 
     let original = world_triangles(&load(&data.join("mitsuba/instanced.gltf")));
-    let packed = world_triangles(&load(&data.join("meshopt/instanced-cc-mi.glb")));
+    for file in ["instanced-cc-mi.glb", "instanced-cc-mi-khr.glb"] {
+        let packed = world_triangles(&load(&data.join("meshopt").join(file)));
+        assert_within_quantization(&original, &packed, file);
+    }
+
+    // KHR_meshopt_compression's colour filter: vertex colours through YCoCg at 8 bits.
+    let colours = |scene: &Scene| -> Vec<([f32; 3], [f32; 4])> {
+        let mut out = Vec::new();
+        for inst in &scene.instances {
+            let p = &scene.primitives[inst.primitive as usize];
+            if p.color_offset == lanterna::gpu::INVALID_INDEX {
+                continue;
+            }
+            for v in 0..p.vertex_count {
+                let x = scene.vertices[(p.vertex_offset + v) as usize].position;
+                let x = inst.transform.transform_point3(glam::Vec3::from(x));
+                out.push((x.to_array(), scene.colors[(p.color_offset + v) as usize]));
+            }
+        }
+        out
+    };
+    let original = colours(&load(&data.join("mitsuba/colors.gltf")));
+    let packed = colours(&load(&data.join("meshopt/colors-cc-khr.glb")));
+    assert!(!original.is_empty());
     assert_eq!(original.len(), packed.len());
+    for (x, c) in &original {
+        assert!(
+            packed.iter().any(|(y, d)| {
+                (0..3).all(|k| (x[k] - y[k]).abs() < 5e-3)
+                    && (0..4).all(|k| (c[k] - d[k]).abs() < 0.02)
+            }),
+            "no packed vertex near {x:?} with colour {c:?}"
+        );
+    }
+}
+
+/// Each of `original`'s triangles has its own in `packed` within the quantization.
+fn assert_within_quantization(original: &[[[f32; 6]; 3]], packed: &[[[f32; 6]; 3]], what: &str) {
+    assert_eq!(original.len(), packed.len(), "{what}");
     // Each original triangle has a packed one within the quantization: gltfpack puts
     // every mesh on one 14-bit grid over the scene (6.5 units), whose origin lies up to
     // 3 units from a lamp, so an instance rotation rounded to 2⁻¹² moves a lamp's corners
     // by up to about 2·10⁻³ (seen: 2.1·10⁻³); normals are 8-bit octahedral.
     let mut used = vec![false; packed.len()];
-    for a in &original {
+    for a in original {
         let close = |b: &[[f32; 6]; 3]| {
             a.iter().zip(b).all(|(p, q)| {
                 (0..3).all(|c| (p[c] - q[c]).abs() < 5e-3)
@@ -1112,7 +1151,7 @@ fn meshopt_compressed_scenes_load_their_originals_triangles() {
         };
         let k = (0..packed.len())
             .find(|&k| !used[k] && close(&packed[k]))
-            .unwrap_or_else(|| panic!("no packed triangle near {a:?}"));
+            .unwrap_or_else(|| panic!("{what}: no packed triangle near {a:?}"));
         used[k] = true;
     }
 }

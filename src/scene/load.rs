@@ -77,7 +77,9 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let mut budget = sources::Budget::new(limit);
 
     // Buffers, one at a time so a failure names the buffer.
-    let meshopt_used = document.extensions_used().any(|e| e == meshopt::EXTENSION);
+    let meshopt_used = document
+        .extensions_used()
+        .any(|e| meshopt::EXTENSIONS.contains(&e));
     let mut buffers = Vec::new();
     for b in document.buffers() {
         let (what, data) = match b.source() {
@@ -609,10 +611,13 @@ fn decompress_views(
     buffers: &mut [gltf::buffer::Data],
 ) -> Result<(), String> {
     for view in document.views() {
-        let Some(ext) = view.extension_value(meshopt::EXTENSION) else {
+        let Some((name, ext)) = meshopt::EXTENSIONS
+            .iter()
+            .find_map(|&name| Some((name, view.extension_value(name)?)))
+        else {
             continue;
         };
-        let what = format!("buffer view {} ({})", view.index(), meshopt::EXTENSION);
+        let what = format!("buffer view {} ({name})", view.index());
         let int = |key: &str, default: Option<u64>| -> Result<usize, String> {
             match ext.get(key) {
                 None => default.ok_or_else(|| format!("{what} has no `{key}`")),
@@ -642,6 +647,7 @@ fn decompress_views(
             Some(Some("OCTAHEDRAL")) => meshopt::Filter::Octahedral,
             Some(Some("QUATERNION")) => meshopt::Filter::Quaternion,
             Some(Some("EXPONENTIAL")) => meshopt::Filter::Exponential,
+            Some(Some("COLOR")) => meshopt::Filter::Color,
             Some(_) => return Err(format!("{what}: unknown filter {}", ext["filter"])),
         };
         if count.checked_mul(stride) != Some(view.length()) {
@@ -918,6 +924,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_transmission",
     "KHR_materials_volume",
     "KHR_mesh_quantization",
+    "KHR_meshopt_compression",
     "KHR_texture_transform",
 ];
 

@@ -1,12 +1,14 @@
-//! `EXT_meshopt_compression`: buffer views stored compressed by meshoptimizer's codecs
-//! (gltfpack's `-c`, `-cc`), decoded on load into the buffer views' own bytes. Written
-//! from the extension's specification (Appendix A, the bitstreams; Appendix B, the
-//! filters): attribute streams (header 0xa0), triangle lists (0xe1), index sequences
-//! (0xd1) and the octahedral, quaternion and exponential filters. Every read is
+//! `EXT_meshopt_compression` and `KHR_meshopt_compression`: buffer views stored
+//! compressed by meshoptimizer's codecs (gltfpack's `-c`, `-cc`, `-ce khr`), decoded on
+//! load into the buffer views' own bytes. Written from the extensions' specifications
+//! (Appendix A, the bitstreams; Appendix B, the filters): attribute streams (headers 0xa0
+//! and 0xa1), triangle lists (0xe1), index sequences (0xd1) and the octahedral,
+//! quaternion, exponential and colour filters. Every read is
 //! bounds-checked, so a damaged stream is an error naming what is wrong, never a panic.
 
-/// The extension's name.
-pub(super) const EXTENSION: &str = "EXT_meshopt_compression";
+/// The extensions' names: the vendor one and its ratified successor, which adds the
+/// version 1 attribute codec and the colour filter.
+pub(super) const EXTENSIONS: [&str; 2] = ["EXT_meshopt_compression", "KHR_meshopt_compression"];
 
 /// How a buffer view is compressed (the extension's JSON, checked).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -22,6 +24,8 @@ pub(super) enum Filter {
     Octahedral,
     Quaternion,
     Exponential,
+    /// `KHR_meshopt_compression`'s YCoCg colours.
+    Color,
 }
 
 /// Decodes `data` (one compressed buffer view) into `out`, `count` elements of `stride`
@@ -68,6 +72,7 @@ pub(super) fn decode(
         Filter::Octahedral => octahedral(out, stride),
         Filter::Quaternion => quaternion(out, stride),
         Filter::Exponential => exponential(out, stride),
+        Filter::Color => color(out, stride),
     }
 }
 
@@ -117,60 +122,136 @@ fn unzigzag8(v: u8) -> u8 {
     }
 }
 
-/// Mode 0: per-byte deltas, deinterleaved, in blocks of groups of 16 elements.
+/// Mode 0: per-byte deltas, deinterleaved, in blocks of groups of 16 elements; version
+/// 0 (header 0xa0, `EXT_meshopt_compression`) or version 1 (0xa1,
+/// `KHR_meshopt_compression`: per-byte control modes, 1-bit deltas, literal bytes, and
+/// per-channel 16-bit and rotated-XOR 32-bit deltas).
 fn decode_attributes(
     out: &mut [u8],
     count: usize,
     stride: usize,
     data: &[u8],
 ) -> Result<(), String> {
-    if data.first() != Some(&0xa0) {
-        return Err(format!(
-            "ATTRIBUTES stream starts with {:#04x}, not 0xa0 (the version this extension \
-             defines)",
-            data.first().copied().unwrap_or(0)
-        ));
-    }
-    let tail = stride.max(32);
-    if data.len() < 1 + tail {
+    let v1 = match data.first() {
+        Some(0xa0) => false,
+        Some(0xa1) => true,
+        other => {
+            return Err(format!(
+                "ATTRIBUTES stream starts with {:#04x}, not 0xa0 or 0xa1",
+                other.copied().unwrap_or(0)
+            ))
+        }
+    };
+    let channel_count = stride / 4;
+    let tail = stride + if v1 { channel_count } else { 0 };
+    let padded = tail.max(if v1 { 24 } else { 32 });
+    if data.len() < 1 + padded {
         return Err("ATTRIBUTES stream is shorter than its tail".into());
     }
-    let mut last: Vec<u8> = data[data.len() - stride..].to_vec();
+    let tail_at = data.len() - tail;
+    let mut last: Vec<u8> = data[tail_at..tail_at + stride].to_vec();
+    let channels: Vec<u8> = if v1 {
+        data[tail_at + stride..].to_vec()
+    } else {
+        vec![0; channel_count]
+    };
+    if let Some(c) = channels
+        .iter()
+        .find(|&&c| c & 15 > 2 || (c & 15 < 2 && c >> 4 != 0))
+    {
+        return Err(format!("ATTRIBUTES channel mode {c:#04x} is invalid"));
+    }
     let mut r = Reader {
         data,
         pos: 1,
-        end: data.len() - tail,
+        end: data.len() - padded,
     };
+    // Bits per delta of a group's 2-bit header: version 0, then version 1 under
+    // control modes 0 and 1 (8: a raw byte per delta).
+    const WIDTHS: [[u32; 4]; 3] = [[0, 2, 4, 8], [0, 1, 2, 4], [1, 2, 4, 8]];
     let block_max = ((8192 / stride) & !15).min(256);
-    let mut deltas = [0u8; 256];
+    let mut deltas = vec![0u8; stride * 256];
     let mut done = 0;
     while done < count {
         let elements = (count - done).min(block_max);
         let groups = elements.div_ceil(16);
-        for (k, last) in last.iter_mut().enumerate() {
+        let control = if v1 {
+            r.bytes(channel_count)?.to_vec()
+        } else {
+            Vec::new()
+        };
+        for k in 0..stride {
+            let d = &mut deltas[256 * k..256 * k + 256];
+            let ctrl = if v1 {
+                (control[k / 4] >> (2 * (k % 4))) & 3
+            } else {
+                0
+            };
+            match ctrl {
+                2 => {
+                    d.fill(0);
+                    continue;
+                }
+                3 => {
+                    d[..elements].copy_from_slice(r.bytes(elements)?);
+                    continue;
+                }
+                _ => {}
+            }
+            let widths = WIDTHS[if v1 { 1 + ctrl as usize } else { 0 }];
             let header = r.bytes(groups.div_ceil(4))?.to_vec();
             for g in 0..groups {
-                let d = &mut deltas[16 * g..16 * g + 16];
-                match (header[g / 4] >> (2 * (g % 4))) & 3 {
+                let d = &mut d[16 * g..16 * g + 16];
+                match widths[((header[g / 4] >> (2 * (g % 4))) & 3) as usize] {
                     0 => d.fill(0),
-                    3 => d.copy_from_slice(r.bytes(16)?),
-                    mode => {
-                        let bits = if mode == 1 { 2 } else { 4 };
-                        let packed = r.bytes(2 * bits)?.to_vec();
+                    8 => d.copy_from_slice(r.bytes(16)?),
+                    bits => {
+                        let packed = r.bytes(2 * bits as usize)?.to_vec();
                         let sentinel = (1u8 << bits) - 1;
+                        let per_byte = (8 / bits) as usize;
                         for (i, d) in d.iter_mut().enumerate() {
-                            let per_byte = 8 / bits;
-                            let shift = 8 - bits * (1 + i % per_byte);
+                            // 1-bit deltas from the low bit up, wider ones from the high.
+                            let slot = (i % per_byte) as u32;
+                            let shift = if bits == 1 {
+                                slot
+                            } else {
+                                8 - bits * (1 + slot)
+                            };
                             let v = (packed[i / per_byte] >> shift) & sentinel;
                             *d = if v == sentinel { r.byte()? } else { v };
                         }
                     }
                 }
             }
-            for (i, &delta) in deltas[..elements].iter().enumerate() {
-                *last = last.wrapping_add(unzigzag8(delta));
-                out[(done + i) * stride + k] = *last;
+        }
+        let delta = |k: usize, i: usize| deltas[256 * k + i];
+        for i in 0..elements {
+            let element = &mut out[(done + i) * stride..(done + i + 1) * stride];
+            for (c, &mode) in channels.iter().enumerate() {
+                let at = 4 * c;
+                match mode & 15 {
+                    0 => {
+                        for (k, v) in last.iter_mut().enumerate().skip(at).take(4) {
+                            *v = v.wrapping_add(unzigzag8(delta(k, i)));
+                        }
+                    }
+                    1 => {
+                        for k in [at, at + 2] {
+                            let d = u16::from_le_bytes([delta(k, i), delta(k + 1, i)]);
+                            let d = if d & 1 != 0 { !(d >> 1) } else { d >> 1 };
+                            let v = u16::from_le_bytes([last[k], last[k + 1]]).wrapping_add(d);
+                            last[k..k + 2].copy_from_slice(&v.to_le_bytes());
+                        }
+                    }
+                    _ => {
+                        let d = u32::from_le_bytes([0, 1, 2, 3].map(|b| delta(at + b, i)));
+                        let p = u32::from_le_bytes(last[at..at + 4].try_into().unwrap());
+                        let v = p ^ d.rotate_right(u32::from(mode >> 4));
+                        last[at..at + 4].copy_from_slice(&v.to_le_bytes());
+                    }
+                }
             }
+            element.copy_from_slice(&last);
         }
         done += elements;
     }
@@ -430,6 +511,51 @@ fn exponential(out: &mut [u8], stride: usize) -> Result<(), String> {
     Ok(())
 }
 
+/// Filter 4 (`KHR_meshopt_compression`): YCoCg colours, 4 × 8 or 4 × 16 bits, K bits
+/// found from the alpha's top bit; output unsigned normalised RGBA.
+fn color(out: &mut [u8], stride: usize) -> Result<(), String> {
+    let wide = match stride {
+        4 => false,
+        8 => true,
+        _ => return Err(format!("COLOR byteStride {stride} is not 4 or 8")),
+    };
+    let max = if wide { 65535.0 } else { 255.0 };
+    for e in out.chunks_exact_mut(stride) {
+        let unsigned = |i: usize| -> i32 {
+            if wide {
+                i32::from(u16::from_le_bytes([e[2 * i], e[2 * i + 1]]))
+            } else {
+                i32::from(e[i])
+            }
+        };
+        let (y, co, cg) = (
+            unsigned(0),
+            component(e, 1, wide) as i32,
+            component(e, 2, wide) as i32,
+        );
+        let alpha = unsigned(3);
+        if alpha == 0 {
+            return Err("COLOR element has no scale bit in its alpha".into());
+        }
+        let scale = (1i32 << (32 - alpha.leading_zeros())) - 1;
+        let a = alpha & (scale >> 1);
+        let a = (a << 1) | (a & 1);
+        let ss = max / scale as f32;
+        for (i, v) in [y + co - cg, y + cg, y - co - cg, a]
+            .into_iter()
+            .enumerate()
+        {
+            let v = (v as f32 * ss).round().clamp(0.0, max);
+            if wide {
+                e[2 * i..2 * i + 2].copy_from_slice(&(v as u16).to_le_bytes());
+            } else {
+                e[i] = v as u8;
+            }
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -476,6 +602,7 @@ mod tests {
                     "OCTAHEDRAL" => Filter::Octahedral,
                     "QUATERNION" => Filter::Quaternion,
                     "EXPONENTIAL" => Filter::Exponential,
+                    "COLOR" => Filter::Color,
                     _ => Filter::None,
                 },
                 encoded: b64(&c["encoded"]),
@@ -496,15 +623,21 @@ mod tests {
             decode(&mut out, c.count, c.stride, c.mode, c.filter, &c.encoded)
                 .unwrap_or_else(|e| panic!("{}: {e}", c.name));
             match c.filter {
-                Filter::Octahedral | Filter::Quaternion => {
+                Filter::Octahedral | Filter::Quaternion | Filter::Color => {
                     let wide = c.stride == 8;
+                    let signed = c.filter != Filter::Color;
                     let values = |b: &[u8]| -> Vec<i32> {
-                        if wide {
-                            b.chunks_exact(2)
+                        match (wide, signed) {
+                            (true, true) => b
+                                .chunks_exact(2)
                                 .map(|p| i32::from(i16::from_le_bytes([p[0], p[1]])))
-                                .collect()
-                        } else {
-                            b.iter().map(|&v| i32::from(v as i8)).collect()
+                                .collect(),
+                            (true, false) => b
+                                .chunks_exact(2)
+                                .map(|p| i32::from(u16::from_le_bytes([p[0], p[1]])))
+                                .collect(),
+                            (false, true) => b.iter().map(|&v| i32::from(v as i8)).collect(),
+                            (false, false) => b.iter().map(|&v| i32::from(v)).collect(),
                         }
                     };
                     for (i, (a, b)) in values(&out).iter().zip(values(&c.decoded)).enumerate() {
