@@ -446,13 +446,19 @@ fn set_component(e: &mut [u8], i: usize, wide: bool, v: f32) {
     }
 }
 
+/// Whether a filter of four components per element (`name`) has 16-bit components
+/// (stride 8) rather than 8-bit ones (stride 4).
+fn sixteen_bit_components(stride: usize, name: &str) -> Result<bool, String> {
+    match stride {
+        4 => Ok(false),
+        8 => Ok(true),
+        _ => Err(format!("{name} byteStride {stride} is not 4 or 8")),
+    }
+}
+
 /// Filter 1: octahedral unit vectors, 4 × 8 or 4 × 16 bits, the third component K bits' 1.
 fn octahedral(out: &mut [u8], stride: usize) -> Result<(), String> {
-    let wide = match stride {
-        4 => false,
-        8 => true,
-        _ => return Err(format!("OCTAHEDRAL byteStride {stride} is not 4 or 8")),
-    };
+    let wide = sixteen_bit_components(stride, "OCTAHEDRAL")?;
     let max = if wide { 32767.0 } else { 127.0 };
     for e in out.chunks_exact_mut(stride) {
         let one = component(e, 2, wide);
@@ -514,11 +520,7 @@ fn exponential(out: &mut [u8], stride: usize) -> Result<(), String> {
 /// Filter 4 (`KHR_meshopt_compression`): YCoCg colours, 4 × 8 or 4 × 16 bits, K bits
 /// found from the alpha's top bit; output unsigned normalised RGBA.
 fn color(out: &mut [u8], stride: usize) -> Result<(), String> {
-    let wide = match stride {
-        4 => false,
-        8 => true,
-        _ => return Err(format!("COLOR byteStride {stride} is not 4 or 8")),
-    };
+    let wide = sixteen_bit_components(stride, "COLOR")?;
     let max = if wide { 65535.0 } else { 255.0 };
     for e in out.chunks_exact_mut(stride) {
         let unsigned = |i: usize| -> i32 {
