@@ -57,6 +57,13 @@ glTF BSDF plugin. Don't combine it with `--materials` there either.
 specular lobe (roughness 0.1-0.7), a third of them metals, which `mitsuba_compare.py
 --gltf-bsdf` renders exactly through the glTF BSDF plugin. Not with `--materials` there.
 
+`--layers` makes about half of the opaque Lambertian materials glossy metals, plastics or
+something between (metallic 0-1, roughness 0.02-0.8), the dielectric ones with
+KHR_materials_specular and KHR_materials_ior, about half with KHR_materials_clearcoat and
+a third with KHR_materials_sheen (factors only), which `mitsuba_compare.py --gltf-bsdf`
+renders exactly through the glTF BSDF plugin and its layers. Not with `--materials`
+there.
+
 `--alpha` makes about half of the opaque non-emissive Lambertian materials BLEND (alpha
 0.2-0.9) or MASK (a nearest RGBA texture where the mesh has UVs, else a constant alpha
 either side of the cutoff), which the export writes exactly as Mitsuba's `mask` under
@@ -279,8 +286,47 @@ def add_iridescence(s, seed):
     return listed_if_used(s, "KHR_materials_iridescence", count)
 
 
+def add_layers(s, seed):
+    """Glossy metallic-roughness materials with their layers on about half of the opaque
+    Lambertian materials (factors only): metallic 0, 1 or between, roughness 0.02-0.8
+    (a quarter of them below 0.1), KHR_materials_specular (factor 0.3-1, a colour of
+    0.5-1) and KHR_materials_ior (1.2-2.4) on dielectric ones, KHR_materials_clearcoat
+    (factor 0.3-1, roughness 0-0.5) on about half and KHR_materials_sheen (a colour of
+    0.2-1, roughness 0.1-1) on about a third, which `mitsuba_compare.py --gltf-bsdf`
+    renders exactly through the glTF BSDF plugin and its layers. Drawn from a generator
+    of their own, so that the scene is otherwise the one the seed gives without them."""
+    count = 0
+    for r, m in about_half_of_the_matte(s, seed + 6_000_003):
+        pbr = m.setdefault("pbrMetallicRoughness", {})
+        ext = m["extensions"]
+        ext.pop("KHR_materials_specular", None)
+        metallic = r.choice([0.0, 0.0, 1.0, r.uniform(0.0, 1.0)])
+        pbr["metallicFactor"] = metallic
+        pbr["roughnessFactor"] = (r.uniform(0.02, 0.1) if r.random() < 0.25
+                                  else r.uniform(0.1, 0.8))
+        if metallic > 0.0:
+            pbr["baseColorFactor"] = rgb_of(r, 0.4, 1.0) + [1.0]
+        if metallic < 1.0:
+            if r.random() < 0.5:
+                ext["KHR_materials_specular"] = {"specularFactor": r.uniform(0.3, 1.0),
+                                                 "specularColorFactor": rgb_of(r, 0.5, 1.0)}
+            if r.random() < 0.5:
+                ext["KHR_materials_ior"] = {"ior": r.uniform(1.2, 2.4)}
+        if r.random() < 0.5:
+            ext["KHR_materials_clearcoat"] = {"clearcoatFactor": r.uniform(0.3, 1.0),
+                                              "clearcoatRoughnessFactor": r.uniform(0.0, 0.5)}
+        if r.random() < 1 / 3:
+            ext["KHR_materials_sheen"] = {"sheenColorFactor": rgb_of(r, 0.2, 1.0),
+                                          "sheenRoughnessFactor": r.uniform(0.1, 1.0)}
+        count += 1
+    s.uses(*(e for e in ("KHR_materials_ior", "KHR_materials_clearcoat", "KHR_materials_sheen")
+             if any(e in m.get("extensions", {}) for m in s.materials)))
+    return count
+
+
 def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=False,
-             anisotropy=False, diffuse_transmission=False, iridescence=False):
+             anisotropy=False, diffuse_transmission=False, iridescence=False,
+             layers=False):
     r = random.Random(seed)
     s = Builder()
     rgb = lambda lo, hi: [r.uniform(lo, hi) for _ in range(3)]  # noqa: E731
@@ -383,6 +429,8 @@ def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=Fa
         kinds.append(f"{add_diffuse_transmission(s, seed)} diffusely transmitting materials")
     if iridescence:
         kinds.append(f"{add_iridescence(s, seed)} iridescent materials")
+    if layers:
+        kinds.append(f"{add_layers(s, seed)} glossy layered materials")
     return s, kinds
 
 
@@ -410,11 +458,14 @@ def main():
     ap.add_argument("--iridescence", action="store_true",
                     help="thin films on about half of the opaque Lambertian materials, "
                     "made glossy (a third of them metals)")
+    ap.add_argument("--layers", action="store_true",
+                    help="glossy metals and plastics with specular, ior, clearcoat and sheen "
+                    "on about half of the opaque Lambertian materials")
     ap.add_argument("--two-sided-boxes", action="store_true",
                     help="let emissive boxes be two-sided too (Mitsuba's references leak there)")
     a = ap.parse_args()
     scene, kinds = generate(a.seed, a.two_sided_boxes, a.materials, a.normal_maps, a.alpha,
-                            a.anisotropy, a.diffuse_transmission, a.iridescence)
+                            a.anisotropy, a.diffuse_transmission, a.iridescence, a.layers)
     scene.write(os.path.abspath(a.output))  # an absolute name: not next to make_scenes.py
     print(f"{a.output}: {', '.join(kinds)}")
     return 0
