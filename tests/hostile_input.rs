@@ -798,6 +798,32 @@ fn wrong_values_are_refused() {
             }),
             "KHR_materials_iridescence iridescenceThicknessMinimum -20 is negative",
         ),
+        // KHR_materials_dispersion: a negative spread, one beyond single precision, one
+        // that is not a number (the extension's schema: a number from 0).
+        (
+            scene_with(|j| {
+                j["extensionsUsed"] = json!(["KHR_materials_dispersion"]);
+                j["materials"][0]["extensions"] =
+                    json!({"KHR_materials_dispersion": {"dispersion": -0.5}});
+            }),
+            "KHR_materials_dispersion dispersion -0.5 is not a finite number of at least 0",
+        ),
+        (
+            scene_with(|j| {
+                j["extensionsUsed"] = json!(["KHR_materials_dispersion"]);
+                j["materials"][0]["extensions"] =
+                    json!({"KHR_materials_dispersion": {"dispersion": 1e39}});
+            }),
+            "KHR_materials_dispersion dispersion inf is not a finite number of at least 0",
+        ),
+        (
+            scene_with(|j| {
+                j["extensionsUsed"] = json!(["KHR_materials_dispersion"]);
+                j["materials"][0]["extensions"] =
+                    json!({"KHR_materials_dispersion": {"dispersion": "flint"}});
+            }),
+            "KHR_materials_dispersion dispersion is not a finite number",
+        ),
         // EXT_meshopt_compression: a stream that is not one (the quad's float
         // positions), an unknown mode.
         (

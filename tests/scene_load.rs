@@ -205,20 +205,19 @@ fn emissive_factor_above_one_loads_with_a_warning() {
 #[test]
 fn an_unsupported_extension_loads_with_a_warning_naming_it() {
     // Used, not required: the file stays loadable, and the user hears that the
-    // dispersion it describes is not rendered.
+    // unlit shading it asks for is not rendered (the material renders lit).
     let dir = tempfile::tempdir().unwrap();
     let src = root().join("scenes/cornell-lights.gltf");
     let mut json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&src).unwrap()).unwrap();
     json["extensionsUsed"].as_array_mut().unwrap().extend([
-        serde_json::json!("KHR_materials_dispersion"),
+        serde_json::json!("KHR_materials_unlit"),
         serde_json::json!("KHR_materials_variants"),
     ]);
-    json["materials"][0]["extensions"]["KHR_materials_dispersion"] =
-        serde_json::json!({ "dispersion": 0.5 });
+    json["materials"][0]["extensions"]["KHR_materials_unlit"] = serde_json::json!({});
     let (_, stderr) = info_of_edited_cornell(dir.path(), &json);
     assert!(
-        stderr.contains("KHR_materials_dispersion, which lanterna does not support"),
+        stderr.contains("KHR_materials_unlit, which lanterna does not support"),
         "no warning:\n{stderr}"
     );
     // Extensions lanterna reads (the shipped file's emissive strength) and inert ones are
@@ -227,6 +226,46 @@ fn an_unsupported_extension_loads_with_a_warning_naming_it() {
     let (ok, stderr) = lanterna(&["info", src.to_str().unwrap()]);
     assert!(ok, "{stderr}");
     assert!(!stderr.contains("does not support"), "{stderr}");
+}
+
+/// KHR_materials_dispersion is read onto the solids whose boundary it spreads
+/// (`dispersion.gltf`: a prism at 8, a ball at 2) and counted by `lanterna info`; on a
+/// material that bounds no solid it changes nothing, and the file loads with a warning
+/// naming the material. Seen to fail with the extension read from the wrong key (no
+/// dispersive material) and with the warning left out.
+#[test]
+fn dispersion_is_read_on_solids_and_named_where_it_does_nothing() {
+    let scene = load(&root().join("tests/data/mitsuba/dispersion.gltf"));
+    let mut spread: Vec<f32> = scene
+        .materials
+        .iter()
+        .map(|m| m.dispersion)
+        .filter(|&d| d > 0.0)
+        .collect();
+    spread.sort_by(f32::total_cmp);
+    assert_eq!(spread, [2.0, 8.0]);
+    let stats = lanterna::scene::SceneStats::new(&scene, &LightTable::build(&scene).unwrap());
+    assert_eq!(stats.dispersive_materials, 2);
+
+    let dir = tempfile::tempdir().unwrap();
+    let src = root().join("scenes/cornell-lights.gltf");
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&src).unwrap()).unwrap();
+    json["extensionsUsed"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!("KHR_materials_dispersion"));
+    json["materials"][0]["extensions"]["KHR_materials_dispersion"] =
+        serde_json::json!({ "dispersion": 0.5 });
+    let (path, stderr) = info_of_edited_cornell(dir.path(), &json);
+    assert!(
+        stderr.contains("KHR_materials_dispersion has no effect, the material bounds no solid"),
+        "no warning:\n{stderr}"
+    );
+    assert!(!stderr.contains("does not support"), "{stderr}");
+    let edited = load(&path);
+    let stats = lanterna::scene::SceneStats::new(&edited, &LightTable::build(&edited).unwrap());
+    assert_eq!(stats.dispersive_materials, 0);
 }
 
 /// A file may *require* the material extensions lanterna reads from the JSON, which the

@@ -18,6 +18,9 @@
 // scaled by 1/η² on the way through (pbrt-v4's and Mitsuba 3's `roughdielectric`). It
 // takes the share (1 − metallic)·transmission of the material; the rest is the opaque
 // material (diffuse + specular, metal) with that share taken out (volume_rest).
+// KHR_materials_dispersion gives each colour channel its own index there (the
+// extension's RGB recipe): the interface is then three interfaces, one per channel,
+// sampled as their equal mixture.
 //
 // KHR_materials_diffuse_transmission splits the dielectric's diffuse lobe (what the
 // transmission leaves of it, on a thin wall or a solid's boundary alike) into reflection,
@@ -64,6 +67,8 @@ struct BsdfParams {
                            // lobe that goes through the surface (0: opaque)
     float eta;             // KHR_materials_volume: the boundary of a refracting solid, the
                            // index of the far side over wo's; 0: a thin or opaque surface
+    float dispersion;      // KHR_materials_dispersion on that boundary (20 / Abbe number;
+                           // 0: one index for every channel)
     float coat;            // KHR_materials_clearcoat: the coat's weight (0: no coat)
     float coat_alpha;      // its GGX α (clearcoat roughness², clamped to MIN_GGX_ALPHA)
     vec3 coat_n;           // its unit normal in the local frame (upper hemisphere)
@@ -263,11 +268,23 @@ float fresnel_dielectric(float cos_i, float eta) {
     return 0.5 * (r_parallel * r_parallel + r_perpendicular * r_perpendicular);
 }
 
-// The interface's f·|cosθi| and sampling density of wi (wo.z > 0), both sides.
-vec3 interface_eval_pdf(BsdfParams p, vec3 wo, float lambda_wo, vec3 wi, out float pdf) {
+// The interface's index ratio for each colour channel (KHR_materials_dispersion): the
+// solid's index n (eta seen from outside, 1 / eta from inside) becomes n − s, n and n + s
+// for red, green and blue, s = (n − 1)·0.025·dispersion, none below 1.
+vec3 interface_etas(BsdfParams p) {
+    bool outside = p.eta >= 1.0;
+    float n = outside ? p.eta : 1.0 / p.eta;
+    float s = (n - 1.0) * 0.025 * p.dispersion;
+    vec3 ns = max(vec3(n - s, n, n + s), vec3(1.0));
+    return outside ? ns : 1.0 / ns;
+}
+
+// The interface of index ratio eta: f·|cosθi| and sampling density of wi (wo.z > 0),
+// both sides.
+vec3 interface_eval_pdf_eta(BsdfParams p, float eta, vec3 wo, float lambda_wo, vec3 wi, out float pdf) {
     pdf = 0.0;
     bool reflected = wi.z > 0.0;
-    float etap = reflected ? 1.0 : p.eta;
+    float etap = reflected ? 1.0 : eta;
     vec3 h = wi * etap + wo;  // the (generalised) half vector
     if (wi.z == 0.0 || dot(h, h) == 0.0) return vec3(0.0);
     h = normalize(h);
@@ -279,7 +296,7 @@ vec3 interface_eval_pdf(BsdfParams p, vec3 wo, float lambda_wo, vec3 wi, out flo
     float d = ggx_d(h, ggx_alphas(p));
     float g1o = 1.0 / (1.0 + lambda_wo);
     float g1i = 1.0 / (1.0 + ggx_lambda(wi, ggx_alphas(p)));
-    float f = fresnel_dielectric(ho, p.eta);
+    float f = fresnel_dielectric(ho, eta);
     // Visible-normal density of h: g1o·D·(wo·h)/cosθo.
     float visible = g1o * d * ho / wo.z;
     if (reflected) {
@@ -291,16 +308,39 @@ vec3 interface_eval_pdf(BsdfParams p, vec3 wo, float lambda_wo, vec3 wi, out flo
     return p.base_color * ((1.0 - f) * d * g1o * g1i * abs(hi) * ho / (denom * wo.z * etap * etap));
 }
 
+// The interface's f·|cosθi| and sampling density of wi (wo.z > 0), both sides. With
+// dispersion each channel has its own interface (its own Fresnel term, refracted
+// direction and 1/η²), and interface_sample draws from the three with equal
+// probabilities: the density is their mean.
+vec3 interface_eval_pdf(BsdfParams p, vec3 wo, float lambda_wo, vec3 wi, out float pdf) {
+    if (p.dispersion <= 0.0) return interface_eval_pdf_eta(p, p.eta, wo, lambda_wo, wi, pdf);
+    vec3 etas = interface_etas(p);
+    float pdf_g, pdf_b;
+    vec3 f = vec3(interface_eval_pdf_eta(p, etas.r, wo, lambda_wo, wi, pdf).r,
+                  interface_eval_pdf_eta(p, etas.g, wo, lambda_wo, wi, pdf_g).g,
+                  interface_eval_pdf_eta(p, etas.b, wo, lambda_wo, wi, pdf_b).b);
+    pdf = (pdf + pdf_g + pdf_b) * (1.0 / 3.0);
+    return f;
+}
+
 // Sample the interface: a visible normal from u.yz, then reflection with probability F
-// (decided by u.x) or refraction.
+// (decided by u.x) or refraction. With dispersion u.x first picks the channel whose
+// interface is sampled (each with probability 1/3), then, rescaled, decides as above.
 bool interface_sample(BsdfParams p, vec3 wo, vec3 u, out vec3 wi) {
+    float eta = p.eta;
+    float u_fresnel = u.x;
+    if (p.dispersion > 0.0) {
+        float k = min(floor(u.x * 3.0), 2.0);
+        eta = interface_etas(p)[int(k)];
+        u_fresnel = min(u.x * 3.0 - k, 0.99999994);
+    }
     vec3 h = ggx_sample_visible_normal(wo, ggx_alphas(p), u.yz);
     float ho = dot(wo, h);
-    if (u.x < fresnel_dielectric(ho, p.eta)) {
+    if (u_fresnel < fresnel_dielectric(ho, eta)) {
         wi = reflect(-wo, h);
         return wi.z > 0.0;
     }
-    wi = refract(-wo, h, 1.0 / p.eta);
+    wi = refract(-wo, h, 1.0 / eta);
     return wi.z < 0.0;
 }
 

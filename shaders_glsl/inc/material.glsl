@@ -230,6 +230,7 @@ Surface make_surface(Hit h, vec3 ray_dir) {
         && (m.flags & MATERIAL_FLAG_VOLUME) != 0u;
     float ior = max(m.ior, 1.0);
     s.bsdf.eta = solid ? (s.front ? ior : 1.0 / ior) : 0.0;
+    s.bsdf.dispersion = DISPERSION && solid ? max(m.dispersion, 0.0) : 0.0;
     // KHR_materials_clearcoat.
     s.bsdf.coat = 0.0;
     s.bsdf.coat_alpha = 1.0;

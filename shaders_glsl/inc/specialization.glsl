@@ -29,6 +29,9 @@ layout(constant_id = 12) const bool DIFFUSE_TRANSMISSION = false;
 // The scene has iridescent materials (KHR_materials_iridescence): without, the thin
 // film's Fresnel term compiles away.
 layout(constant_id = 13) const bool IRIDESCENCE = false;
+// The scene has dispersive solids (KHR_materials_dispersion): without, the interface's
+// per-channel indices compile away.
+layout(constant_id = 14) const bool DISPERSION = false;
 // Where the kernels take the Lambertian lobe alone (BSDF_KERNEL_*): at Lambertian
 // surfaces (metallic 0, specular 0, no transmission of either kind, coat or sheen), or everywhere when
 // every material the scene uses is (`Scene::only_lambertian`), the other lobes then

@@ -110,6 +110,11 @@ struct Material {
     float iridescence_thickness_max;
     TextureRef iridescence_tex;
     TextureRef iridescence_thickness_tex;
+    // KHR_materials_dispersion, on the boundary of a solid: 20 / the Abbe number. The red,
+    // green and blue channels refract with indices n − s, n and n + s, s = (n − 1)·0.025·
+    // dispersion (the extension's recipe for RGB renderers; red at least 1). Counted in
+    // the content hash only where a material has it.
+    float dispersion;
 };
 
 // One emissive triangle in world space.

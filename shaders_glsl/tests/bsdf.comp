@@ -27,6 +27,7 @@ struct BsdfCase {
     float iridescence;
     float iridescence_ior;
     float iridescence_thickness;
+    float dispersion;
 };
 
 layout(local_size_x = 64) in;
@@ -57,6 +58,7 @@ void main() {
     p.iridescence = bsdf_case.iridescence;
     p.iridescence_ior = bsdf_case.iridescence_ior;
     p.iridescence_thickness = bsdf_case.iridescence_thickness;
+    p.dispersion = bsdf_case.dispersion;
     bool lambertian = pc.mode >= 2u;
     BsdfWo c = lambertian ? bsdf_at_lambertian(bsdf_case.wo) : bsdf_at(p, bsdf_case.wo);
     vec3 wi = items[t].xyz;

@@ -34,6 +34,8 @@ pub(super) struct Variant {
     pub diffuse_transmission: bool,
     /// The scene has iridescent materials (KHR_materials_iridescence).
     pub iridescence: bool,
+    /// The scene has dispersive solids (KHR_materials_dispersion).
+    pub dispersion: bool,
     /// Where the kernels take the Lambertian lobe alone (`gpu::BSDF_KERNEL_*`).
     pub bsdf: u32,
     /// World-space light reuse (`light_reuse.rs`; RIS methods).
@@ -196,16 +198,17 @@ impl Renderer {
                 v.anisotropy as u32,
                 v.diffuse_transmission as u32,
                 v.iridescence as u32,
+                v.dispersion as u32,
             ];
             let name = format!(
-                "render (ris={}, guiding={}, training={}, aovs={}, solids={}, clearcoat={}, sheen={}, anisotropy={}, diffuse_transmission={}, iridescence={}, bsdf={}, reuse={}, visibility={}, debug={}, lanes={}, traversal={})",
-                v.ris, v.guiding, v.training, v.aovs, v.solids, v.clearcoat, v.sheen, v.anisotropy, v.diffuse_transmission, v.iridescence, v.bsdf, v.reuse, v.visibility, v.debug, v.lanes, self.traversal.kind
+                "render (ris={}, guiding={}, training={}, aovs={}, solids={}, clearcoat={}, sheen={}, anisotropy={}, diffuse_transmission={}, iridescence={}, dispersion={}, bsdf={}, reuse={}, visibility={}, debug={}, lanes={}, traversal={})",
+                v.ris, v.guiding, v.training, v.aovs, v.solids, v.clearcoat, v.sheen, v.anisotropy, v.diffuse_transmission, v.iridescence, v.dispersion, v.bsdf, v.reuse, v.visibility, v.debug, v.lanes, self.traversal.kind
             );
             requests.push((v, spirv, spec, name));
         }
         let bindings = self.bindings();
         let device = &self.device;
-        let create = |(v, spirv, spec, name): &(Variant, Vec<u32>, [u32; 14], String)| {
+        let create = |(v, spirv, spec, name): &(Variant, Vec<u32>, [u32; 15], String)| {
             let started = Instant::now();
             let p = ComputePipeline::new(
                 device,
@@ -346,6 +349,7 @@ impl Renderer {
             anisotropy: self.has_anisotropy,
             diffuse_transmission: self.has_diffuse_transmission,
             iridescence: self.has_iridescence,
+            dispersion: self.has_dispersion,
             bsdf: self.bsdf_kernel(),
             reuse: self.settings.light_reuse.world && method.uses_ris(),
             visibility: self.settings.light_visibility.learned && method.uses_ris(),

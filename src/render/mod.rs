@@ -181,6 +181,8 @@ pub struct Renderer {
     has_diffuse_transmission: bool,
     /// Whether any material has a thin film (the kernels' IRIDESCENCE constant).
     has_iridescence: bool,
+    /// Whether any solid's boundary disperses (the kernels' DISPERSION constant).
+    has_dispersion: bool,
     /// Whether every material in use is Lambertian (the kernels' BSDF_KERNEL constant:
     /// `Renderer::bsdf_kernel`).
     only_lambertian: bool,
@@ -313,6 +315,10 @@ impl Renderer {
                 .any(|m| m.anisotropy_strength > 0.0 && !crate::scene::is_lambertian(m)),
             has_diffuse_transmission: scene.materials.iter().any(|m| m.diffuse_transmission > 0.0),
             has_iridescence: scene.materials.iter().any(|m| m.iridescence > 0.0),
+            has_dispersion: scene
+                .materials
+                .iter()
+                .any(|m| m.dispersion > 0.0 && crate::scene::bounds_solid(m)),
             only_lambertian: scene.only_lambertian(),
             guide,
             reuse_cells,

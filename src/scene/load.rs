@@ -900,13 +900,13 @@ fn prefer_webp_sources(value: &mut serde_json::Value) {
     }
 }
 
-/// glTF extensions lanterna reads. A file may use others without requiring them (a
-/// required one it does not know is refused when the file is parsed); their data is then
-/// ignored, which a user should hear about: a `KHR_materials_dispersion` material
-/// renders without its dispersion, a `KHR_materials_unlit` material lit.
 /// The most mesh instances a scene may have: a TLAS instance's custom index has 24 bits.
 const MAX_INSTANCES: usize = (1 << 24) - 1;
 
+/// glTF extensions lanterna reads. A file may use others without requiring them (a
+/// required one it does not know is refused when the file is parsed); their data is then
+/// ignored, which a user should hear about: a `KHR_materials_unlit` material renders
+/// lit.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "EXT_mesh_gpu_instancing",
     "EXT_meshopt_compression",
@@ -915,6 +915,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",
     "KHR_materials_diffuse_transmission",
+    "KHR_materials_dispersion",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_iridescence",
@@ -981,8 +982,8 @@ fn content_hash(scene: &Scene) -> String {
     eat(bytemuck::cast_slice(&scene.indices));
     // Materials up to their transmission fields, which count only where a material
     // transmits (specularly or diffusely: the volume's absorption is among them), and the
-    // coat's, the sheen's, the anisotropy's and the diffuse transmission's, which count
-    // only where it has one (scenes without keep their hashes, as for vertex colours).
+    // coat's, the sheen's, the anisotropy's, the diffuse transmission's, the thin film's
+    // and the dispersion's, which count only where it has one (scenes without keep their hashes, as for vertex colours).
     let opaque_part = std::mem::offset_of!(crate::gpu::Material, transmission);
     let coat_part = std::mem::offset_of!(crate::gpu::Material, clearcoat);
     let sheen_part = std::mem::offset_of!(crate::gpu::Material, sheen_color);
@@ -990,6 +991,7 @@ fn content_hash(scene: &Scene) -> String {
     let diffuse_transmission_part =
         std::mem::offset_of!(crate::gpu::Material, diffuse_transmission);
     let iridescence_part = std::mem::offset_of!(crate::gpu::Material, iridescence);
+    let dispersion_part = std::mem::offset_of!(crate::gpu::Material, dispersion);
     for m in &scene.materials {
         let bytes = bytemuck::bytes_of(m);
         eat(&bytes[..opaque_part]);
@@ -1009,7 +1011,10 @@ fn content_hash(scene: &Scene) -> String {
             eat(&bytes[diffuse_transmission_part..iridescence_part]);
         }
         if m.iridescence > 0.0 {
-            eat(&bytes[iridescence_part..]);
+            eat(&bytes[iridescence_part..dispersion_part]);
+        }
+        if m.dispersion > 0.0 {
+            eat(&bytes[dispersion_part..]);
         }
     }
     for i in &scene.instances {

@@ -28,6 +28,9 @@ pub struct SceneStats {
     pub diffuse_transmission_materials: u64,
     /// Materials with a thin film (KHR_materials_iridescence, factor above 0).
     pub iridescent_materials: u64,
+    /// Solids whose boundary disperses (KHR_materials_dispersion above 0 on a material
+    /// that bounds a solid).
+    pub dispersive_materials: u64,
     /// Every material in use is Lambertian (`Scene::only_lambertian`): the kernels take
     /// that lobe alone.
     pub only_lambertian: bool,
@@ -126,6 +129,11 @@ impl SceneStats {
                 .iter()
                 .filter(|m| m.iridescence > 0.0)
                 .count() as u64,
+            dispersive_materials: scene
+                .materials
+                .iter()
+                .filter(|m| m.dispersion > 0.0 && super::bounds_solid(m))
+                .count() as u64,
             only_lambertian: scene.only_lambertian(),
             textures: scene.textures.len() as u64,
             cameras: scene.cameras.len() as u64,
@@ -186,6 +194,9 @@ impl fmt::Display for SceneStats {
         }
         if self.iridescent_materials > 0 {
             kinds.push(format!("{} iridescent", self.iridescent_materials));
+        }
+        if self.dispersive_materials > 0 {
+            kinds.push(format!("{} dispersive", self.dispersive_materials));
         }
         if self.only_lambertian {
             kinds.push("every one in use Lambertian".into());

@@ -196,10 +196,13 @@ impl Writer<'_> {
         }
         let transmits = mat.transmission > 0.0 && mat.metallic < 1.0;
         let solid = transmits && is_solid(&mat);
+        // A constant transmittance, which a dispersive interface splits by channel.
+        let constant = (!vertex_colors && mat.base_color_tex.index < 0)
+            .then(|| std::array::from_fn(|c| mat.base_color[c].clamp(0.0, 1.0)));
         let share = (1.0 - mat.metallic) * mat.transmission.min(1.0);
         if solid && share >= 1.0 {
             // Clear or tinted glass through and through: exactly `roughdielectric`.
-            s.push_str(&self.solid_glass_xml(m, &mat, &colour, Some(&id)));
+            s.push_str(&self.solid_glass_xml(m, &mat, &colour, constant, Some(&id)));
             return Ok(s);
         }
         if transmits {
@@ -312,7 +315,7 @@ impl Writer<'_> {
                     "material `{name}`: a solid whose interface takes only part of the material (metallic {}, transmission {}) as a blend of `roughdielectric` with the opaque part",
                     mat.metallic, mat.transmission
                 ));
-                s.push_str(&self.solid_glass_xml(m, &mat, &colour, None));
+                s.push_str(&self.solid_glass_xml(m, &mat, &colour, constant, None));
             } else {
                 s.push_str(&self.thin_glass_xml(m, &mat, &colour));
             }
@@ -327,11 +330,18 @@ impl Writer<'_> {
     /// take from the winding), transmittance the base colour. The same model as
     /// lanterna's (exact Fresnel, separable Smith, 1/η² for radiance).
     /// `id`: the BSDF's own id when it stands alone (not inside a blend).
+    ///
+    /// A dispersive interface (KHR_materials_dispersion) is lanterna's three interfaces,
+    /// one per channel, as an equal `blendbsdf` mixture of three `roughdielectric`s, each
+    /// at its channel's index and passing only its channel, three times over (the
+    /// mixture's weight of 1/3 brings it back): exact where the transmittance is
+    /// `constant`; a textured or per-vertex one keeps one index (approximate).
     fn solid_glass_xml(
         &mut self,
         m: u32,
         mat: &gpu::Material,
         colour: &str,
+        constant: Option<[f32; 3]>,
         id: Option<&str>,
     ) -> String {
         let name = self.material_name(m).to_string();
@@ -345,20 +355,59 @@ impl Writer<'_> {
                 "material `{name}`: metallic-roughness texture not exported (factors used)"
             ));
         }
-        // Mitsuba refuses equal indices; 1.0001 bends light by nothing visible.
-        let ior = mat.ior.max(1.0001);
         let alpha = (mat.roughness * mat.roughness).max(gpu::MIN_GGX_ALPHA);
-        let mut s = match id {
-            Some(id) => format!("    <bsdf type=\"roughdielectric\" id=\"{id}\">\n"),
-            None => "    <bsdf type=\"roughdielectric\">\n".to_string(),
+        let open = |id: Option<&str>, kind: &str| match id {
+            Some(id) => format!("    <bsdf type=\"{kind}\" id=\"{id}\">\n"),
+            None => format!("    <bsdf type=\"{kind}\">\n"),
         };
-        s.push_str("      <string name=\"distribution\" value=\"ggx\"/>\n");
-        let _ = writeln!(s, "      <float name=\"alpha\" value=\"{alpha}\"/>");
-        let _ = writeln!(s, "      <float name=\"int_ior\" value=\"{ior}\"/>");
-        s.push_str("      <float name=\"ext_ior\" value=\"1\"/>\n");
-        s.push_str("      <boolean name=\"sample_visible\" value=\"true\"/>\n");
-        s.push_str(&colour.replace("\"reflectance\"", "\"specular_transmittance\""));
-        s.push_str("    </bsdf>\n");
+        // One interface of index `ior`, its reflectance and transmittance given as XML.
+        let interface = |ior: f32, id: Option<&str>, weights: &str| {
+            // Mitsuba refuses equal indices; 1.0001 bends light by nothing visible.
+            let ior = ior.max(1.0001);
+            let mut s = open(id, "roughdielectric");
+            s.push_str("      <string name=\"distribution\" value=\"ggx\"/>\n");
+            let _ = writeln!(s, "      <float name=\"alpha\" value=\"{alpha}\"/>");
+            let _ = writeln!(s, "      <float name=\"int_ior\" value=\"{ior}\"/>");
+            s.push_str("      <float name=\"ext_ior\" value=\"1\"/>\n");
+            s.push_str("      <boolean name=\"sample_visible\" value=\"true\"/>\n");
+            s.push_str(weights);
+            s.push_str("    </bsdf>\n");
+            s
+        };
+        let plain = colour.replace("\"reflectance\"", "\"specular_transmittance\"");
+        if mat.dispersion <= 0.0 {
+            return interface(mat.ior, id, &plain);
+        }
+        let Some(base) = constant else {
+            self.approximations.push(format!(
+                "material `{name}`: its dispersion ({}) is left out: the transmittance is textured or per vertex (one index for every channel)",
+                mat.dispersion
+            ));
+            return interface(mat.ior, id, &plain);
+        };
+        // Mitsuba's reflectances are clamped to 1 unless `unbounded`.
+        let unbounded = |param: &str, c: [f32; 3]| {
+            format!(
+                "      <texture type=\"srgb\" name=\"{param}\">\n        {}\n        <boolean name=\"unbounded\" value=\"true\"/>\n      </texture>\n",
+                rgb_xml("color", c)
+            )
+        };
+        let etas = crate::scene::dispersion_iors(mat.ior, mat.dispersion);
+        let channel = |k: usize| {
+            let only = |v: f32| std::array::from_fn(|c| if c == k { 3.0 * v } else { 0.0 });
+            let weights = unbounded("specular_reflectance", only(1.0))
+                + &unbounded("specular_transmittance", only(base[k]));
+            interface(etas[k], None, &weights)
+        };
+        // blend(2/3: red | blend(1/2: green | blue)): each a third.
+        let mut s = open(id, "blendbsdf");
+        s.push_str("      <float name=\"weight\" value=\"0.6666667\"/>\n");
+        s.push_str(&channel(0));
+        s.push_str(&open(None, "blendbsdf"));
+        s.push_str("      <float name=\"weight\" value=\"0.5\"/>\n");
+        s.push_str(&channel(1));
+        s.push_str(&channel(2));
+        s.push_str("    </bsdf>\n    </bsdf>\n");
         s
     }
 

@@ -61,6 +61,9 @@ agree up to noise.
   solid.gltf      KHR_materials_volume: a smooth clear glass box (index 1.5) and a rough
                   absorbing ball (index 1.33, attenuation) around a small lamp (exact
                   against Mitsuba's roughdielectric and an interior homogeneous medium)
+  dispersion.gltf  KHR_materials_dispersion: a smooth box of index 1.6 at dispersion 4
+                  and a rough amber ball at 1.5 and 2 under a ceiling lamp and beside a
+                  wall lamp (exact against three roughdielectrics, one per channel)
   solid_pane.gltf  an absorbing glass box and a thin amber pane under a ceiling lamp: the
                   export needs `volpath` for the box, which would not count passes through
                   a `thindielectric` pane as bounces, so the pane must go out as a dielectric
@@ -248,20 +251,25 @@ class Builder:
         self.uses("KHR_materials_transmission")
         return len(self.materials) - 1
 
-    def solid_glass(self, rgb, roughness, ior, attenuation=None):
+    def solid_glass(self, rgb, roughness, ior, attenuation=None, dispersion=None):
         """The boundary of a glass solid (KHR_materials_volume, thickness > 0):
-        `attenuation` = (colour, distance) makes it absorb."""
+        `attenuation` = (colour, distance) makes it absorb, `dispersion` (20 / Abbe
+        number) spreads its index over the colour channels."""
         volume = {"thicknessFactor": 0.1}
         if attenuation:
             volume.update(attenuationColor=list(attenuation[0]),
                           attenuationDistance=attenuation[1])
+        extensions = {"KHR_materials_transmission": {"transmissionFactor": 1},
+                      "KHR_materials_ior": {"ior": ior},
+                      "KHR_materials_volume": volume}
+        self.uses("KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_volume")
+        if dispersion is not None:
+            extensions["KHR_materials_dispersion"] = {"dispersion": dispersion}
+            self.uses("KHR_materials_dispersion")
         self.materials.append({
             "pbrMetallicRoughness": {"baseColorFactor": list(rgb) + [1], "metallicFactor": 0,
                                      "roughnessFactor": roughness},
-            "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1},
-                           "KHR_materials_ior": {"ior": ior},
-                           "KHR_materials_volume": volume}})
-        self.uses("KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_volume")
+            "extensions": extensions})
         return len(self.materials) - 1
 
     # The extensions write() lists in every file.
@@ -905,6 +913,69 @@ def solid_scene():
     b.write("solid.gltf")
 
 
+def prism_geometry(apex, base_dir, side_dir, side, y0, y1):
+    """An upright triangular prism from y0 to y1: its cross-section an equilateral
+    triangle of side `side` with its apex at `apex` (x, z) and its base toward the unit
+    vector `base_dir` (x, z), `side_dir` along the base; outward faces, flat normals."""
+    h = side * math.sqrt(3) / 2
+    mid = (apex[0] + h * base_dir[0], apex[1] + h * base_dir[1])
+    corners = [apex,
+               (mid[0] + side / 2 * side_dir[0], mid[1] + side / 2 * side_dir[1]),
+               (mid[0] - side / 2 * side_dir[0], mid[1] - side / 2 * side_dir[1])]
+    centre = [sum(c[i] for c in corners) / 3 for i in range(2)]
+    centre = (centre[0], (y0 + y1) / 2, centre[1])
+    faces = [[(x, y0, z) for x, z in corners], [(x, y1, z) for x, z in corners]]
+    for i in range(3):
+        (ax, az), (bx, bz) = corners[i], corners[(i + 1) % 3]
+        faces.append([(ax, y0, az), (bx, y0, bz), (bx, y1, bz), (ax, y1, az)])
+    pos, nrm, idx = [], [], []
+    for f in faces:
+        e1 = [f[1][k] - f[0][k] for k in range(3)]
+        e2 = [f[2][k] - f[0][k] for k in range(3)]
+        n = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+             e1[0] * e2[1] - e1[1] * e2[0]]
+        if sum(n[k] * (f[0][k] - centre[k]) for k in range(3)) < 0:
+            f, n = f[::-1], [-v for v in n]
+        ln = math.sqrt(sum(v * v for v in n))
+        base = len(pos)
+        pos += f
+        nrm += [[v / ln for v in n]] * len(f)
+        idx += [base + k for k in ([0, 1, 2] if len(f) == 3 else [0, 1, 2, 0, 2, 3])]
+    return pos, nrm, idx
+
+
+def dispersion_scene():
+    """Dispersive glass solids (KHR_materials_dispersion): a smooth 60° prism of index
+    1.6 at dispersion 8 (Abbe number 2.5, red 1.48 to blue 1.72: far stronger than any
+    glass), through which the camera sees a narrow upright lamp, out of view on the left,
+    spread into its colours (red and blue some 20° apart), and which throws the lamp's
+    spectrum on the floor; and a rough, slightly amber ball of index 1.5 at dispersion 2
+    under a ceiling lamp."""
+    b = Builder()
+    grey = b.lambert((0.6, 0.6, 0.6))
+    floor_and_wall(b, grey)
+    ceiling_lamp(b)
+    strip = b.lambert((0, 0, 0), emission=(1, 1, 1), strength=40)
+    b.node(mesh=b.quad((-1.8, 0.2, 2.02), (-1.8, 0.2, 1.98), (-1.8, 1.4, 1.98),
+                       (-1.8, 1.4, 2.02), strip, uv=False))
+    flint = b.solid_glass((1, 1, 1), 0.0, 1.6, dispersion=8.0)
+    # The rays through it run at a heading of about 33° left of −z: the base lies
+    # across them, toward the left (the way they bend).
+    h = math.radians(33.5)
+    along, base_dir = (-math.sin(h), -math.cos(h)), (-math.cos(h), math.sin(h))
+    apex = (0.02 - 0.29 * base_dir[0], 1.8 - 0.29 * base_dir[1])
+    pos, nrm, idx = prism_geometry(apex, base_dir, along, 0.5, 0.0, 1.1)
+    b.node(mesh=b.mesh(pos, idx, flint, nrm))
+    pos, idx = sphere_geometry(rings=8, segs=16)
+    frosted = b.solid_glass((1, 0.9, 0.75), 0.35, 1.5, dispersion=2.0)
+    b.node(mesh=b.mesh(pos, idx, frosted), translation=[0.7, 0.45, -0.3],
+           scale=[0.45, 0.45, 0.45])
+    eye = (0.3, 1.3, 3.4)
+    b.node(camera=b.camera(yfov=0.8, aspect=4 / 3), translation=list(eye),
+           rotation=look_at_rotation(eye, (0.0, 0.5, -0.2)))
+    b.write("dispersion.gltf")
+
+
 def solid_pane_scene():
     b = Builder()
     grey = b.lambert((0.6, 0.6, 0.6))
@@ -1120,6 +1191,7 @@ if __name__ == "__main__":
     quantized_scene()
     glass_scene()
     solid_scene()
+    dispersion_scene()
     solid_pane_scene()
     coat_sheen_scene()
     normal_map_scene()
