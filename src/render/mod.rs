@@ -315,10 +315,7 @@ impl Renderer {
                 .any(|m| m.anisotropy_strength > 0.0 && !crate::scene::is_lambertian(m)),
             has_diffuse_transmission: scene.materials.iter().any(|m| m.diffuse_transmission > 0.0),
             has_iridescence: scene.materials.iter().any(|m| m.iridescence > 0.0),
-            has_dispersion: scene
-                .materials
-                .iter()
-                .any(|m| m.dispersion > 0.0 && crate::scene::bounds_solid(m)),
+            has_dispersion: scene.materials.iter().any(crate::scene::disperses),
             only_lambertian: scene.only_lambertian(),
             guide,
             reuse_cells,

@@ -983,7 +983,8 @@ fn content_hash(scene: &Scene) -> String {
     // Materials up to their transmission fields, which count only where a material
     // transmits (specularly or diffusely: the volume's absorption is among them), and the
     // coat's, the sheen's, the anisotropy's, the diffuse transmission's, the thin film's
-    // and the dispersion's, which count only where it has one (scenes without keep their hashes, as for vertex colours).
+    // and the dispersion's, which count only where it has one (scenes without keep their
+    // hashes, as for vertex colours).
     let opaque_part = std::mem::offset_of!(crate::gpu::Material, transmission);
     let coat_part = std::mem::offset_of!(crate::gpu::Material, clearcoat);
     let sheen_part = std::mem::offset_of!(crate::gpu::Material, sheen_color);

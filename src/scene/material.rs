@@ -709,6 +709,12 @@ pub fn bounds_solid(m: &gpu::Material) -> bool {
         && m.flags & gpu::MATERIAL_FLAG_VOLUME != 0
 }
 
+/// Whether a material's dispersion acts: KHR_materials_dispersion above 0 on a material
+/// that bounds a solid (the kernels' DISPERSION constant, `lanterna info`).
+pub fn disperses(m: &gpu::Material) -> bool {
+    m.dispersion > 0.0 && bounds_solid(m)
+}
+
 /// Whether a material's BSDF is the Lambertian lobe alone, whatever its textures: no
 /// metal (the factor, which its texture only scales, at 0), no specular lobe
 /// (KHR_materials_specular's factor 0, which takes the dielectric's F0 and F90 to 0), no

@@ -22,7 +22,7 @@ mod texture;
 
 pub use camera::{Camera, CameraOverride, ClipPlanes, Projection};
 pub use load::LoadOptions;
-pub use material::{bounds_solid, dispersion_iors, is_lambertian};
+pub use material::{bounds_solid, disperses, dispersion_iors, is_lambertian};
 pub use stats::SceneStats;
 pub use texture::{TextureData, TextureKey};
 

@@ -132,7 +132,7 @@ impl SceneStats {
             dispersive_materials: scene
                 .materials
                 .iter()
-                .filter(|m| m.dispersion > 0.0 && super::bounds_solid(m))
+                .filter(|m| super::disperses(m))
                 .count() as u64,
             only_lambertian: scene.only_lambertian(),
             textures: scene.textures.len() as u64,
