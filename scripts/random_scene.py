@@ -64,6 +64,10 @@ a third with KHR_materials_sheen (factors only), which `mitsuba_compare.py --glt
 renders exactly through the glTF BSDF plugin and its layers. Not with `--materials`
 there.
 
+`--dispersion` (with `--materials`) gives about two thirds of the solid glass boxes
+KHR_materials_dispersion (0.5-8: Abbe numbers 40 down to 2.5), which the export writes
+exactly as three `roughdielectric`s, one per colour channel.
+
 `--alpha` makes about half of the opaque non-emissive Lambertian materials BLEND (alpha
 0.2-0.9) or MASK (a nearest RGBA texture where the mesh has UVs, else a constant alpha
 either side of the cutoff), which the export writes exactly as Mitsuba's `mask` under
@@ -324,9 +328,23 @@ def add_layers(s, seed):
     return count
 
 
+def add_dispersion(s, seed):
+    """KHR_materials_dispersion (0.5-8) on about two thirds of the solid glass materials,
+    drawn from a generator of their own, so that the scene is otherwise the seed's."""
+    r = random.Random(seed + 7_000_003)
+    used = sorted({prim["material"] for mesh in s.meshes for prim in mesh["primitives"]})
+    count = 0
+    for m in (s.materials[i] for i in used):
+        ext = m.get("extensions", {})
+        if "KHR_materials_volume" in ext and r.random() < 2 / 3:
+            ext["KHR_materials_dispersion"] = {"dispersion": r.uniform(0.5, 8.0)}
+            count += 1
+    return listed_if_used(s, "KHR_materials_dispersion", count)
+
+
 def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=False,
              anisotropy=False, diffuse_transmission=False, iridescence=False,
-             layers=False):
+             layers=False, dispersion=False):
     r = random.Random(seed)
     s = Builder()
     rgb = lambda lo, hi: [r.uniform(lo, hi) for _ in range(3)]  # noqa: E731
@@ -431,6 +449,8 @@ def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=Fa
         kinds.append(f"{add_iridescence(s, seed)} iridescent materials")
     if layers:
         kinds.append(f"{add_layers(s, seed)} glossy layered materials")
+    if dispersion:
+        kinds.append(f"{add_dispersion(s, seed)} dispersive glass materials")
     return s, kinds
 
 
@@ -461,11 +481,15 @@ def main():
     ap.add_argument("--layers", action="store_true",
                     help="glossy metals and plastics with specular, ior, clearcoat and sheen "
                     "on about half of the opaque Lambertian materials")
+    ap.add_argument("--dispersion", action="store_true",
+                    help="dispersion on about two thirds of the solid glass boxes "
+                    "(with --materials)")
     ap.add_argument("--two-sided-boxes", action="store_true",
                     help="let emissive boxes be two-sided too (Mitsuba's references leak there)")
     a = ap.parse_args()
     scene, kinds = generate(a.seed, a.two_sided_boxes, a.materials, a.normal_maps, a.alpha,
-                            a.anisotropy, a.diffuse_transmission, a.iridescence, a.layers)
+                            a.anisotropy, a.diffuse_transmission, a.iridescence, a.layers,
+                            a.dispersion)
     scene.write(os.path.abspath(a.output))  # an absolute name: not next to make_scenes.py
     print(f"{a.output}: {', '.join(kinds)}")
     return 0
