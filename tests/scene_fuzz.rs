@@ -14,7 +14,7 @@
 //! accessors of a float type (2 cases), and 12 more cases load wrong geometry silently.
 
 use lanterna::scene::generate::{generate, Kind, Options};
-use lanterna::scene::{LoadOptions, Scene};
+use lanterna::scene::{LoadOptions, Pose, Scene};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -79,6 +79,7 @@ fn seeds(scratch: &Path) -> Vec<Seed> {
         read_seed(&root.join("scenes/cornell-lights.gltf")),
         read_seed(&root.join("scenes/street.gltf")),
     ];
+    seeds.push(animated(&seeds[0]));
     for kind in [
         Kind::Furnace,
         Kind::PlaneQuad,
@@ -91,6 +92,87 @@ fn seeds(scratch: &Path) -> Vec<Seed> {
         seeds.push(read_seed(&path));
     }
     seeds
+}
+
+/// `cornell-lights` with an animation of its blockers and camera (translation LINEAR,
+/// rotation CUBICSPLINE, scale STEP) in a second, data-URI buffer, for the cases that
+/// pose the scene (`--animation-time`).
+fn animated(cornell: &Seed) -> Seed {
+    use base64::Engine as _;
+    let floats: Vec<f32> = [
+        &[0.0, 0.5, 1.0][..],
+        &[0., 0., 0., 0.1, 0.2, 0., 0., 0.3, 0.][..],
+        &[0., 0., 0., 0., 0., 0., 0., 1., 0., 0.1, 0., 0.][..],
+        &[0., 0., 0., 0., 0., 0.38, 0., 0.92, 0., 0., 0., 0.][..],
+        &[0., 0., 0., 0., 0., 0., 0., 1., 0., 0.1, 0., 0.][..],
+        &[1., 1., 1., 1.2, 0.8, 1., 1., 1., 1.][..],
+    ]
+    .concat();
+    let bytes: Vec<u8> = floats.iter().flat_map(|x| x.to_le_bytes()).collect();
+    let mut json = cornell.json.clone();
+    let buffer = json["buffers"].as_array().unwrap().len();
+    json["buffers"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({
+            "byteLength": bytes.len(),
+            "uri": format!("data:application/octet-stream;base64,{}",
+                base64::engine::general_purpose::STANDARD.encode(&bytes)),
+        }));
+    let accessors = json["accessors"].as_array().unwrap().len();
+    for (offset, length, count, ty) in [
+        (0, 12, 3, "SCALAR"),
+        (12, 36, 3, "VEC3"),
+        (48, 144, 9, "VEC4"),
+        (192, 36, 3, "VEC3"),
+    ] {
+        let view = json["bufferViews"].as_array().unwrap().len();
+        json["bufferViews"]
+            .as_array_mut()
+            .unwrap()
+            .push(serde_json::json!(
+            {"buffer": buffer, "byteOffset": offset, "byteLength": length}));
+        json["accessors"]
+            .as_array_mut()
+            .unwrap()
+            .push(serde_json::json!(
+            {"bufferView": view, "componentType": 5126, "count": count, "type": ty,
+             "min": if ty == "SCALAR" { serde_json::json!([0.0]) } else { Value::Null },
+             "max": if ty == "SCALAR" { serde_json::json!([1.0]) } else { Value::Null }}));
+    }
+    for a in json["accessors"].as_array_mut().unwrap() {
+        if let Some(o) = a.as_object_mut() {
+            o.retain(|_, v| !v.is_null());
+        }
+    }
+    let camera = json["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|n| n.get("camera").is_some())
+        .unwrap();
+    let input = accessors;
+    json["animations"] = serde_json::json!([{
+        "name": "move",
+        "samplers": [
+            {"input": input, "output": input + 1},
+            {"input": input, "output": input + 2, "interpolation": "CUBICSPLINE"},
+            {"input": input, "output": input + 3, "interpolation": "STEP"}
+        ],
+        "channels": [
+            {"sampler": 0, "target": {"node": 1, "path": "translation"}},
+            {"sampler": 1, "target": {"node": 1, "path": "rotation"}},
+            {"sampler": 2, "target": {"node": 1, "path": "scale"}},
+            {"sampler": 0, "target": {"node": camera, "path": "translation"}}
+        ]
+    }]);
+    Seed {
+        name: "cornell-lights, animated".into(),
+        json,
+        bin_name: cornell.bin_name.clone(),
+        bin: cornell.bin.clone(),
+        others: Vec::new(),
+    }
 }
 
 /// Values that have broken parsers before: boundaries of the integer types, huge and
@@ -327,9 +409,10 @@ enum Outcome {
     Panicked(String),
 }
 
-fn load_case(path: &Path, allow_outside: bool) -> Outcome {
+fn load_case(path: &Path, allow_outside: bool, pose: Option<Pose>) -> Outcome {
     let options = LoadOptions {
         allow_outside_uris: allow_outside,
+        pose,
     };
     IN_LOAD.with(|f| f.set(true));
     let result = std::panic::catch_unwind(|| Scene::load(path, &options));
@@ -418,7 +501,13 @@ fn mutated_scenes_load_or_fail_without_panicking() {
             std::fs::write(&p, &text).unwrap();
             p
         };
-        match load_case(&path, rng.chance(0.1)) {
+        // Half the cases pose the file's animations, at a time inside or outside their
+        // keys, all of them or one by index.
+        let pose = rng.chance(0.5).then(|| Pose {
+            time: [-1.0, 0.0, 0.25, 0.5, 0.99, 1.0, 1e30][rng.below(7)],
+            animation: rng.chance(0.2).then(|| rng.below(2).to_string()),
+        });
+        match load_case(&path, rng.chance(0.1), pose) {
             Outcome::Loaded => loaded += 1,
             Outcome::Refused => refused += 1,
             Outcome::Panicked(message) => {

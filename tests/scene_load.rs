@@ -2212,3 +2212,350 @@ fn camera_rays_honour_the_clip_planes() {
         }
     }
 }
+
+/// A file with three animations, built here so every keyframe is known: animation 0
+/// (`move`) moves a morphing quad (translation LINEAR, rotation STEP, scale CUBICSPLINE,
+/// morph weights LINEAR) and turns an arm (rotation LINEAR, a slerp) that carries a
+/// point light; animations 1 and 2 both move the camera (STEP), so playing all of them
+/// must keep 1's channel and warn about 2's.
+fn animated_scene(dir: &Path) -> (PathBuf, serde_json::Value) {
+    use base64::Engine as _;
+    let mut bin: Vec<u8> = Vec::new();
+    let mut views = Vec::new();
+    let mut accessors = Vec::new();
+    // Appends `data` as one accessor of `count` elements of `ty`; returns its index.
+    let mut add = |data: &[f32], ty: &str, count: usize, bounds: bool| -> usize {
+        let offset = bin.len();
+        data.iter()
+            .for_each(|x| bin.extend_from_slice(&x.to_le_bytes()));
+        views.push(
+            serde_json::json!({"buffer": 0, "byteOffset": offset, "byteLength": 4 * data.len()}),
+        );
+        let mut accessor = serde_json::json!({"bufferView": views.len() - 1,
+            "componentType": 5126, "count": count, "type": ty});
+        if bounds {
+            let lo = data.iter().copied().fold(f32::INFINITY, f32::min);
+            let hi = data.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+            accessor["min"] = serde_json::json!([lo]);
+            accessor["max"] = serde_json::json!([hi]);
+        }
+        accessors.push(accessor);
+        accessors.len() - 1
+    };
+    let s = std::f32::consts::FRAC_1_SQRT_2;
+    let positions = add(
+        &[0., 0., 0., 1., 0., 0., 1., 1., 0., 0., 1., 0.],
+        "VEC3",
+        4,
+        false,
+    );
+    let target = add(
+        &[0., 0., 0., 0., 0., 0., 0., 1., 0., 0., 0., 0.],
+        "VEC3",
+        4,
+        false,
+    );
+    let t02 = add(&[0., 2.], "SCALAR", 2, true);
+    let t01 = add(&[0., 1.], "SCALAR", 2, true);
+    let translation = add(&[0., 0., 0., 4., 0., 0.], "VEC3", 2, false);
+    let turn_z = add(&[0., 0., 0., 1., 0., 0., s, s], "VEC4", 2, false);
+    // σ(t) = 1 + t/4 + t³/16 on [0, 2]: values 1 and 2, tangents (per second) 0.25 out of
+    // the first key and 1 into the second; the tangents outside the interval (7, −7)
+    // must not matter.
+    #[rustfmt::skip]
+    let scale = add(&[7., 7., 7., 1., 1., 1., 0.25, 0.25, 0.25,
+                      1., 1., 1., 2., 2., 2., -7., -7., -7.], "VEC3", 6, false);
+    let weights = add(&[0., 1.], "SCALAR", 2, false);
+    let turn_y = add(&[0., 0., 0., 1., 0., s, 0., s], "VEC4", 2, false);
+    let camera_z = add(&[0., 0., 5., 0., 0., 7.], "VEC3", 2, false);
+    let camera_far = add(&[0., 0., 9.], "VEC3", 1, false);
+    let t0 = add(&[0.], "SCALAR", 1, true);
+    // Not used by the file as written: keyframe times that do not increase.
+    add(&[1., 1.], "SCALAR", 2, true);
+    // A skinned triangle whose one joint is the arm: it turns with the lamp.
+    let skin_positions = add(&[0., 0., 1., 1., 0., 1., 0., 1., 1.], "VEC3", 3, false);
+    let skin_weights = add(&[1., 0., 0., 0.].repeat(3), "VEC4", 3, false);
+    let joints = bin.len();
+    bin.extend_from_slice(&[0u8; 12]);
+    views.push(serde_json::json!({"buffer": 0, "byteOffset": joints, "byteLength": 12}));
+    accessors.push(
+        serde_json::json!({"bufferView": views.len() - 1, "componentType": 5121,
+        "count": 3, "type": "VEC4"}),
+    );
+    let skin_joints = accessors.len() - 1;
+    let indices = bin.len();
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    views.push(serde_json::json!({"buffer": 0, "byteOffset": indices, "byteLength": 12}));
+    accessors.push(
+        serde_json::json!({"bufferView": views.len() - 1, "componentType": 5123,
+        "count": 6, "type": "SCALAR"}),
+    );
+    let index_accessor = accessors.len() - 1;
+    accessors[positions]["min"] = serde_json::json!([0, 0, 0]);
+    accessors[positions]["max"] = serde_json::json!([1, 1, 0]);
+    accessors[skin_positions]["min"] = serde_json::json!([0, 0, 1]);
+    accessors[skin_positions]["max"] = serde_json::json!([1, 1, 1]);
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bin)
+    );
+    let sampler = |input: usize, output: usize, interpolation: &str| serde_json::json!({"input": input, "output": output, "interpolation": interpolation});
+    let channel = |sampler: usize, node: usize, path: &str| serde_json::json!({"sampler": sampler, "target": {"node": node, "path": path}});
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 10}]}},
+        "buffers": [{"uri": uri, "byteLength": bin.len()}],
+        "bufferViews": views,
+        "accessors": accessors,
+        "materials": [{"emissiveFactor": [1, 1, 1], "doubleSided": true}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": positions}, "indices": index_accessor,
+                                    "material": 0, "targets": [{"POSITION": target}]}],
+                    "weights": [0.0]},
+                   {"primitives": [{"attributes": {"POSITION": skin_positions, "JOINTS_0": skin_joints,
+                                                   "WEIGHTS_0": skin_weights}, "material": 0}]}],
+        "skins": [{"joints": [1]}],
+        "nodes": [
+            {"name": "quad", "mesh": 0},
+            {"name": "arm", "children": [2]},
+            {"name": "lamp", "translation": [1, 0, 0], "extensions": {"KHR_lights_punctual": {"light": 0}}},
+            {"name": "eye", "camera": 0, "translation": [0, 0, 3]},
+            {"name": "skinned", "mesh": 1, "skin": 0}
+        ],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}],
+        "animations": [
+            {"name": "move",
+             "samplers": [sampler(t02, translation, "LINEAR"), sampler(t01, turn_z, "STEP"),
+                          sampler(t02, scale, "CUBICSPLINE"), sampler(t02, weights, "LINEAR"),
+                          sampler(t02, turn_y, "LINEAR")],
+             "channels": [channel(0, 0, "translation"), channel(1, 0, "rotation"),
+                          channel(2, 0, "scale"), channel(3, 0, "weights"),
+                          channel(4, 1, "rotation")]},
+            {"name": "dolly", "samplers": [sampler(t01, camera_z, "STEP")],
+             "channels": [channel(0, 3, "translation")]},
+            {"name": "far", "samplers": [sampler(t0, camera_far, "LINEAR")],
+             "channels": [channel(0, 3, "translation")]}
+        ],
+        "scenes": [{"nodes": [0, 1, 3, 4]}],
+        "scene": 0
+    });
+    let path = dir.join("animated.gltf");
+    std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
+    (path, json)
+}
+
+/// `--animation-time` poses nodes, morph weights, skins, cameras and lights from the file's
+/// animations by the glTF spec's interpolation rules, worked out by hand here: the quad
+/// at time t sits at T(2t, 0, 0)·R·S(σ) with R the identity before t = 1 and 90° about z
+/// from then on (STEP), σ = 1 + t/4 + t³/16 (the CUBICSPLINE through its keys' values
+/// and tangents), and its third vertex raised by the morph weight t/2; the lamp on the
+/// arm, and a triangle skinned to the arm, turn by 45°·t about y (a slerp); keys hold
+/// before the first and after the last; one animation can be played alone. Seen to
+/// fail with the CUBICSPLINE's out-tangent read from the in-tangent's place, with its
+/// tangents not scaled by the key interval, with STEP interpolating, with the rotation
+/// lerped instead of slerped, with the animated weights ignored, and with skins' joints
+/// left at the static pose.
+#[test]
+fn animations_pose_nodes_cameras_lights_and_weights_at_a_time() {
+    use glam::{Mat4, Quat, Vec3};
+    let dir = tempfile::tempdir().unwrap();
+    let (path, json) = animated_scene(dir.path());
+    let posed = |time: f32, animation: Option<&str>| {
+        let options = lanterna::scene::LoadOptions {
+            pose: Some(lanterna::scene::Pose {
+                time,
+                animation: animation.map(str::to_string),
+            }),
+            ..Default::default()
+        };
+        Scene::load(&path, &options).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let vertices = |scene: &Scene, node: &str| -> Vec<Vec3> {
+        let inst = scene
+            .instances
+            .iter()
+            .find(|i| i.node_name.contains(node))
+            .unwrap();
+        let p = &scene.primitives[inst.primitive as usize];
+        scene.vertices[p.vertex_offset as usize..][..p.vertex_count as usize]
+            .iter()
+            .map(|v| inst.transform.transform_point3(Vec3::from(v.position)) + scene.origin)
+            .collect()
+    };
+    let expected_quad = |t: f32| -> Vec<Vec3> {
+        let t = t.clamp(0.0, 2.0);
+        let u = t / 2.0;
+        let sigma = 1.0 + t / 4.0 + t * t * t / 16.0;
+        let turn = if t < 1.0 {
+            Quat::IDENTITY
+        } else {
+            Quat::from_rotation_z(std::f32::consts::FRAC_PI_2)
+        };
+        let m = Mat4::from_scale_rotation_translation(
+            Vec3::splat(sigma),
+            turn,
+            Vec3::new(2.0 * t, 0.0, 0.0),
+        );
+        [[0., 0., 0.], [1., 0., 0.], [1., 1. + u, 0.], [0., 1., 0.]]
+            .iter()
+            .map(|&p| m.transform_point3(Vec3::from(p)))
+            .collect()
+    };
+    let close = |a: Vec3, b: Vec3, what: &str| {
+        assert!((a - b).length() < 1e-5, "{what}: {a} instead of {b}");
+    };
+    for t in [-1.0f32, 0.0, 0.5, 1.0, 1.5, 2.0, 7.0] {
+        let scene = posed(t, None);
+        for (k, (got, want)) in vertices(&scene, "quad")
+            .into_iter()
+            .zip(expected_quad(t))
+            .enumerate()
+        {
+            close(got, want, &format!("t = {t}: quad vertex {k}"));
+        }
+        let turned = Quat::from_rotation_y(std::f32::consts::FRAC_PI_4 * t.clamp(0.0, 2.0));
+        let lamp = Vec3::from(scene.punctual[0].position) + scene.origin;
+        close(lamp, turned * Vec3::X, &format!("t = {t}: lamp"));
+        let skinned = vertices(&scene, "skinned");
+        for (k, p) in [Vec3::Z, Vec3::new(1.0, 0.0, 1.0), Vec3::new(0.0, 1.0, 1.0)]
+            .iter()
+            .enumerate()
+        {
+            close(
+                skinned[k],
+                turned * *p,
+                &format!("t = {t}: skinned vertex {k}"),
+            );
+        }
+        let eye = scene.cameras[0].to_world.w_axis.truncate() + scene.origin;
+        let z = if t < 1.0 { 5.0 } else { 7.0 };
+        close(eye, Vec3::new(0.0, 0.0, z), &format!("t = {t}: camera"));
+    }
+    // One animation alone: `far` (by name or index) moves the camera and nothing else.
+    for which in ["far", "2"] {
+        let scene = posed(1.5, Some(which));
+        close(
+            scene.cameras[0].to_world.w_axis.truncate() + scene.origin,
+            Vec3::new(0.0, 0.0, 9.0),
+            &format!("--animation {which}: camera"),
+        );
+        close(
+            vertices(&scene, "quad")[2],
+            Vec3::new(1.0, 1.0, 0.0),
+            &format!("--animation {which}: quad"),
+        );
+    }
+    // Without a pose: the nodes' own transforms.
+    let scene = load(&path);
+    close(
+        scene.cameras[0].to_world.w_axis.truncate() + scene.origin,
+        Vec3::new(0.0, 0.0, 3.0),
+        "static camera",
+    );
+    // `lanterna info` lists the animations; the second mover of the camera is named.
+    let out = Command::new(env!("CARGO_BIN_EXE_lanterna"))
+        .args(["info", path.to_str().unwrap(), "--animation-time", "0.5"])
+        .output()
+        .unwrap();
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(out.status.success(), "{stderr}");
+    assert!(stdout.contains("0 (`move`): 0–2 s, 5 channels"), "{stdout}");
+    assert!(stderr.contains("animation 1's channel is used"), "{stderr}");
+    // A time that is not a number is refused before anything loads.
+    let (ok, err) = lanterna(&["info", path.to_str().unwrap(), "--animation-time", "nan"]);
+    assert!(
+        !ok && err.contains("not a finite number of seconds"),
+        "{err}"
+    );
+    // Bad animations and times are refused, naming what is wrong.
+    let load_error = |edit: &dyn Fn(&mut serde_json::Value), time: f32, animation: Option<&str>| {
+        let mut bad = json.clone();
+        edit(&mut bad);
+        let bad_path = dir.path().join("bad.gltf");
+        std::fs::write(&bad_path, serde_json::to_vec(&bad).unwrap()).unwrap();
+        let options = lanterna::scene::LoadOptions {
+            pose: Some(lanterna::scene::Pose {
+                time,
+                animation: animation.map(str::to_string),
+            }),
+            ..Default::default()
+        };
+        Scene::load(&bad_path, &options).unwrap_err().to_string()
+    };
+    let err = load_error(&|_| {}, 0.0, Some("walk"));
+    assert!(
+        err.contains(
+            "no animation matches `walk` (the file has 0 (`move`), 1 (`dolly`), 2 (`far`))"
+        ),
+        "{err}"
+    );
+    let err = load_error(
+        &|j| j["animations"][0]["samplers"][0]["input"] = serde_json::json!(12),
+        0.5,
+        None,
+    );
+    assert!(
+        err.contains("keyframe time 1 is 1, which is not finite or not after the one before"),
+        "{err}"
+    );
+    let err = load_error(
+        &|j| j["animations"][0]["samplers"][0]["input"] = serde_json::json!(11),
+        0.5,
+        None,
+    );
+    assert!(
+        err.contains("1 keyframe times but 2 output values"),
+        "{err}"
+    );
+    let err = load_error(
+        &|j| j["animations"][0]["samplers"][2]["interpolation"] = serde_json::json!("LINEAR"),
+        0.5,
+        None,
+    );
+    assert!(
+        err.contains("2 keyframe times but 6 output values"),
+        "{err}"
+    );
+    let err = load_error(
+        &|j| {
+            j["nodes"][0]["matrix"] =
+                serde_json::json!([2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 1])
+        },
+        0.5,
+        None,
+    );
+    assert!(err.contains("which has a matrix"), "{err}");
+    let err = load_error(
+        &|j| j["animations"][0]["channels"][1]["target"]["path"] = serde_json::json!("translation"),
+        0.5,
+        None,
+    );
+    assert!(
+        err.contains("a second channel for the translation of node `quad`"),
+        "{err}"
+    );
+    let err = load_error(
+        &|j| j["accessors"][3]["componentType"] = serde_json::json!(5123),
+        0.5,
+        None,
+    );
+    assert!(err.contains("keyframe times must be float SCALAR"), "{err}");
+    let err = load_error(
+        &|j| {
+            j["meshes"][0]["primitives"][0]
+                .as_object_mut()
+                .unwrap()
+                .remove("targets")
+                .map(|_| ())
+                .unwrap()
+        },
+        0.5,
+        None,
+    );
+    assert!(err.contains("whose mesh has no morph targets"), "{err}");
+}

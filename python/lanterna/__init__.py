@@ -61,6 +61,8 @@ def load_scene(
     look_at: Optional[Sequence[float]] = None,
     fov: Optional[float] = None,
     clip_planes: bool = True,
+    animation_time: Optional[float] = None,
+    animation: Union[str, int, None] = None,
 ) -> Scene:
     """Load a glTF 2.0 scene (.gltf or .glb) and its light table.
 
@@ -69,6 +71,9 @@ def load_scene(
         camera: the file's camera by index or name (default: the first), like ``--camera``.
         look_at: ``(ex, ey, ez, tx, ty, tz)``: view from eye to target instead, like ``--look-at``.
         fov: vertical field of view in degrees (overrides the camera's), like ``--fov``.
+        clip_planes: honour the file camera's znear/zfar (False: ``--no-clip-planes``).
+        animation_time: pose the file's animations at this time in seconds, like ``--animation-time``.
+        animation: play only this animation, by index or name, like ``--animation``.
 
     ``scene.info()`` returns the statistics of ``lanterna info SCENE`` as a dict.
     """
@@ -78,6 +83,8 @@ def load_scene(
         look_at=None if look_at is None else [float(v) for v in look_at],
         fov=fov,
         clip_planes=bool(clip_planes),
+        animation_time=None if animation_time is None else float(animation_time),
+        animation=animation,
     )
 
 

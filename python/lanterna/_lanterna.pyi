@@ -40,6 +40,8 @@ def load_scene(
     look_at: Optional[Sequence[float]] = None,
     fov: Optional[float] = None,
     clip_planes: bool = True,
+    animation_time: Optional[float] = None,
+    animation: Union[str, int, None] = None,
 ) -> Scene: ...
 
 class Renderer:

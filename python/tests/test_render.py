@@ -124,3 +124,48 @@ def test_clip_planes_follow_the_file_unless_turned_off(tmp_path):
         wall[clip] = np.asarray(img)[H // 4, W // 2]
     assert np.all(wall[True] == 0.0), wall
     assert np.all(wall[False] > 0.05), wall
+
+
+def test_animation_time_poses_the_scene(tmp_path):
+    """``animation_time=`` (``--animation-time``) poses the file's animations: the
+    blockers of cornell-lights, lifted 0.3 by a one-second animation, cast their shadow
+    elsewhere at time 1 than at time 0, and the file's static pose is time 0's; an
+    unknown animation and a time that is not a number are ValueErrors."""
+    import base64
+    import json
+    import shutil
+    import struct
+
+    import pytest
+
+    gltf = json.loads(SCENE.read_text())
+    data = struct.pack("<8f", 0, 1, 0, 0, 0, 0, 0.3, 0)
+    gltf["buffers"].append({"byteLength": len(data),
+                            "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()})
+    buffer = len(gltf["buffers"]) - 1
+    gltf["bufferViews"] += [{"buffer": buffer, "byteOffset": 0, "byteLength": 8},
+                            {"buffer": buffer, "byteOffset": 8, "byteLength": 24}]
+    views = len(gltf["bufferViews"])
+    gltf["accessors"] += [{"bufferView": views - 2, "componentType": 5126, "count": 2, "type": "SCALAR",
+                           "min": [0], "max": [1]},
+                          {"bufferView": views - 1, "componentType": 5126, "count": 2, "type": "VEC3"}]
+    accessors = len(gltf["accessors"])
+    blockers = next(i for i, n in enumerate(gltf["nodes"]) if n.get("name") == "blockers")
+    gltf["animations"] = [{"name": "lift", "samplers": [{"input": accessors - 2, "output": accessors - 1}],
+                           "channels": [{"sampler": 0, "target": {"node": blockers, "path": "translation"}}]}]
+    shutil.copy(SCENE.with_suffix(".bin"), tmp_path / "cornell-lights.bin")
+    path = tmp_path / "animated.gltf"
+    path.write_text(json.dumps(gltf))
+
+    def render(**pose):
+        scene = lanterna.load_scene(path, **pose)
+        return np.asarray(lanterna.Renderer(scene, W, H, method="pt", seed=1).render(spp=4))
+
+    still, start, lifted = render(), render(animation_time=0.0), render(animation_time=1.0, animation="lift")
+    np.testing.assert_array_equal(still, start)
+    assert np.abs(lifted - start).mean() > 0.01 * start.mean()
+    assert lanterna.load_scene(path).info()["animations"][0]["name"] == "0 (`lift`)"
+    with pytest.raises(ValueError, match="no animation matches `walk`"):
+        lanterna.load_scene(path, animation="walk")
+    with pytest.raises(ValueError, match="not a finite number"):
+        lanterna.load_scene(path, animation_time=float("nan"))

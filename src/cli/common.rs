@@ -41,13 +41,50 @@ pub struct SceneArgs {
     /// paths, `..`, `file:` URIs, symlinks out); by default they are refused.
     #[arg(long)]
     pub allow_outside_uris: bool,
+    #[command(flatten)]
+    pub pose: PoseArgs,
 }
 
 impl SceneArgs {
     pub fn load_options(&self) -> LoadOptions {
         LoadOptions {
             allow_outside_uris: self.allow_outside_uris,
+            pose: self.pose.pose(),
         }
+    }
+}
+
+/// Which pose of the file's animations to load.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct PoseArgs {
+    /// Pose the scene's animations at this time in seconds (nodes, cameras, lights,
+    /// skins and morph weights; keys held before the first and after the last). Without
+    /// it (and without --animation) the nodes' own transforms are rendered.
+    #[arg(long, value_name = "SECONDS", value_parser = parse_time, allow_negative_numbers = true)]
+    pub animation_time: Option<f32>,
+    /// Play only this animation, by index or name (default: all of them; with no
+    /// --animation-time, at time 0).
+    #[arg(long, value_name = "INDEX|NAME")]
+    pub animation: Option<String>,
+}
+
+impl PoseArgs {
+    pub fn pose(&self) -> Option<lanterna::scene::Pose> {
+        if self.animation_time.is_none() && self.animation.is_none() {
+            return None;
+        }
+        Some(lanterna::scene::Pose {
+            time: self.animation_time.unwrap_or(0.0),
+            animation: self.animation.clone(),
+        })
+    }
+}
+
+fn parse_time(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(t) if t.is_finite() => Ok(t),
+        Ok(t) => Err(format!("{t} is not a finite number of seconds")),
+        Err(e) => Err(format!("`{s}`: {e}")),
     }
 }
 

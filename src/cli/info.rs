@@ -17,20 +17,31 @@ pub struct Args {
     /// Follow buffer and image URIs that lead outside the scene's folder.
     #[arg(long)]
     pub allow_outside_uris: bool,
+    #[command(flatten)]
+    pub pose: super::common::PoseArgs,
 }
 
 pub fn run(args: Args) -> Result<()> {
     match &args.scene {
-        Some(path) => scene_info(path, args.json, args.allow_outside_uris),
+        Some(path) => {
+            let options = lanterna::scene::LoadOptions {
+                allow_outside_uris: args.allow_outside_uris,
+                pose: args.pose.pose(),
+            };
+            scene_info(path, args.json, &options)
+        }
         None => device_info(args.json),
     }
 }
 
-fn scene_info(path: &std::path::Path, json: bool, allow_outside_uris: bool) -> Result<()> {
-    let options = lanterna::scene::LoadOptions { allow_outside_uris };
+fn scene_info(
+    path: &std::path::Path,
+    json: bool,
+    options: &lanterna::scene::LoadOptions,
+) -> Result<()> {
     // A scene without lights cannot be rendered, but its statistics can still say what
     // it holds (and so why nothing lights it).
-    let scene = lanterna::scene::Scene::load(path, &options)?;
+    let scene = lanterna::scene::Scene::load(path, options)?;
     let stats = match lanterna::lights::LightTable::build(&scene) {
         Ok(lights) => SceneStats::new(&scene, &lights),
         Err(e @ lanterna::scene::SceneError::NoLights { .. }) => {
@@ -58,6 +69,24 @@ fn scene_info(path: &std::path::Path, json: bool, allow_outside_uris: bool) -> R
                 })
                 .collect();
             println!("cameras             {}", names.join(", "));
+        }
+        if !scene.animations.is_empty() {
+            let seconds = |t: Option<f32>| t.map_or("?".to_string(), |t| format!("{t}"));
+            let list: Vec<String> = scene
+                .animations
+                .iter()
+                .map(|a| {
+                    format!(
+                        "{}: {}–{} s, {} channel{}",
+                        a.name,
+                        seconds(a.start),
+                        seconds(a.end),
+                        a.channels,
+                        if a.channels == 1 { "" } else { "s" }
+                    )
+                })
+                .collect();
+            println!("animations          {} (--animation-time)", list.join("; "));
         }
     }
     Ok(())

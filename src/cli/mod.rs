@@ -143,3 +143,36 @@ pub fn main() -> ExitCode {
         },
     }
 }
+
+#[cfg(test)]
+mod tests {
+    /// No command has two arguments with one name (as `--time`, a render's budget and an
+    /// animation pose, once had: clap then refuses every render that uses either). clap's
+    /// own `debug_assert` checks this only in debug builds, and the tests run in release.
+    #[test]
+    fn no_command_has_two_arguments_with_one_name() {
+        use clap::CommandFactory;
+        fn check(cmd: &clap::Command, path: &str) {
+            let mut seen = std::collections::HashSet::new();
+            for a in cmd.get_arguments() {
+                let names = a
+                    .get_long()
+                    .map(|l| format!("--{l}"))
+                    .into_iter()
+                    .chain(a.get_short().map(|c| format!("-{c}")));
+                for name in names {
+                    assert!(
+                        seen.insert(name.clone()),
+                        "`{path}` has two arguments {name}"
+                    );
+                }
+            }
+            for sub in cmd.get_subcommands() {
+                check(sub, &format!("{path} {}", sub.get_name()));
+            }
+        }
+        let mut cmd = super::Cli::command();
+        cmd.build();
+        check(&cmd, "lanterna");
+    }
+}

@@ -42,6 +42,8 @@ pub struct ExportArgs {
     /// Follow buffer and image URIs that lead outside the scene's folder.
     #[arg(long)]
     pub allow_outside_uris: bool,
+    #[command(flatten)]
+    pub pose: super::common::PoseArgs,
 }
 
 pub fn run(args: ExportArgs) -> Result<()> {
@@ -49,6 +51,7 @@ pub fn run(args: ExportArgs) -> Result<()> {
     anyhow::ensure!(args.spp >= 1, "--spp must be at least 1");
     let options = lanterna::scene::LoadOptions {
         allow_outside_uris: args.allow_outside_uris,
+        pose: args.pose.pose(),
     };
     let loaded = session::load_scene_with(&args.scene, &options)?;
     let camera = session::choose_camera(

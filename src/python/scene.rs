@@ -71,7 +71,8 @@ impl PyScene {
 
 /// Load a glTF scene and choose its view (see the Python package's docstring).
 #[pyfunction]
-#[pyo3(signature = (path, camera=None, look_at=None, fov=None, clip_planes=true))]
+#[pyo3(signature = (path, camera=None, look_at=None, fov=None, clip_planes=true, animation_time=None, animation=None))]
+#[allow(clippy::too_many_arguments)]
 fn load_scene(
     py: Python<'_>,
     path: PathBuf,
@@ -79,7 +80,25 @@ fn load_scene(
     look_at: Option<Vec<f32>>,
     fov: Option<f32>,
     clip_planes: bool,
+    animation_time: Option<f32>,
+    animation: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyScene> {
+    let animation = animation
+        .filter(|a| !a.is_none())
+        .map(|a| a.str().map(|s| s.to_string()))
+        .transpose()?;
+    if let Some(t) = animation_time.filter(|t| !t.is_finite()) {
+        return Err(PyValueError::new_err(format!(
+            "animation_time: {t} is not a finite number of seconds"
+        )));
+    }
+    let options = crate::scene::LoadOptions {
+        pose: (animation_time.is_some() || animation.is_some()).then(|| crate::scene::Pose {
+            time: animation_time.unwrap_or(0.0),
+            animation,
+        }),
+        ..Default::default()
+    };
     let camera = camera
         .filter(|c| !c.is_none())
         .map(|c| c.str().map(|s| s.to_string()))
@@ -92,7 +111,7 @@ fn load_scene(
         })
         .transpose()?;
     let loaded = py
-        .detach(|| session::load_scene(&path))
+        .detach(|| session::load_scene_with(&path, &options))
         .map_err(errors::scene)?;
     let view = ViewOptions {
         camera,

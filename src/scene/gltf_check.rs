@@ -14,6 +14,14 @@ use gltf::json;
 use gltf::json::accessor::{ComponentType, Type};
 use gltf::json::validation::Checked;
 
+/// A node as messages name it: by name, else by index.
+pub(super) fn node_name(node: &gltf::Node<'_>) -> String {
+    match node.name() {
+        Some(n) => format!("`{n}`"),
+        None => format!("#{}", node.index()),
+    }
+}
+
 /// Before `Document::from_json`: indices the crate's validation hooks use unchecked.
 pub(super) fn precheck(root: &json::Root) -> Result<(), String> {
     let n = root.accessors.len();
@@ -84,6 +92,11 @@ pub(super) enum Role {
     InstanceTranslation,
     InstanceRotation,
     InstanceScale,
+    /// Animation samplers: keyframe times, and the values a channel sets.
+    AnimationInput,
+    AnimationVec3,
+    AnimationRotation,
+    AnimationWeights,
 }
 
 impl Role {
@@ -101,6 +114,10 @@ impl Role {
             Role::InstanceTranslation => "TRANSLATION",
             Role::InstanceRotation => "ROTATION",
             Role::InstanceScale => "SCALE",
+            Role::AnimationInput => "keyframe times",
+            Role::AnimationVec3 => "translation or scale keyframes",
+            Role::AnimationRotation => "rotation keyframes",
+            Role::AnimationWeights => "morph weight keyframes",
         }
     }
 
@@ -132,6 +149,10 @@ impl Role {
             }
             Role::InstanceTranslation | Role::InstanceScale => ty == Type::Vec3 && ct == F32,
             Role::InstanceRotation => ty == Type::Vec4 && matches!(ct, F32 | I8 | I16),
+            Role::AnimationInput => ty == Type::Scalar && ct == F32,
+            Role::AnimationVec3 => ty == Type::Vec3 && ct == F32,
+            Role::AnimationRotation => ty == Type::Vec4 && ct != U32,
+            Role::AnimationWeights => ty == Type::Scalar && ct != U32,
         }
     }
 
@@ -158,6 +179,10 @@ impl Role {
             }
             Role::InstanceTranslation | Role::InstanceScale => "float VEC3",
             Role::InstanceRotation => "VEC4 of float, normalized byte or normalized short",
+            Role::AnimationInput => "float SCALAR",
+            Role::AnimationVec3 => "float VEC3",
+            Role::AnimationRotation => "VEC4 of float or of normalized (unsigned) bytes or shorts",
+            Role::AnimationWeights => "SCALAR float or normalized (unsigned) byte or short",
         }
     }
 }
@@ -218,7 +243,12 @@ pub(super) fn check_accessor(
     if integer
         && matches!(
             role,
-            Role::Normal | Role::Tangent | Role::Weights | Role::InstanceRotation
+            Role::Normal
+                | Role::Tangent
+                | Role::Weights
+                | Role::InstanceRotation
+                | Role::AnimationRotation
+                | Role::AnimationWeights
         )
         && !acc.normalized
     {

@@ -3,8 +3,9 @@
 //! deduplicated into one BLAS each, materials converted, cameras and punctual lights
 //! placed in world space.
 
+use super::animation::{self, Pose};
 use super::camera::{Camera, ClipPlanes, Projection};
-use super::gltf_check;
+use super::gltf_check::{self, node_name};
 use super::load_instancing;
 use super::load_light::convert_light;
 use super::load_primitive::{load_primitive, Geometry};
@@ -22,6 +23,9 @@ pub struct LoadOptions {
     /// Follow buffer and image URIs that resolve outside the scene's folder (absolute
     /// paths, `..`, `file:` URIs, symlinks out). Off by default: see `sources.rs`.
     pub allow_outside_uris: bool,
+    /// Pose the file's animations at a time (`--animation-time`, `--animation`); `None` renders
+    /// the nodes' own transforms and morph weights.
+    pub pose: Option<Pose>,
 }
 
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
@@ -44,10 +48,10 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         parse(&bytes, &mut parse_warnings).map_err(gltf_error)?;
     drop(bytes);
     let mut root = document.into_json();
-    if !root.animations.is_empty() {
+    if !root.animations.is_empty() && options.pose.is_none() {
         parse_warnings.push(format!(
-            "has {} animation(s), which lanterna does not play: it renders the nodes' own \
-             transforms and morph weights",
+            "has {} animation(s); without --animation-time lanterna renders the nodes' own transforms \
+             and morph weights (the static pose)",
             root.animations.len()
         ));
     }
@@ -261,8 +265,19 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     // own geometry.
     type PrimitiveKey = (usize, usize, Vec<u32>, Option<usize>);
     let mut primitive_ids: HashMap<PrimitiveKey, Option<u32>> = HashMap::new();
-    // Every node's world transform, for skins' joints (which may lie anywhere).
-    let node_worlds = node_world_matrices(&document).map_err(&invalid)?;
+    // Every node's local transform, posed by the animations when asked, and its world
+    // transform, for skins' joints (which may lie anywhere).
+    let mut pose_warnings = Vec::new();
+    let (locals, animated_weights) = match &options.pose {
+        None => (animation::static_locals(&document), Vec::new()),
+        Some(pose) => {
+            let posed =
+                animation::pose(&document, &buffers, pose, budget.left(), &mut pose_warnings)
+                    .map_err(&invalid)?;
+            (posed.locals, posed.weights)
+        }
+    };
+    let node_worlds = node_world_matrices(&document, &locals).map_err(&invalid)?;
     let mut instances = Vec::new();
     let mut cameras = Vec::new();
     // Cameras with a far clip plane: (camera index, world-to-camera as the kernels see
@@ -270,6 +285,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let mut far_planes: Vec<(usize, Mat4, f32)> = Vec::new();
     let mut punctual = Vec::new();
     let mut warnings = parse_warnings;
+    warnings.append(&mut pose_warnings);
     warnings.append(&mut registry.warnings);
     warnings.extend(unsupported_extensions(document.extensions_used()));
     let textures = std::mem::take(&mut registry.textures);
@@ -289,8 +305,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
                 node_name(&node)
             )));
         }
-        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
-        let world = parent * local;
+        let world = parent * locals[node.index()];
         if !world.is_finite() {
             return Err(invalid(format!(
                 "node {} has a non-finite transform",
@@ -430,7 +445,12 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         if copies.is_empty() {
             continue;
         }
-        let morph_weights = node.weights().or(mesh.weights()).unwrap_or(&[]);
+        let morph_weights = animated_weights
+            .get(node.index())
+            .and_then(Option::as_deref)
+            .or(node.weights())
+            .or(mesh.weights())
+            .unwrap_or(&[]);
         for prim in mesh.primitives() {
             let posed = prim.morph_targets().next().is_some();
             let weight_bits = if posed {
@@ -574,6 +594,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         extras,
         origin: Vec3::ZERO,
         files: uris.files,
+        animations: animation::summaries(&document),
     };
     scene.hash = content_hash(&scene);
     rebase(&mut scene);
@@ -677,7 +698,7 @@ fn decompress_views(
 
 /// World transforms of all nodes of the file (those outside the scene's trees too: a
 /// skin's joints may be anywhere), each its parents' product with its own.
-fn node_world_matrices(document: &gltf::Document) -> Result<Vec<Mat4>, String> {
+fn node_world_matrices(document: &gltf::Document, local: &[Mat4]) -> Result<Vec<Mat4>, String> {
     let count = document.nodes().len();
     let mut parent = vec![None; count];
     for node in document.nodes() {
@@ -690,10 +711,6 @@ fn node_world_matrices(document: &gltf::Document) -> Result<Vec<Mat4>, String> {
             }
         }
     }
-    let local: Vec<Mat4> = document
-        .nodes()
-        .map(|n| Mat4::from_cols_array_2d(&n.transform().matrix()))
-        .collect();
     let mut world: Vec<Option<Mat4>> = vec![None; count];
     for start in 0..count {
         // Walk up to a node whose transform is known (or a root), then down again.
@@ -951,13 +968,6 @@ fn unsupported_extensions<'a>(used: impl Iterator<Item = &'a str>) -> Vec<String
             format!("uses the glTF extension {e}, which lanterna does not support: {what}")
         })
         .collect()
-}
-
-fn node_name(node: &gltf::Node<'_>) -> String {
-    match node.name() {
-        Some(n) => format!("`{n}`"),
-        None => format!("#{}", node.index()),
-    }
 }
 
 /// FNV-1a over the loaded content: geometry, placement and materials.

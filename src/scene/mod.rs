@@ -5,6 +5,7 @@
 //! the kernels' layout, decoded textures, cameras and punctual lights. The light table is
 //! derived from it by [`crate::lights`].
 
+mod animation;
 mod camera;
 pub mod export_mitsuba;
 pub mod generate;
@@ -20,6 +21,7 @@ pub mod spatial_order;
 mod stats;
 mod texture;
 
+pub use animation::{AnimationInfo, Pose};
 pub use camera::{Camera, CameraOverride, ClipPlanes, Projection};
 pub use load::LoadOptions;
 pub use material::{bounds_solid, disperses, dispersion_iors, is_lambertian};
@@ -112,6 +114,8 @@ pub struct Scene {
     /// The external files the scene's URIs named (buffers, images), canonical: with
     /// `path`, every file loading read (outputs must not overwrite them).
     pub files: Vec<PathBuf>,
+    /// The file's animations (whether or not the scene is posed by them).
+    pub animations: Vec<AnimationInfo>,
 }
 
 impl Scene {

@@ -49,6 +49,8 @@ pub struct SceneStats {
     pub bounds_max: [f32; 3],
     /// Estimated device memory in bytes: buffers, textures and acceleration structures.
     pub device_bytes: u64,
+    /// The file's animations (`--animation-time` poses them).
+    pub animations: Vec<super::AnimationInfo>,
 }
 
 impl SceneStats {
@@ -100,6 +102,7 @@ impl SceneStats {
         let accel = unique_triangles * 64 + scene.instances.len() as u64 * 128;
         let transmitting = || scene.materials.iter().filter(|m| m.transmission > 0.0);
         SceneStats {
+            animations: scene.animations.clone(),
             triangles: scene.triangle_count(),
             unique_triangles,
             vertices: scene.vertices.len() as u64,

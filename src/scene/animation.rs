@@ -1,0 +1,470 @@
+//! glTF animations sampled at one time: the pose a render asks for with `--animation-time`
+//! (`--animation` picks one animation; by default every animation plays). A channel moves
+//! a node's translation, rotation or scale, or a mesh node's morph weights; its sampler's
+//! keyframes are interpolated as the glTF 2.0 specification says (appendix C): STEP holds
+//! the key at or before the time, LINEAR interpolates linearly (spherically for rotations,
+//! along the shorter arc), CUBICSPLINE is the cubic Hermite spline through the keys with
+//! the file's in- and out-tangents scaled by the key interval (rotations renormalised).
+//! Before the first key and after the last the value is held. Cameras, punctual lights,
+//! skins' joints and instanced nodes follow their nodes.
+
+use super::gltf_check::{self, Role};
+use glam::{Mat4, Quat, Vec3};
+use gltf::animation::{Interpolation, Property};
+
+/// Which pose of the file's animations to render.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pose {
+    /// Seconds on the animations' timeline (glTF keyframe times are seconds).
+    pub time: f32,
+    /// One animation, by index or name; `None` plays them all.
+    pub animation: Option<String>,
+}
+
+/// One animation of a file, as `lanterna info` lists it.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct AnimationInfo {
+    pub name: String,
+    /// The first and last keyframe times over its samplers (seconds), from the
+    /// accessors' `min` and `max`, which the spec requires of animation inputs.
+    pub start: Option<f32>,
+    pub end: Option<f32>,
+    pub channels: usize,
+}
+
+/// The file's animations, for statistics.
+pub(super) fn summaries(document: &gltf::Document) -> Vec<AnimationInfo> {
+    document
+        .animations()
+        .map(|a| {
+            let bound = |v: Option<gltf::json::Value>| {
+                v.and_then(|v| v.as_array()?.first()?.as_f64())
+                    .map(|x| x as f32)
+            };
+            let (mut start, mut end): (Option<f32>, Option<f32>) = (None, None);
+            for s in a.samplers() {
+                if let Some(lo) = bound(s.input().min()) {
+                    start = Some(start.map_or(lo, |x| x.min(lo)));
+                }
+                if let Some(hi) = bound(s.input().max()) {
+                    end = Some(end.map_or(hi, |x| x.max(hi)));
+                }
+            }
+            AnimationInfo {
+                name: name(&a),
+                start,
+                end,
+                channels: a.channels().count(),
+            }
+        })
+        .collect()
+}
+
+fn name(a: &gltf::Animation<'_>) -> String {
+    match a.name() {
+        Some(n) => format!("{} (`{n}`)", a.index()),
+        None => a.index().to_string(),
+    }
+}
+
+/// The scene's nodes at a pose.
+pub(super) struct Posed {
+    /// Every node's local transform (the file's own where no channel moves it).
+    pub locals: Vec<Mat4>,
+    /// Morph weights set by a channel, per node.
+    pub weights: Vec<Option<Vec<f32>>>,
+}
+
+/// Every node's local transform from the file, without animation.
+pub(super) fn static_locals(document: &gltf::Document) -> Vec<Mat4> {
+    document
+        .nodes()
+        .map(|n| Mat4::from_cols_array_2d(&n.transform().matrix()))
+        .collect()
+}
+
+const PATHS: [&str; 4] = ["translation", "rotation", "scale", "weights"];
+
+/// Samples the animations `pose` selects at its time. Errors name the animation, channel
+/// and what is wrong; `max_bytes` bounds what reading keyframes may allocate. Two
+/// animations that move one property of one node: the first in the file wins, with a
+/// warning.
+pub(super) fn pose(
+    document: &gltf::Document,
+    buffers: &[gltf::buffer::Data],
+    pose: &Pose,
+    max_bytes: u64,
+    warnings: &mut Vec<String>,
+) -> Result<Posed, String> {
+    if !pose.time.is_finite() {
+        return Err(format!("the animation time {} is not finite", pose.time));
+    }
+    let animations: Vec<gltf::Animation<'_>> = match &pose.animation {
+        None => document.animations().collect(),
+        Some(wanted) => {
+            let found = document.animations().find(|a| {
+                wanted.parse::<usize>().ok() == Some(a.index()) || a.name() == Some(wanted)
+            });
+            match found {
+                Some(a) => vec![a],
+                None => {
+                    let available: Vec<String> = document.animations().map(|a| name(&a)).collect();
+                    return Err(format!(
+                        "no animation matches `{wanted}` (the file has {})",
+                        if available.is_empty() {
+                            "none".to_string()
+                        } else {
+                            available.join(", ")
+                        }
+                    ));
+                }
+            }
+        }
+    };
+    if animations.is_empty() {
+        warnings.push(format!(
+            "has no animations to pose at time {}: it renders the nodes' own transforms",
+            pose.time
+        ));
+    }
+    let count = document.nodes().len();
+    let mut trs: Vec<(Vec3, Quat, Vec3)> = document
+        .nodes()
+        .map(|n| {
+            let (t, r, s) = n.transform().decomposed();
+            (Vec3::from(t), Quat::from_array(r), Vec3::from(s))
+        })
+        .collect();
+    let mut moved = vec![false; count];
+    let mut weights: Vec<Option<Vec<f32>>> = vec![None; count];
+    // Which animation set each (node, property) first.
+    let mut owner: std::collections::HashMap<(usize, usize), usize> = Default::default();
+    let root = document.as_json();
+    let get = |b: gltf::Buffer<'_>| buffers.get(b.index()).map(|d| &d.0[..]);
+    for animation in &animations {
+        for channel in animation.channels() {
+            let what = format!("animation {} channel {}", name(animation), channel.index());
+            let node = channel.target().node();
+            let property = channel.target().property();
+            let path = match property {
+                Property::Translation => 0,
+                Property::Rotation => 1,
+                Property::Scale => 2,
+                Property::MorphTargetWeights => 3,
+            };
+            match owner.get(&(node.index(), path)) {
+                Some(&a) if a == animation.index() => {
+                    return Err(format!(
+                        "{what}: a second channel for the {} of node {}; an animation may \
+                         target each property of a node once",
+                        PATHS[path],
+                        gltf_check::node_name(&node)
+                    ));
+                }
+                Some(&a) => {
+                    warnings.push(format!(
+                        "{what} moves the {} of node {}, which animation {a} moves too: \
+                         animation {a}'s channel is used",
+                        PATHS[path],
+                        gltf_check::node_name(&node)
+                    ));
+                    continue;
+                }
+                None => {
+                    owner.insert((node.index(), path), animation.index());
+                }
+            }
+            if path < 3 && matches!(node.transform(), gltf::scene::Transform::Matrix { .. }) {
+                // glTF: an animated node has translation, rotation and scale, not a matrix.
+                let identity = node.transform().matrix() == Mat4::IDENTITY.to_cols_array_2d();
+                if !identity {
+                    return Err(format!(
+                        "{what} animates node {}, which has a matrix; an animated node must \
+                         give translation, rotation and scale instead",
+                        gltf_check::node_name(&node)
+                    ));
+                }
+            }
+            let sampler = channel.sampler();
+            let input = sampler.input();
+            gltf_check::check_accessor(root, input.index(), Role::AnimationInput, max_bytes)
+                .map_err(|e| format!("{what}: {e}"))?;
+            let times: Vec<f32> = read_scalars(input, get)
+                .ok_or_else(|| format!("{what}: unreadable keyframe times"))?;
+            if let Some(k) = times
+                .iter()
+                .position(|t| !t.is_finite())
+                .or_else(|| times.windows(2).position(|w| w[1] <= w[0]).map(|k| k + 1))
+            {
+                return Err(format!(
+                    "{what}: keyframe time {k} is {}, which is not finite or not after the \
+                     one before; keyframe times must increase",
+                    times[k]
+                ));
+            }
+            let role = match property {
+                Property::Translation | Property::Scale => Role::AnimationVec3,
+                Property::Rotation => Role::AnimationRotation,
+                Property::MorphTargetWeights => Role::AnimationWeights,
+            };
+            let output = sampler.output();
+            gltf_check::check_accessor(root, output.index(), role, max_bytes)
+                .map_err(|e| format!("{what}: {e}"))?;
+            let values: Vec<f32> = match property {
+                Property::Translation | Property::Scale => {
+                    super::load_primitive::read_floats::<3>(output, get, false).map(|v| v.concat())
+                }
+                Property::Rotation => {
+                    super::load_primitive::read_floats::<4>(output, get, false).map(|v| v.concat())
+                }
+                Property::MorphTargetWeights => read_scalars(output, get),
+            }
+            .ok_or_else(|| format!("{what}: unreadable keyframe values"))?;
+            if let Some(v) = values.iter().find(|v| !v.is_finite()) {
+                return Err(format!("{what}: a keyframe value is {v}"));
+            }
+            let width = match property {
+                Property::Translation | Property::Scale => 3,
+                Property::Rotation => 4,
+                Property::MorphTargetWeights => {
+                    let targets = node
+                        .mesh()
+                        .and_then(|m| m.primitives().next())
+                        .map_or(0, |p| p.morph_targets().count());
+                    if targets == 0 {
+                        return Err(format!(
+                            "{what} animates the morph weights of node {}, whose mesh has no \
+                             morph targets",
+                            gltf_check::node_name(&node)
+                        ));
+                    }
+                    targets
+                }
+            };
+            let cubic = sampler.interpolation() == Interpolation::CubicSpline;
+            let per_key = width * if cubic { 3 } else { 1 };
+            if values.len() != times.len() * per_key {
+                return Err(format!(
+                    "{what}: {} keyframe times but {} output values; {} {} needs {} per key",
+                    times.len(),
+                    values.len() / width,
+                    match sampler.interpolation() {
+                        Interpolation::Linear => "LINEAR",
+                        Interpolation::Step => "STEP",
+                        Interpolation::CubicSpline => "CUBICSPLINE",
+                    },
+                    PATHS[path],
+                    if cubic { 3 } else { 1 }
+                ));
+            }
+            let keys = Keys {
+                times: &times,
+                values: &values,
+                width,
+                interpolation: sampler.interpolation(),
+            };
+            let value = keys.sample(pose.time, property == Property::Rotation);
+            let node_index = node.index();
+            match property {
+                Property::Translation => trs[node_index].0 = Vec3::from_slice(&value),
+                Property::Rotation => trs[node_index].1 = Quat::from_slice(&value),
+                Property::Scale => trs[node_index].2 = Vec3::from_slice(&value),
+                Property::MorphTargetWeights => weights[node_index] = Some(value),
+            }
+            if path < 3 {
+                moved[node_index] = true;
+            }
+        }
+    }
+    let mut locals = static_locals(document);
+    for (n, local) in locals.iter_mut().enumerate() {
+        if moved[n] {
+            let (t, r, s) = trs[n];
+            let len = r.length();
+            if !(len.is_finite() && len > 1e-6) {
+                return Err(format!(
+                    "node {} is posed with rotation {r:?}, not a rotation",
+                    n
+                ));
+            }
+            *local = Mat4::from_scale_rotation_translation(s, r / len, t);
+        }
+    }
+    Ok(Posed { locals, weights })
+}
+
+/// A SCALAR accessor's elements as floats, normalised integers mapped as the glTF spec
+/// says (`check_accessor` refuses integers that are not normalised).
+fn read_scalars<'a, 's>(
+    accessor: gltf::Accessor<'a>,
+    get: impl Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+) -> Option<Vec<f32>> {
+    use gltf::accessor::{DataType, Iter};
+    let scaled = |c: f32, largest: f32| (c / largest).max(-1.0);
+    Some(match accessor.data_type() {
+        DataType::F32 => Iter::<f32>::new(accessor, get)?.collect(),
+        DataType::I8 => Iter::<i8>::new(accessor, get)?
+            .map(|c| scaled(c.into(), 127.0))
+            .collect(),
+        DataType::U8 => Iter::<u8>::new(accessor, get)?
+            .map(|c| scaled(c.into(), 255.0))
+            .collect(),
+        DataType::I16 => Iter::<i16>::new(accessor, get)?
+            .map(|c| scaled(c.into(), 32767.0))
+            .collect(),
+        DataType::U16 => Iter::<u16>::new(accessor, get)?
+            .map(|c| scaled(c.into(), 65535.0))
+            .collect(),
+        DataType::U32 => return None,
+    })
+}
+
+/// One sampler's keyframes: `times` increasing, `values` `width` floats per element and
+/// three elements per key (in-tangent, value, out-tangent) for CUBICSPLINE.
+struct Keys<'k> {
+    times: &'k [f32],
+    values: &'k [f32],
+    width: usize,
+    interpolation: Interpolation,
+}
+
+impl Keys<'_> {
+    /// Element `e` of key `k` (for CUBICSPLINE: 0 in-tangent, 1 value, 2 out-tangent).
+    fn element(&self, k: usize, e: usize) -> &[f32] {
+        let per_key = if self.interpolation == Interpolation::CubicSpline {
+            3
+        } else {
+            1
+        };
+        let start = (k * per_key + e) * self.width;
+        &self.values[start..start + self.width]
+    }
+
+    fn value(&self, k: usize) -> Vec<f32> {
+        let e = usize::from(self.interpolation == Interpolation::CubicSpline);
+        self.element(k, e).to_vec()
+    }
+
+    /// The value at time `t`; `rotation`: the elements are quaternions (x, y, z, w).
+    fn sample(&self, t: f32, rotation: bool) -> Vec<f32> {
+        let n = self.times.len();
+        if n == 1 || t <= self.times[0] {
+            return self.value(0);
+        }
+        if t >= self.times[n - 1] {
+            return self.value(n - 1);
+        }
+        // The key interval [t_k, t_k+1) that holds t.
+        let k = self.times.partition_point(|&x| x <= t) - 1;
+        let (t0, t1) = (self.times[k], self.times[k + 1]);
+        let dt = t1 - t0;
+        let s = (t - t0) / dt;
+        match self.interpolation {
+            Interpolation::Step => self.value(k),
+            Interpolation::Linear if rotation => {
+                let a = Quat::from_slice(self.element(k, 0));
+                let b = Quat::from_slice(self.element(k + 1, 0));
+                slerp(a, b, s).to_array().to_vec()
+            }
+            Interpolation::Linear => {
+                let (a, b) = (self.element(k, 0), self.element(k + 1, 0));
+                a.iter().zip(b).map(|(a, b)| a + s * (b - a)).collect()
+            }
+            Interpolation::CubicSpline => {
+                // p(s) = h00·v_k + h10·dt·b_k + h01·v_k+1 + h11·dt·a_k+1, with b_k the
+                // out-tangent of key k and a_k+1 the in-tangent of key k + 1.
+                let (s2, s3) = (s * s, s * s * s);
+                let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
+                let h10 = s3 - 2.0 * s2 + s;
+                let h01 = -2.0 * s3 + 3.0 * s2;
+                let h11 = s3 - s2;
+                let (v0, b0) = (self.element(k, 1), self.element(k, 2));
+                let (a1, v1) = (self.element(k + 1, 0), self.element(k + 1, 1));
+                let mut p: Vec<f32> = (0..self.width)
+                    .map(|i| h00 * v0[i] + h10 * dt * b0[i] + h01 * v1[i] + h11 * dt * a1[i])
+                    .collect();
+                if rotation {
+                    let len = p.iter().map(|x| x * x).sum::<f32>().sqrt();
+                    if len > 0.0 {
+                        p.iter_mut().for_each(|x| *x /= len);
+                    }
+                }
+                p
+            }
+        }
+    }
+}
+
+/// Spherical linear interpolation along the shorter arc (glTF appendix C), from
+/// normalised keys (normalised integer keys are only nearly unit length).
+fn slerp(a: Quat, b: Quat, s: f32) -> Quat {
+    let (a, b) = (a.normalize(), b.normalize());
+    let mut d = a.dot(b);
+    let b = if d < 0.0 {
+        d = -d;
+        -b
+    } else {
+        b
+    };
+    if d > 0.9995 {
+        return a.lerp(b, s).normalize();
+    }
+    let angle = d.acos();
+    let sin = angle.sin();
+    let (wa, wb) = (((1.0 - s) * angle).sin() / sin, (s * angle).sin() / sin);
+    Quat::from_xyzw(
+        wa * a.x + wb * b.x,
+        wa * a.y + wb * b.y,
+        wa * a.z + wb * b.z,
+        wa * a.w + wb * b.w,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn keys<'k>(times: &'k [f32], values: &'k [f32], width: usize, i: Interpolation) -> Keys<'k> {
+        Keys {
+            times,
+            values,
+            width,
+            interpolation: i,
+        }
+    }
+
+    #[test]
+    fn linear_step_and_clamping() {
+        let k = keys(&[1.0, 3.0], &[0.0, 10.0], 1, Interpolation::Linear);
+        assert_eq!(k.sample(0.0, false), [0.0]);
+        assert_eq!(k.sample(2.5, false), [7.5]);
+        assert_eq!(k.sample(9.0, false), [10.0]);
+        let k = keys(&[1.0, 3.0], &[0.0, 10.0], 1, Interpolation::Step);
+        assert_eq!(k.sample(2.999, false), [0.0]);
+        assert_eq!(k.sample(3.0, false), [10.0]);
+    }
+
+    #[test]
+    fn cubic_spline_is_the_hermite_curve() {
+        // p(t) = t³ on [0, 1]: values 0 and 1, tangents dp/dt 0 and 3.
+        let values = [0.0, 0.0, 0.0, 3.0, 1.0, 0.0];
+        let k = keys(&[0.0, 1.0], &values, 1, Interpolation::CubicSpline);
+        for t in [0.1f32, 0.5, 0.8] {
+            assert!((k.sample(t, false)[0] - t * t * t).abs() < 1e-6);
+        }
+        // Tangents are per second: on [0, 2], p(t) = t³ / 8 has dp/dt(2) = 1.5.
+        let values = [0.0, 0.0, 0.0, 1.5, 1.0, 0.0];
+        let k = keys(&[0.0, 2.0], &values, 1, Interpolation::CubicSpline);
+        assert!((k.sample(1.0, false)[0] - 0.125).abs() < 1e-6);
+    }
+
+    #[test]
+    fn rotations_take_the_shorter_arc() {
+        let a = Quat::IDENTITY;
+        // 270° about y is −90° the short way.
+        let b = Quat::from_rotation_y(1.5 * std::f32::consts::PI);
+        let half = slerp(a, b, 0.5);
+        let expect = Quat::from_rotation_y(-0.25 * std::f32::consts::PI);
+        assert!(half.dot(expect).abs() > 1.0 - 1e-6, "{half:?}");
+    }
+}
