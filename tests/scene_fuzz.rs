@@ -96,7 +96,7 @@ fn seeds(scratch: &Path) -> Vec<Seed> {
 
 /// `cornell-lights` with an animation of its blockers and camera (translation LINEAR,
 /// rotation CUBICSPLINE, scale STEP) in a second, data-URI buffer, for the cases that
-/// pose the scene (`--animation-time`).
+/// pose the scene (`--animation-time`), and two material variants (`--variant`).
 fn animated(cornell: &Seed) -> Seed {
     use base64::Engine as _;
     let floats: Vec<f32> = [
@@ -166,8 +166,14 @@ fn animated(cornell: &Seed) -> Seed {
             {"sampler": 0, "target": {"node": camera, "path": "translation"}}
         ]
     }]);
+    // Two material variants: the blockers red in the second.
+    json["extensionsUsed"] = serde_json::json!(["KHR_materials_variants"]);
+    json["extensions"] = serde_json::json!({"KHR_materials_variants":
+        {"variants": [{"name": "white"}, {"name": "red"}]}});
+    json["meshes"][1]["primitives"][0]["extensions"] = serde_json::json!({"KHR_materials_variants":
+        {"mappings": [{"material": 1, "variants": [1]}, {"material": 0, "variants": [0]}]}});
     Seed {
-        name: "cornell-lights, animated".into(),
+        name: "cornell-lights, animated, with material variants".into(),
         json,
         bin_name: cornell.bin_name.clone(),
         bin: cornell.bin.clone(),
@@ -409,10 +415,16 @@ enum Outcome {
     Panicked(String),
 }
 
-fn load_case(path: &Path, allow_outside: bool, pose: Option<Pose>) -> Outcome {
+fn load_case(
+    path: &Path,
+    allow_outside: bool,
+    pose: Option<Pose>,
+    variant: Option<String>,
+) -> Outcome {
     let options = LoadOptions {
         allow_outside_uris: allow_outside,
         pose,
+        variant,
     };
     IN_LOAD.with(|f| f.set(true));
     let result = std::panic::catch_unwind(|| Scene::load(path, &options));
@@ -507,7 +519,10 @@ fn mutated_scenes_load_or_fail_without_panicking() {
             time: [-1.0, 0.0, 0.25, 0.5, 0.99, 1.0, 1e30][rng.below(7)],
             animation: rng.chance(0.2).then(|| rng.below(2).to_string()),
         });
-        match load_case(&path, rng.chance(0.1), pose) {
+        let variant = rng
+            .chance(0.3)
+            .then(|| ["0", "1", "red", "2"][rng.below(4)].to_string());
+        match load_case(&path, rng.chance(0.1), pose, variant) {
             Outcome::Loaded => loaded += 1,
             Outcome::Refused => refused += 1,
             Outcome::Panicked(message) => {

@@ -2559,3 +2559,142 @@ fn animations_pose_nodes_cameras_lights_and_weights_at_a_time() {
     );
     assert!(err.contains("whose mesh has no morph targets"), "{err}");
 }
+
+/// `KHR_materials_variants`: `cornell-lights` with three variants, `plain` (nothing
+/// mapped), `gold` (the blockers gold, the red wall blue) and `blue` (the blockers
+/// blue). `--variant gold` must load exactly the scene (its content hash: geometry,
+/// placement, every primitive's material and the materials) of the file with those
+/// materials written into the primitives, `--variant 2` that of `blue`, `plain` and no
+/// variant the file's own. Seen to fail with the mapping's material ignored, with a
+/// mapping applied under every variant, and with the variant index taken from the
+/// mapping's position. Malformed mappings and unknown variants are refused by name.
+#[test]
+fn material_variants_swap_materials_by_name_or_index() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        root().join("scenes/cornell-lights.bin"),
+        dir.path().join("cornell-lights.bin"),
+    )
+    .unwrap();
+    let mut json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(root().join("scenes/cornell-lights.gltf")).unwrap())
+            .unwrap();
+    let materials = json["materials"].as_array().unwrap().len();
+    let (gold, blue) = (materials, materials + 1);
+    json["materials"].as_array_mut().unwrap().extend([
+        serde_json::json!({"name": "gold", "pbrMetallicRoughness": {
+            "baseColorFactor": [1.0, 0.78, 0.34, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.3}}),
+        serde_json::json!({"name": "blue", "pbrMetallicRoughness": {
+            "baseColorFactor": [0.1, 0.2, 0.8, 1.0], "metallicFactor": 0.0}}),
+    ]);
+    let write = |name: &str, json: &serde_json::Value| -> PathBuf {
+        let path = dir.path().join(name);
+        std::fs::write(&path, serde_json::to_vec(json).unwrap()).unwrap();
+        path
+    };
+    // The same file with each variant's materials written in.
+    let baked = |blockers: usize, red_wall: usize| {
+        let mut j = json.clone();
+        j["meshes"][1]["primitives"][0]["material"] = blockers.into();
+        j["meshes"][0]["primitives"][1]["material"] = red_wall.into();
+        j
+    };
+    let plain = write("plain.gltf", &json);
+    let gold_baked = write("gold.gltf", &baked(gold, 1));
+    let blue_baked = write("blue.gltf", &baked(blue, 1));
+    let mut varied = json.clone();
+    varied["extensionsUsed"] = serde_json::json!(["KHR_materials_variants"]);
+    varied["extensions"] = serde_json::json!({"KHR_materials_variants": {"variants": [
+        {"name": "plain"}, {"name": "gold"}, {"name": "blue"}]}});
+    varied["meshes"][1]["primitives"][0]["extensions"] = serde_json::json!({"KHR_materials_variants":
+        {"mappings": [{"material": blue, "variants": [2]}, {"material": gold, "variants": [1]}]}});
+    varied["meshes"][0]["primitives"][1]["extensions"] = serde_json::json!({"KHR_materials_variants":
+        {"mappings": [{"material": 1, "variants": [0]}, {"material": blue, "variants": [1]}]}});
+    let varied_path = write("varied.gltf", &varied);
+    // The red wall is blue under `gold`.
+    let gold_baked = {
+        let _ = gold_baked;
+        write("gold.gltf", &baked(gold, blue))
+    };
+    let hash = |path: &Path, variant: Option<&str>| -> String {
+        let options = lanterna::scene::LoadOptions {
+            variant: variant.map(str::to_string),
+            ..Default::default()
+        };
+        Scene::load(path, &options)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .hash
+    };
+    let own = hash(&plain, None);
+    assert_eq!(hash(&varied_path, None), own, "no variant");
+    assert_eq!(hash(&varied_path, Some("plain")), own, "--variant plain");
+    assert_eq!(
+        hash(&varied_path, Some("gold")),
+        hash(&gold_baked, None),
+        "--variant gold"
+    );
+    assert_eq!(
+        hash(&varied_path, Some("2")),
+        hash(&blue_baked, None),
+        "--variant 2"
+    );
+    assert_ne!(hash(&gold_baked, None), own);
+    // `lanterna info` names the variants.
+    let out = Command::new(env!("CARGO_BIN_EXE_lanterna"))
+        .args(["info", varied_path.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("material variants   0: plain, 1: gold, 2: blue"),
+        "{stdout}"
+    );
+    // Refusals, naming what is wrong.
+    let refused = |edit: &dyn Fn(&mut serde_json::Value), variant: &str| -> String {
+        let mut bad = varied.clone();
+        edit(&mut bad);
+        let path = write("bad.gltf", &bad);
+        let options = lanterna::scene::LoadOptions {
+            variant: Some(variant.to_string()),
+            ..Default::default()
+        };
+        Scene::load(&path, &options).unwrap_err().to_string()
+    };
+    let err = refused(&|_| {}, "silver");
+    assert!(
+        err.contains(
+            "no material variant matches `silver` (the file has 0: plain, 1: gold, 2: blue)"
+        ),
+        "{err}"
+    );
+    let err = refused(
+        &|j| {
+            j["meshes"][1]["primitives"][0]["extensions"]["KHR_materials_variants"]["mappings"][0]
+                ["material"] = 99.into()
+        },
+        "blue",
+    );
+    assert!(
+        err.contains("mapping names material 99, but the file has"),
+        "{err}"
+    );
+    let err = refused(
+        &|j| {
+            j["meshes"][1]["primitives"][0]["extensions"]["KHR_materials_variants"]["mappings"][0]
+                ["variants"] = serde_json::json!([1])
+        },
+        "gold",
+    );
+    assert!(err.contains("variant 1 is mapped twice"), "{err}");
+    let err = refused(
+        &|j| {
+            j["meshes"][1]["primitives"][0]["extensions"]["KHR_materials_variants"]["mappings"][0]
+                ["variants"] = serde_json::json!([7])
+        },
+        "gold",
+    );
+    assert!(
+        err.contains("mapping names variant 7, but the file has 3"),
+        "{err}"
+    );
+}

@@ -63,6 +63,7 @@ def load_scene(
     clip_planes: bool = True,
     animation_time: Optional[float] = None,
     animation: Union[str, int, None] = None,
+    variant: Union[str, int, None] = None,
 ) -> Scene:
     """Load a glTF 2.0 scene (.gltf or .glb) and its light table.
 
@@ -74,6 +75,7 @@ def load_scene(
         clip_planes: honour the file camera's znear/zfar (False: ``--no-clip-planes``).
         animation_time: pose the file's animations at this time in seconds, like ``--animation-time``.
         animation: play only this animation, by index or name, like ``--animation``.
+        variant: the material variant (KHR_materials_variants) by name or index, like ``--variant``.
 
     ``scene.info()`` returns the statistics of ``lanterna info SCENE`` as a dict.
     """
@@ -85,6 +87,7 @@ def load_scene(
         clip_planes=bool(clip_planes),
         animation_time=None if animation_time is None else float(animation_time),
         animation=animation,
+        variant=variant,
     )
 
 

@@ -42,6 +42,7 @@ def load_scene(
     clip_planes: bool = True,
     animation_time: Optional[float] = None,
     animation: Union[str, int, None] = None,
+    variant: Union[str, int, None] = None,
 ) -> Scene: ...
 
 class Renderer:

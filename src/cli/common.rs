@@ -42,21 +42,18 @@ pub struct SceneArgs {
     #[arg(long)]
     pub allow_outside_uris: bool,
     #[command(flatten)]
-    pub pose: PoseArgs,
+    pub version: VersionArgs,
 }
 
 impl SceneArgs {
     pub fn load_options(&self) -> LoadOptions {
-        LoadOptions {
-            allow_outside_uris: self.allow_outside_uris,
-            pose: self.pose.pose(),
-        }
+        self.version.load_options(self.allow_outside_uris)
     }
 }
 
-/// Which pose of the file's animations to load.
+/// Which version of the file to load: the pose of its animations, its material variant.
 #[derive(clap::Args, Clone, Debug, Default)]
-pub struct PoseArgs {
+pub struct VersionArgs {
     /// Pose the scene's animations at this time in seconds (nodes, cameras, lights,
     /// skins and morph weights; keys held before the first and after the last). Without
     /// it (and without --animation) the nodes' own transforms are rendered.
@@ -66,17 +63,25 @@ pub struct PoseArgs {
     /// --animation-time, at time 0).
     #[arg(long, value_name = "INDEX|NAME")]
     pub animation: Option<String>,
+    /// Render this material variant of the file (KHR_materials_variants), by name or
+    /// index; primitives it does not map keep their own materials (default: every
+    /// primitive's own material).
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub variant: Option<String>,
 }
 
-impl PoseArgs {
-    pub fn pose(&self) -> Option<lanterna::scene::Pose> {
-        if self.animation_time.is_none() && self.animation.is_none() {
-            return None;
+impl VersionArgs {
+    /// The loader's options for this version, following outside URIs or not.
+    pub fn load_options(&self, allow_outside_uris: bool) -> LoadOptions {
+        let posed = self.animation_time.is_some() || self.animation.is_some();
+        LoadOptions {
+            allow_outside_uris,
+            pose: posed.then(|| lanterna::scene::Pose {
+                time: self.animation_time.unwrap_or(0.0),
+                animation: self.animation.clone(),
+            }),
+            variant: self.variant.clone(),
         }
-        Some(lanterna::scene::Pose {
-            time: self.animation_time.unwrap_or(0.0),
-            animation: self.animation.clone(),
-        })
     }
 }
 

@@ -18,16 +18,13 @@ pub struct Args {
     #[arg(long)]
     pub allow_outside_uris: bool,
     #[command(flatten)]
-    pub pose: super::common::PoseArgs,
+    pub version: super::common::VersionArgs,
 }
 
 pub fn run(args: Args) -> Result<()> {
     match &args.scene {
         Some(path) => {
-            let options = lanterna::scene::LoadOptions {
-                allow_outside_uris: args.allow_outside_uris,
-                pose: args.pose.pose(),
-            };
+            let options = args.version.load_options(args.allow_outside_uris);
             scene_info(path, args.json, &options)
         }
         None => device_info(args.json),
@@ -87,6 +84,15 @@ fn scene_info(
                 })
                 .collect();
             println!("animations          {} (--animation-time)", list.join("; "));
+        }
+        if !scene.variants.is_empty() {
+            let list: Vec<String> = scene
+                .variants
+                .iter()
+                .enumerate()
+                .map(|(i, n)| format!("{i}: {n}"))
+                .collect();
+            println!("material variants   {} (--variant)", list.join(", "));
         }
     }
     Ok(())

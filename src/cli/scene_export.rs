@@ -43,16 +43,13 @@ pub struct ExportArgs {
     #[arg(long)]
     pub allow_outside_uris: bool,
     #[command(flatten)]
-    pub pose: super::common::PoseArgs,
+    pub version: super::common::VersionArgs,
 }
 
 pub fn run(args: ExportArgs) -> Result<()> {
     anyhow::ensure!(args.max_depth >= 1, "--max-depth must be at least 1");
     anyhow::ensure!(args.spp >= 1, "--spp must be at least 1");
-    let options = lanterna::scene::LoadOptions {
-        allow_outside_uris: args.allow_outside_uris,
-        pose: args.pose.pose(),
-    };
+    let options = args.version.load_options(args.allow_outside_uris);
     let loaded = session::load_scene_with(&args.scene, &options)?;
     let camera = session::choose_camera(
         &loaded.scene,

@@ -71,7 +71,7 @@ impl PyScene {
 
 /// Load a glTF scene and choose its view (see the Python package's docstring).
 #[pyfunction]
-#[pyo3(signature = (path, camera=None, look_at=None, fov=None, clip_planes=true, animation_time=None, animation=None))]
+#[pyo3(signature = (path, camera=None, look_at=None, fov=None, clip_planes=true, animation_time=None, animation=None, variant=None))]
 #[allow(clippy::too_many_arguments)]
 fn load_scene(
     py: Python<'_>,
@@ -82,11 +82,15 @@ fn load_scene(
     clip_planes: bool,
     animation_time: Option<f32>,
     animation: Option<&Bound<'_, PyAny>>,
+    variant: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyScene> {
-    let animation = animation
-        .filter(|a| !a.is_none())
-        .map(|a| a.str().map(|s| s.to_string()))
-        .transpose()?;
+    let text = |v: Option<&Bound<'_, PyAny>>| -> PyResult<Option<String>> {
+        v.filter(|v| !v.is_none())
+            .map(|v| v.str().map(|s| s.to_string()))
+            .transpose()
+    };
+    let animation = text(animation)?;
+    let variant = text(variant)?;
     if let Some(t) = animation_time.filter(|t| !t.is_finite()) {
         return Err(PyValueError::new_err(format!(
             "animation_time: {t} is not a finite number of seconds"
@@ -97,6 +101,7 @@ fn load_scene(
             time: animation_time.unwrap_or(0.0),
             animation,
         }),
+        variant,
         ..Default::default()
     };
     let camera = camera

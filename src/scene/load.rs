@@ -12,6 +12,7 @@ use super::load_primitive::{load_primitive, Geometry};
 use super::material::{self, TextureRegistry};
 use super::meshopt;
 use super::sources;
+use super::variants;
 use super::{Instance, MeshPrimitive, Scene, SceneError};
 use glam::{Mat4, Vec3};
 use std::collections::HashMap;
@@ -26,6 +27,9 @@ pub struct LoadOptions {
     /// Pose the file's animations at a time (`--animation-time`, `--animation`); `None` renders
     /// the nodes' own transforms and morph weights.
     pub pose: Option<Pose>,
+    /// Render this `KHR_materials_variants` variant, by name or index (`--variant`);
+    /// `None` keeps every primitive's own material.
+    pub variant: Option<String>,
 }
 
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
@@ -228,6 +232,11 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         );
     }
     let default_material = materials.len() as u32;
+    let variant_count = variants::names(&document).len();
+    let variant = match &options.variant {
+        Some(wanted) => Some(variants::choose(&document, wanted).map_err(&invalid)?),
+        None => None,
+    };
     materials.push(material::default_material());
     material_names.push("default".into());
 
@@ -467,13 +476,29 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
             let id = match primitive_ids.get(&key) {
                 Some(id) => *id,
                 None => {
+                    let variant_material = match variant {
+                        Some(v) => {
+                            variants::material(&prim, v, variant_count, default_material as usize)
+                                .map_err(|e| {
+                                invalid(format!(
+                                    "mesh {} primitive {}: {e}",
+                                    mesh.index(),
+                                    prim.index()
+                                ))
+                            })?
+                        }
+                        None => None,
+                    };
+                    let material = variant_material
+                        .or(prim.material().index())
+                        .map_or(default_material, |i| i as u32);
                     let id = load_primitive(
                         &mesh,
                         &prim,
                         morph_weights,
                         joints.as_deref(),
                         &buffers,
-                        default_material,
+                        material,
                         &materials,
                         &mut Geometry {
                             root: document.as_json(),
@@ -595,6 +620,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         origin: Vec3::ZERO,
         files: uris.files,
         animations: animation::summaries(&document),
+        variants: variants::names(&document),
     };
     scene.hash = content_hash(&scene);
     rebase(&mut scene);
@@ -940,15 +966,15 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_sheen",
     "KHR_materials_specular",
     "KHR_materials_transmission",
+    "KHR_materials_variants",
     "KHR_materials_volume",
     "KHR_mesh_quantization",
     "KHR_meshopt_compression",
     "KHR_texture_transform",
 ];
 
-/// Extensions that change nothing lanterna draws: metadata, and material variants (the
-/// default material is the one rendered, as the extension specifies).
-const INERT_EXTENSIONS: &[&str] = &["KHR_xmp_json_ld", "KHR_materials_variants"];
+/// Extensions that change nothing lanterna draws: metadata.
+const INERT_EXTENSIONS: &[&str] = &["KHR_xmp_json_ld"];
 
 /// One warning per extension the file uses whose data lanterna ignores.
 fn unsupported_extensions<'a>(used: impl Iterator<Item = &'a str>) -> Vec<String> {
@@ -990,6 +1016,11 @@ fn content_hash(scene: &Scene) -> String {
         }
     }
     eat(bytemuck::cast_slice(&scene.indices));
+    // Which material each primitive takes (since 2026-12-06: two files that differ only
+    // there, as a file's material variants do, had one hash).
+    for p in &scene.primitives {
+        eat(&p.material.to_le_bytes());
+    }
     // Materials up to their transmission fields, which count only where a material
     // transmits (specularly or diffusely: the volume's absorption is among them), and the
     // coat's, the sheen's, the anisotropy's, the diffuse transmission's, the thin film's

@@ -26,7 +26,7 @@ pub(super) fn load_primitive(
     morph_weights: &[f32],
     joints: Option<&[Mat4]>,
     buffers: &[gltf::buffer::Data],
-    default_material: u32,
+    material: u32,
     materials: &[gpu::Material],
     out: &mut Geometry<'_>,
     warnings: &mut Vec<String>,
@@ -177,10 +177,6 @@ pub(super) fn load_primitive(
     if let Some(bad) = tri.iter().find(|&&i| i as usize >= n) {
         return Err(format!("{name} has index {bad} but only {n} vertices"));
     }
-    let material = prim
-        .material()
-        .index()
-        .map_or(default_material, |i| i as u32);
     let opaque = materials[material as usize].alpha_mode == gpu::ALPHA_MODE_OPAQUE;
 
     let color_bytes = colors.as_ref().map_or(0, |c| c.len() * 16);

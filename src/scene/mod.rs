@@ -20,6 +20,7 @@ mod sources;
 pub mod spatial_order;
 mod stats;
 mod texture;
+mod variants;
 
 pub use animation::{AnimationInfo, Pose};
 pub use camera::{Camera, CameraOverride, ClipPlanes, Projection};
@@ -116,6 +117,8 @@ pub struct Scene {
     pub files: Vec<PathBuf>,
     /// The file's animations (whether or not the scene is posed by them).
     pub animations: Vec<AnimationInfo>,
+    /// The file's material variants (`KHR_materials_variants`; `--variant` picks one).
+    pub variants: Vec<String>,
 }
 
 impl Scene {

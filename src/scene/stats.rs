@@ -51,6 +51,8 @@ pub struct SceneStats {
     pub device_bytes: u64,
     /// The file's animations (`--animation-time` poses them).
     pub animations: Vec<super::AnimationInfo>,
+    /// The file's material variants (`--variant` picks one).
+    pub material_variants: Vec<String>,
 }
 
 impl SceneStats {
@@ -103,6 +105,7 @@ impl SceneStats {
         let transmitting = || scene.materials.iter().filter(|m| m.transmission > 0.0);
         SceneStats {
             animations: scene.animations.clone(),
+            material_variants: scene.variants.clone(),
             triangles: scene.triangle_count(),
             unique_triangles,
             vertices: scene.vertices.len() as u64,
