@@ -2698,3 +2698,100 @@ fn material_variants_swap_materials_by_name_or_index() {
         "{err}"
     );
 }
+
+/// `KHR_node_visibility`: `cornell-lights` with four of its lamps, a point light and the
+/// camera gathered under a hidden group node must load the very scene (its hash:
+/// geometry, materials, placement, lights) of the file without those lamps and that
+/// light, and keep its camera (visibility does not affect cameras); a lamp marked
+/// visible below the hidden group stays hidden. Seen to fail with the flag read but not
+/// passed to children, with a hidden node's light kept, and with hidden cameras dropped.
+/// A `visible` that is not a boolean is refused by name.
+#[test]
+fn hidden_nodes_take_their_meshes_and_lights_with_them() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        root().join("scenes/cornell-lights.bin"),
+        dir.path().join("cornell-lights.bin"),
+    )
+    .unwrap();
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(root().join("scenes/cornell-lights.gltf")).unwrap())
+            .unwrap();
+    let node = |name: &str| {
+        json["nodes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .position(|n| n["name"] == name)
+            .unwrap()
+    };
+    let lamps: Vec<usize> = (0..4).map(|i| node(&format!("light{i}"))).collect();
+    let camera = node("camera");
+    let write = |name: &str, json: &serde_json::Value| -> PathBuf {
+        let path = dir.path().join(name);
+        std::fs::write(&path, serde_json::to_vec(json).unwrap()).unwrap();
+        path
+    };
+    // Without the four lamps.
+    let mut without = json.clone();
+    without["scenes"][0]["nodes"] = json["scenes"][0]["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|n| !lamps.contains(&(n.as_u64().unwrap() as usize)))
+        .cloned()
+        .collect();
+    // With them, a point light and the camera under a hidden group.
+    let mut hidden = json.clone();
+    let nodes = hidden["nodes"].as_array_mut().unwrap();
+    nodes[lamps[2]]["extensions"] = serde_json::json!({"KHR_node_visibility": {"visible": true}});
+    nodes.push(
+        serde_json::json!({"name": "point", "translation": [0, 1, 0],
+        "extensions": {"KHR_lights_punctual": {"light": 0}}}),
+    );
+    let point = nodes.len() - 1;
+    let mut children = lamps.clone();
+    children.extend([point, camera]);
+    nodes.push(serde_json::json!({"name": "hidden", "children": children,
+        "extensions": {"KHR_node_visibility": {"visible": false}}}));
+    let group = nodes.len() - 1;
+    hidden["extensionsUsed"] = serde_json::json!(["KHR_node_visibility", "KHR_lights_punctual"]);
+    hidden["extensions"] = serde_json::json!({"KHR_lights_punctual": {"lights": [
+        {"type": "point", "intensity": 5}]}});
+    let mut roots: Vec<serde_json::Value> = without["scenes"][0]["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|n| n.as_u64().unwrap() as usize != camera)
+        .cloned()
+        .collect();
+    roots.push(group.into());
+    hidden["scenes"][0]["nodes"] = roots.into();
+    let without = load(&write("without.gltf", &without));
+    let hidden_path = write("hidden.gltf", &hidden);
+    let loaded = load(&hidden_path);
+    assert_eq!(loaded.hash, without.hash);
+    assert_eq!(loaded.instances.len(), without.instances.len());
+    assert!(loaded.punctual.is_empty());
+    assert_eq!(loaded.cameras.len(), 1, "the camera under the hidden group");
+    assert_eq!(
+        loaded.cameras[0].to_world, without.cameras[0].to_world,
+        "the camera keeps its place"
+    );
+    // The group visible: everything is back.
+    let mut shown = hidden.clone();
+    shown["nodes"][group]["extensions"]["KHR_node_visibility"]["visible"] = true.into();
+    let shown = load(&write("shown.gltf", &shown));
+    assert_eq!(shown.instances.len(), without.instances.len() + 4);
+    assert_eq!(shown.punctual.len(), 1);
+    // Not a boolean.
+    let mut bad = hidden.clone();
+    bad["nodes"][group]["extensions"]["KHR_node_visibility"]["visible"] = "no".into();
+    let err = Scene::load(&write("bad.gltf", &bad), &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("node `hidden`: KHR_node_visibility `visible` is \"no\", not true or false"),
+        "{err}"
+    );
+}

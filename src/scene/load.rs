@@ -262,8 +262,11 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
             document.nodes().filter(|n| !is_child[n.index()]).collect()
         }
     };
-    let mut stack: Vec<(gltf::Node<'_>, Mat4, usize)> =
-        roots.into_iter().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+    // (node, parent's world transform, depth, whether the parent is visible).
+    let mut stack: Vec<(gltf::Node<'_>, Mat4, usize, bool)> = roots
+        .into_iter()
+        .map(|n| (n, Mat4::IDENTITY, 0, true))
+        .collect();
 
     let mut vertices = Vec::new();
     let mut colors = Vec::new();
@@ -299,8 +302,10 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     warnings.extend(unsupported_extensions(document.extensions_used()));
     let textures = std::mem::take(&mut registry.textures);
     let mut visited = vec![false; document.nodes().len()];
+    // Nodes with a mesh or a light that KHR_node_visibility hides.
+    let mut hidden = 0usize;
 
-    while let Some((node, parent, depth)) = stack.pop() {
+    while let Some((node, parent, depth, parent_visible)) = stack.pop() {
         if depth > 256 {
             return Err(invalid(
                 "node hierarchy deeper than 256 levels (a cycle?)".into(),
@@ -321,8 +326,24 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
                 node_name(&node)
             )));
         }
+        // KHR_node_visibility: a hidden node hides its meshes and lights and those of
+        // every node below it, whatever theirs say; cameras are not affected.
+        let visible = parent_visible
+            && match node
+                .extension_value(NODE_VISIBILITY)
+                .map(|v| v.get("visible"))
+            {
+                None | Some(None) => true,
+                Some(Some(serde_json::Value::Bool(b))) => *b,
+                Some(Some(other)) => {
+                    return Err(invalid(format!(
+                        "node {}: {NODE_VISIBILITY} `visible` is {other}, not true or false",
+                        node_name(&node)
+                    )))
+                }
+            };
         for c in node.children() {
-            stack.push((c, world, depth + 1));
+            stack.push((c, world, depth + 1, visible));
         }
         if let Some(cam) = node.camera() {
             let (znear, zfar) = match cam.projection() {
@@ -391,6 +412,10 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
                 far_planes.push((cam.index(), camera.rigid_to_world().inverse(), clip.far));
             }
             cameras.push((node.index(), camera));
+        }
+        if !visible {
+            hidden += usize::from(node.light().is_some() || node.mesh().is_some());
+            continue;
         }
         if let Some(light) = node.light() {
             punctual.push(convert_light(&light, &world, &node_name(&node)).map_err(&invalid)?);
@@ -541,6 +566,12 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
                 });
             }
         }
+    }
+    if hidden > 0 {
+        log::info!(
+            "{}: {hidden} node(s) with a mesh or light hidden ({NODE_VISIBILITY})",
+            path.display()
+        );
     }
     // Traversal order is a stack; keep files' declaration order for stable indices.
     cameras.sort_by_key(|(node, _)| *node);
@@ -928,6 +959,9 @@ fn parse(bytes: &[u8], warnings: &mut Vec<String>) -> Result<gltf::Gltf, gltf::E
 
 const WEBP: &str = "EXT_texture_webp";
 
+/// Hides nodes and everything below them (their meshes and lights, not their cameras).
+const NODE_VISIBILITY: &str = "KHR_node_visibility";
+
 /// Points every texture with an `EXT_texture_webp` image at it.
 fn prefer_webp_sources(value: &mut serde_json::Value) {
     let Some(textures) = value.get_mut("textures").and_then(|t| t.as_array_mut()) else {
@@ -970,6 +1004,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_volume",
     "KHR_mesh_quantization",
     "KHR_meshopt_compression",
+    "KHR_node_visibility",
     "KHR_texture_transform",
 ];
 
