@@ -159,9 +159,14 @@ def test_animation_time_poses_the_scene(tmp_path):
 
     def render(**pose):
         scene = lanterna.load_scene(path, **pose)
-        return np.asarray(lanterna.Renderer(scene, W, H, method="pt", seed=1).render(spp=4))
+        return lanterna.Renderer(scene, W, H, method="pt", seed=1).render(spp=4)
 
     still, start, lifted = render(), render(animation_time=0.0), render(animation_time=1.0, animation="lift")
+    # The pose is recorded in the metadata, and makes a scene of its own.
+    assert lifted.meta["animation_time"] == 1 and lifted.meta["animation"] == "lift"
+    assert "animation_time" not in still.meta
+    assert lifted.meta["scene_hash"] != still.meta["scene_hash"]
+    still, start, lifted = (np.asarray(i) for i in (still, start, lifted))
     np.testing.assert_array_equal(still, start)
     assert np.abs(lifted - start).mean() > 0.01 * start.mean()
     assert lanterna.load_scene(path).info()["animations"][0]["name"] == "0 (`lift`)"
@@ -195,9 +200,11 @@ def test_material_variant_is_chosen_by_name_or_index(tmp_path):
 
     def render(**variant):
         scene = lanterna.load_scene(path, **variant)
-        return np.asarray(lanterna.Renderer(scene, W, H, method="pt", seed=1).render(spp=4))
+        return lanterna.Renderer(scene, W, H, method="pt", seed=1).render(spp=4)
 
     own, white, by_name, by_index = render(), render(variant="white"), render(variant="blue"), render(variant=1)
+    assert by_index.meta["variant"] == "blue" and "variant" not in own.meta
+    own, white, by_name, by_index = (np.asarray(i) for i in (own, white, by_name, by_index))
     np.testing.assert_array_equal(own, white)
     np.testing.assert_array_equal(by_name, by_index)
     assert np.abs(by_name - own).mean() > 0.01 * own.mean()

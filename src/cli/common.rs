@@ -531,13 +531,13 @@ pub fn ensure_parent(path: &std::path::Path) -> Result<()> {
 pub fn render_meta(
     settings: &RenderSettings,
     scene: &SceneArgs,
-    scene_hash: &str,
+    loaded: &lanterna::scene::Scene,
     device: &lanterna::vk::Device,
 ) -> lanterna::image_io::RenderMeta {
     lanterna::render::output::render_meta(
         settings,
         &scene.scene.display().to_string(),
-        scene_hash,
+        loaded,
         &device.info.name,
     )
 }

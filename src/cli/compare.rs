@@ -144,7 +144,7 @@ fn prepare(args: &Args, reference: &Image) -> anyhow::Result<Prepared> {
         settings.clone(),
         args.device.shaders(),
     )?;
-    let meta = common::render_meta(&renderer.settings, &view, &loaded.scene.hash, &device);
+    let meta = common::render_meta(&renderer.settings, &view, &loaded.scene, &device);
     Ok(Prepared {
         renderer,
         settings,

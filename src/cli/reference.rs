@@ -124,7 +124,7 @@ fn open_renderer(args: &Args) -> anyhow::Result<Box<dyn SampleRenderer>> {
         args.device.shaders(),
     )?;
     renderer.prepare()?;
-    let meta = common::render_meta(&renderer.settings, &args.scene, &loaded.scene.hash, &device);
+    let meta = common::render_meta(&renderer.settings, &args.scene, &loaded.scene, &device);
     Ok(Box::new(GpuSamples {
         renderer,
         meta,

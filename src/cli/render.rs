@@ -346,7 +346,7 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
             log::info!("saved the SD-tree to {}", path.display());
         }
     }
-    let mut meta = common::render_meta(&renderer.settings, &args.scene, &loaded.scene.hash, device);
+    let mut meta = common::render_meta(&renderer.settings, &args.scene, &loaded.scene, device);
     meta.spp = Some(film.spp);
     meta.sample_offset = Some(film.sample_offset);
     meta.render_seconds = Some(render_seconds);

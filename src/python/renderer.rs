@@ -261,7 +261,7 @@ impl PyRenderer {
         let mut meta = render_meta(
             &inner.renderer.settings,
             &inner.scene_path,
-            &inner.loaded.scene.hash,
+            &inner.loaded.scene,
             &inner.renderer.device.info.name,
         );
         meta.render_seconds = Some(outcome.seconds);
@@ -484,7 +484,7 @@ impl PyRenderer {
         let meta = render_meta(
             &base,
             &inner.scene_path,
-            &inner.loaded.scene.hash,
+            &inner.loaded.scene,
             &inner.renderer.device.info.name,
         );
         let cancel = AtomicBool::new(false);

@@ -12,16 +12,28 @@ use std::str::FromStr;
 
 /// Metadata every render's EXR carries, from what was rendered and how: every setting
 /// from the settings' serde form.
+/// The version of the scene loaded (`--animation-time`, `--animation`, `--variant`) is
+/// recorded as the extra keys `animation_time`, `animation` and `variant` where given.
 pub fn render_meta(
     settings: &RenderSettings,
     scene_path: &str,
-    scene_hash: &str,
+    scene: &crate::scene::Scene,
     device_name: &str,
 ) -> RenderMeta {
     let mut meta = RenderMeta::new();
     meta.device = Some(device_name.to_string());
     meta.scene_path = Some(scene_path.to_string());
-    meta.scene_hash = Some(scene_hash.to_string());
+    meta.scene_hash = Some(scene.hash.clone());
+    if let Some(pose) = &scene.pose {
+        meta.extra
+            .insert("animation_time".into(), pose.time.to_string());
+        if let Some(a) = &pose.animation {
+            meta.extra.insert("animation".into(), a.clone());
+        }
+    }
+    if let Some(v) = &scene.variant {
+        meta.extra.insert("variant".into(), v.clone());
+    }
     set_settings_meta(&mut meta, settings, None);
     meta
 }

@@ -652,6 +652,13 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         files: uris.files,
         animations: animation::summaries(&document),
         variants: variants::names(&document),
+        pose: options.pose.clone(),
+        variant: variant.map(|v| {
+            variants::names(&document)
+                .get(v)
+                .cloned()
+                .unwrap_or_else(|| v.to_string())
+        }),
     };
     scene.hash = content_hash(&scene);
     rebase(&mut scene);

@@ -119,6 +119,10 @@ pub struct Scene {
     pub animations: Vec<AnimationInfo>,
     /// The file's material variants (`KHR_materials_variants`; `--variant` picks one).
     pub variants: Vec<String>,
+    /// The version of the file loaded: the animation pose and the material variant (by
+    /// name) asked for, which renders record in their metadata.
+    pub pose: Option<Pose>,
+    pub variant: Option<String>,
 }
 
 impl Scene {
