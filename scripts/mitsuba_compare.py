@@ -322,6 +322,12 @@ def render_lanterna_batches(args, manifest, out_dir):
         ]
         if manifest.get("camera_index") is not None:
             cmd += ["--camera", str(manifest["camera_index"])]
+        # The version of the file the export shows: its animation pose and variant.
+        for key, flag in (("animation_time", "--animation-time"), ("animation", "--animation"),
+                          ("variant", "--variant")):
+            if manifest.get(key) is not None and not any(
+                    a == flag or a.startswith(flag + "=") for a in args.lanterna_arg):
+                cmd += [flag, str(manifest[key])]
         cmd += args.lanterna_arg
         if manifest.get("hide_emitters") and "--hide-emitters" not in cmd:
             cmd.append("--hide-emitters")

@@ -205,6 +205,11 @@ pub fn export(
         "generator": format!("lanterna {}", env!("CARGO_PKG_VERSION")),
         "scene_path": scene.path.display().to_string(),
         "scene_hash": scene.hash,
+        // The version of the file exported (--animation-time, --animation, --variant):
+        // scripts/mitsuba_compare.py renders lanterna's side with the same.
+        "animation_time": scene.pose.as_ref().map(|p| p.time),
+        "animation": scene.pose.as_ref().and_then(|p| p.animation.clone()),
+        "variant": scene.variant,
         "camera": camera.name,
         "camera_index": scene.cameras.iter().position(|c| {
             c.name == camera.name && c.to_world == camera.to_world && c.projection == camera.projection
