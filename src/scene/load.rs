@@ -906,7 +906,7 @@ fn rebase(scene: &mut Scene) {
 ///   fallback for viewers without WebP, which the extension lets a file leave out, and
 ///   the crate cannot read a texture without one);
 /// * animations the crate cannot read (`KHR_animation_pointer` channels have no node)
-///   are left out with a warning: lanterna does not play animations.
+///   are left out with a warning: the file renders its static pose.
 fn parse(bytes: &[u8], warnings: &mut Vec<String>) -> Result<gltf::Gltf, gltf::Error> {
     // The name in quotes anywhere in the JSON (a GLB's first chunk): it must be listed
     // in `extensionsUsed` wherever it is used.
@@ -952,8 +952,9 @@ fn parse(bytes: &[u8], warnings: &mut Vec<String>) -> Result<gltf::Gltf, gltf::E
             };
             let count = animations.as_array().map_or(0, Vec::len);
             warnings.push(format!(
-                "has {count} animation(s) that cannot be read ({first}); animations are not \
-                 played, so they are left out"
+                "has {count} animation(s) that cannot be read ({first}), such as \
+                 KHR_animation_pointer channels: they are left out (the scene renders its \
+                 static pose, and --animation-time finds no animation to play)"
             ));
             root
         }
