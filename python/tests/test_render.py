@@ -15,6 +15,25 @@ def cli_render(cli, tmp_path, *args):
     return lanterna.read_exr(out)
 
 
+def edited_scene(tmp_path, edit):
+    """cornell-lights' JSON passed through ``edit`` (which changes it in place), written
+    beside a copy of its buffer; returns the new file's path."""
+    import json
+    import shutil
+
+    gltf = json.loads(SCENE.read_text())
+    edit(gltf)
+    shutil.copy(SCENE.with_suffix(".bin"), tmp_path / "cornell-lights.bin")
+    path = tmp_path / "edited.gltf"
+    path.write_text(json.dumps(gltf))
+    return path
+
+
+def render_pt(path, **load):
+    """A 4-spp ``pt`` render of the scene at ``path`` loaded with ``load``'s options."""
+    return lanterna.Renderer(lanterna.load_scene(path, **load), W, H, method="pt", seed=1).render(spp=4)
+
+
 def test_render_equals_cli_bit_for_bit(scene, ris, cli, tmp_path):
     img = ris.render(spp=6, sample_offset=5)
     ref = cli_render(cli, tmp_path, "--method", "ris", "--seed", "3", "--max-depth", "3",
@@ -109,19 +128,10 @@ def test_clip_planes_follow_the_file_unless_turned_off(tmp_path):
     """The file camera's znear/zfar clip camera rays (``--no-clip-planes`` as
     ``clip_planes=False``): a far plane in front of cornell-lights' back wall leaves the
     wall's pixels black, and turning the planes off shows it."""
-    import json
-    import shutil
-
-    gltf = json.loads(SCENE.read_text())
-    gltf["cameras"][0]["perspective"].update(znear=3.3, zfar=4.6)
-    shutil.copy(SCENE.with_suffix(".bin"), tmp_path / "cornell-lights.bin")
-    path = tmp_path / "cornell-lights.gltf"
-    path.write_text(json.dumps(gltf))
+    path = edited_scene(tmp_path, lambda g: g["cameras"][0]["perspective"].update(znear=3.3, zfar=4.6))
     wall = {}
     for clip in (True, False):
-        img = lanterna.Renderer(lanterna.load_scene(path, clip_planes=clip), W, H,
-                                method="pt").render(spp=4)
-        wall[clip] = np.asarray(img)[H // 4, W // 2]
+        wall[clip] = np.asarray(render_pt(path, clip_planes=clip))[H // 4, W // 2]
     assert np.all(wall[True] == 0.0), wall
     assert np.all(wall[False] > 0.05), wall
 
@@ -132,36 +142,29 @@ def test_animation_time_poses_the_scene(tmp_path):
     elsewhere at time 1 than at time 0, and the file's static pose is time 0's; an
     unknown animation and a time that is not a number are ValueErrors."""
     import base64
-    import json
-    import shutil
     import struct
 
     import pytest
 
-    gltf = json.loads(SCENE.read_text())
-    data = struct.pack("<8f", 0, 1, 0, 0, 0, 0, 0.3, 0)
-    gltf["buffers"].append({"byteLength": len(data),
-                            "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()})
-    buffer = len(gltf["buffers"]) - 1
-    gltf["bufferViews"] += [{"buffer": buffer, "byteOffset": 0, "byteLength": 8},
-                            {"buffer": buffer, "byteOffset": 8, "byteLength": 24}]
-    views = len(gltf["bufferViews"])
-    gltf["accessors"] += [{"bufferView": views - 2, "componentType": 5126, "count": 2, "type": "SCALAR",
-                           "min": [0], "max": [1]},
-                          {"bufferView": views - 1, "componentType": 5126, "count": 2, "type": "VEC3"}]
-    accessors = len(gltf["accessors"])
-    blockers = next(i for i, n in enumerate(gltf["nodes"]) if n.get("name") == "blockers")
-    gltf["animations"] = [{"name": "lift", "samplers": [{"input": accessors - 2, "output": accessors - 1}],
-                           "channels": [{"sampler": 0, "target": {"node": blockers, "path": "translation"}}]}]
-    shutil.copy(SCENE.with_suffix(".bin"), tmp_path / "cornell-lights.bin")
-    path = tmp_path / "animated.gltf"
-    path.write_text(json.dumps(gltf))
+    def animate(gltf):
+        data = struct.pack("<8f", 0, 1, 0, 0, 0, 0, 0.3, 0)
+        gltf["buffers"].append({"byteLength": len(data),
+                                "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()})
+        buffer = len(gltf["buffers"]) - 1
+        gltf["bufferViews"] += [{"buffer": buffer, "byteOffset": 0, "byteLength": 8},
+                                {"buffer": buffer, "byteOffset": 8, "byteLength": 24}]
+        views = len(gltf["bufferViews"])
+        gltf["accessors"] += [{"bufferView": views - 2, "componentType": 5126, "count": 2, "type": "SCALAR",
+                               "min": [0], "max": [1]},
+                              {"bufferView": views - 1, "componentType": 5126, "count": 2, "type": "VEC3"}]
+        accessors = len(gltf["accessors"])
+        blockers = next(i for i, n in enumerate(gltf["nodes"]) if n.get("name") == "blockers")
+        gltf["animations"] = [{"name": "lift", "samplers": [{"input": accessors - 2, "output": accessors - 1}],
+                               "channels": [{"sampler": 0, "target": {"node": blockers, "path": "translation"}}]}]
 
-    def render(**pose):
-        scene = lanterna.load_scene(path, **pose)
-        return lanterna.Renderer(scene, W, H, method="pt", seed=1).render(spp=4)
-
-    still, start, lifted = render(), render(animation_time=0.0), render(animation_time=1.0, animation="lift")
+    path = edited_scene(tmp_path, animate)
+    still, start = render_pt(path), render_pt(path, animation_time=0.0)
+    lifted = render_pt(path, animation_time=1.0, animation="lift")
     # The pose is recorded in the metadata, and makes a scene of its own.
     assert lifted.meta["animation_time"] == 1 and lifted.meta["animation"] == "lift"
     assert "animation_time" not in still.meta
@@ -181,28 +184,20 @@ def test_material_variant_is_chosen_by_name_or_index(tmp_path):
     blockers of cornell-lights in a blue variant render differently from the file's own
     white, by name and by index alike; an unknown variant is a ValueError naming the
     variants."""
-    import json
-    import shutil
-
     import pytest
 
-    gltf = json.loads(SCENE.read_text())
-    blue = len(gltf["materials"])
-    gltf["materials"].append({"name": "blue", "pbrMetallicRoughness": {"baseColorFactor": [0.1, 0.2, 0.8, 1]}})
-    gltf["extensionsUsed"] = ["KHR_materials_variants"]
-    gltf["extensions"] = {"KHR_materials_variants": {"variants": [{"name": "white"}, {"name": "blue"}]}}
-    blockers = next(m for m in gltf["meshes"] if m.get("name") == "blockers")
-    blockers["primitives"][0]["extensions"] = {
-        "KHR_materials_variants": {"mappings": [{"material": blue, "variants": [1]}]}}
-    shutil.copy(SCENE.with_suffix(".bin"), tmp_path / "cornell-lights.bin")
-    path = tmp_path / "variants.gltf"
-    path.write_text(json.dumps(gltf))
+    def add_variants(gltf):
+        blue = len(gltf["materials"])
+        gltf["materials"].append({"name": "blue", "pbrMetallicRoughness": {"baseColorFactor": [0.1, 0.2, 0.8, 1]}})
+        gltf["extensionsUsed"] = ["KHR_materials_variants"]
+        gltf["extensions"] = {"KHR_materials_variants": {"variants": [{"name": "white"}, {"name": "blue"}]}}
+        blockers = next(m for m in gltf["meshes"] if m.get("name") == "blockers")
+        blockers["primitives"][0]["extensions"] = {
+            "KHR_materials_variants": {"mappings": [{"material": blue, "variants": [1]}]}}
 
-    def render(**variant):
-        scene = lanterna.load_scene(path, **variant)
-        return lanterna.Renderer(scene, W, H, method="pt", seed=1).render(spp=4)
-
-    own, white, by_name, by_index = render(), render(variant="white"), render(variant="blue"), render(variant=1)
+    path = edited_scene(tmp_path, add_variants)
+    own, white = render_pt(path), render_pt(path, variant="white")
+    by_name, by_index = render_pt(path, variant="blue"), render_pt(path, variant=1)
     assert by_index.meta["variant"] == "blue" and "variant" not in own.meta
     own, white, by_name, by_index = (np.asarray(i) for i in (own, white, by_name, by_index))
     np.testing.assert_array_equal(own, white)
