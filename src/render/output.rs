@@ -12,6 +12,7 @@ use std::str::FromStr;
 
 /// Metadata every render's EXR carries, from what was rendered and how: every setting
 /// from the settings' serde form.
+///
 /// The version of the scene loaded (`--animation-time`, `--animation`, `--variant`) is
 /// recorded as the extra keys `animation_time`, `animation` and `variant` where given.
 pub fn render_meta(

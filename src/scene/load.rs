@@ -232,11 +232,16 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         );
     }
     let default_material = materials.len() as u32;
-    let variant_count = variants::names(&document).len();
+    // A malformed variant list matters only to a render that asks for a variant.
+    let variant_names = variants::names(&document);
     let variant = match &options.variant {
-        Some(wanted) => Some(variants::choose(&document, wanted).map_err(&invalid)?),
+        Some(wanted) => {
+            let names = variant_names.as_deref().map_err(|e| invalid(e.clone()))?;
+            Some(variants::choose(names, wanted).map_err(&invalid)?)
+        }
         None => None,
     };
+    let variant_names = variant_names.unwrap_or_default();
     materials.push(material::default_material());
     material_names.push("default".into());
 
@@ -502,16 +507,19 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
                 Some(id) => *id,
                 None => {
                     let variant_material = match variant {
-                        Some(v) => {
-                            variants::material(&prim, v, variant_count, default_material as usize)
-                                .map_err(|e| {
-                                invalid(format!(
-                                    "mesh {} primitive {}: {e}",
-                                    mesh.index(),
-                                    prim.index()
-                                ))
-                            })?
-                        }
+                        Some(v) => variants::material(
+                            &prim,
+                            v,
+                            variant_names.len(),
+                            default_material as usize,
+                        )
+                        .map_err(|e| {
+                            invalid(format!(
+                                "mesh {} primitive {}: {e}",
+                                mesh.index(),
+                                prim.index()
+                            ))
+                        })?,
                         None => None,
                     };
                     let material = variant_material
@@ -651,14 +659,9 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         origin: Vec3::ZERO,
         files: uris.files,
         animations: animation::summaries(&document),
-        variants: variants::names(&document),
         pose: options.pose.clone(),
-        variant: variant.map(|v| {
-            variants::names(&document)
-                .get(v)
-                .cloned()
-                .unwrap_or_else(|| v.to_string())
-        }),
+        variant: variant.map(|v| variant_names[v].clone()),
+        variants: variant_names,
     };
     scene.hash = content_hash(&scene);
     rebase(&mut scene);

@@ -8,12 +8,8 @@
 pub(super) const EXTENSION: &str = "KHR_materials_variants";
 
 /// The file's variant names (`variant i` where one has none); empty when the file has
-/// none, or their list is malformed (then `choose` refuses any `--variant`).
-pub(super) fn names(document: &gltf::Document) -> Vec<String> {
-    read_names(document).unwrap_or_default()
-}
-
-fn read_names(document: &gltf::Document) -> Result<Vec<String>, String> {
+/// none, an error when their list is malformed.
+pub(super) fn names(document: &gltf::Document) -> Result<Vec<String>, String> {
     let Some(ext) = document.extension_value(EXTENSION) else {
         return Ok(Vec::new());
     };
@@ -32,9 +28,8 @@ fn read_names(document: &gltf::Document) -> Result<Vec<String>, String> {
         .collect())
 }
 
-/// The index of the variant `wanted` names, by name or index.
-pub(super) fn choose(document: &gltf::Document, wanted: &str) -> Result<usize, String> {
-    let names = read_names(document)?;
+/// The index of the variant `wanted` names among `names`, by name or index.
+pub(super) fn choose(names: &[String], wanted: &str) -> Result<usize, String> {
     names
         .iter()
         .position(|n| n == wanted)
