@@ -153,6 +153,55 @@ vec3 light_triangle_radiance(LightTriangle lt, vec2 b, vec3 dir) {
     return e;
 }
 
+// The interval of the `n` increasing angles at light_profiles(first …) that holds x
+// (clamped to the ends), and where in it x lies.
+uint profile_bracket(uint first, uint n, float x, out float t) {
+    uint lo = 0u;
+    uint hi = n - 1u;
+    while (hi - lo > 1u) {  // angles[lo] ≤ x < angles[hi]
+        uint mid = (lo + hi) / 2u;
+        if (light_profiles(first + mid) <= x) lo = mid;
+        else hi = mid;
+    }
+    float a = light_profiles(first + lo);
+    float b = light_profiles(first + lo + 1u);
+    t = clamp((x - a) / max(b - a, 1e-12), 0.0, 1.0);
+    return lo;
+}
+
+// Candela of light l's IES profile toward the unit direction w it emits along
+// (EXT_lights_ies; src/scene/ies.rs packs the profile and says the frame: vertical angle
+// θ from l.direction, horizontal angle φ from l.tangent, counter-clockwise about −direction).
+// Bilinear in (θ, φ) between the file's angles; 0 outside its vertical angles.
+float punctual_profile(PunctualLight l, vec3 w) {
+    uint o = l.profile & 0x7fffffffu;
+    uint nv = floatBitsToUint(light_profiles(o));
+    uint nh = floatBitsToUint(light_profiles(o + 1u));
+    uint vertical = o + 2u;
+    uint horizontal = vertical + nv;
+    uint table = horizontal + nh;
+    float theta = acos(clamp(dot(w, l.direction), -1.0, 1.0));
+    if (theta < light_profiles(vertical) - 1e-6 || theta > light_profiles(vertical + nv - 1u) + 1e-6) return 0.0;
+    float tv = 0.0;
+    uint iv = nv > 1u ? profile_bracket(vertical, nv, theta, tv) : 0u;
+    uint iv1 = min(iv + 1u, nv - 1u);
+    float th = 0.0;
+    uint ih = 0u;
+    if (nh > 1u) {
+        // The frame: x along the tangent, z against the light's direction, y = z × x
+        // (turned over for a mirrored node).
+        vec3 y = cross(-l.direction, l.tangent);
+        if ((l.profile & 0x80000000u) != 0u) y = -y;
+        float phi = atan(dot(w, y), dot(w, l.tangent));
+        if (phi < 0.0) phi += 2.0 * PI;
+        ih = profile_bracket(horizontal, nh, phi, th);
+    }
+    uint ih1 = min(ih + 1u, nh - 1u);
+    float c0 = mix(light_profiles(table + ih * nv + iv), light_profiles(table + ih * nv + iv1), tv);
+    float c1 = mix(light_profiles(table + ih1 * nv + iv), light_profiles(table + ih1 * nv + iv1), tv);
+    return mix(c0, c1, th);
+}
+
 LightSample sample_punctual(uint index, vec3 x) {
     PunctualLight l = punctual_lights(index);
     LightSample s;
@@ -180,6 +229,7 @@ LightSample sample_punctual(uint index, vec3 x) {
             float t = clamp((c - l.cos_outer) / max(l.cos_inner - l.cos_outer, 1e-4), 0.0, 1.0);
             falloff = t * t;
         }
+        if (l.profile != INVALID_INDEX) falloff = punctual_profile(l, -s.wi);
         s.Le_G = l.intensity * falloff / d2;
     }
     return s;

@@ -55,6 +55,7 @@ SCENE_ARRAY(AliasEntry, model_alias, ModelAliasBuffer, model_alias_bound, BINDIN
 SCENE_ARRAY(AliasEntry, triangle_alias, TriangleAliasBuffer, triangle_alias_bound, BINDING_TRIANGLE_ALIAS, TriangleAliasRef, triangle_alias_address)
 SCENE_ARRAY(LightTreeNode, light_tree, LightTreeBuffer, light_tree_bound, BINDING_LIGHT_TREE, LightTreeRef, light_tree_address)
 SCENE_ARRAY(PunctualLight, punctual_lights, PunctualBuffer, punctual_lights_bound, BINDING_PUNCTUAL_LIGHTS, PunctualLightRef, punctual_lights_address)
+SCENE_VALUES(float, light_profiles, LightProfileBuffer, light_profiles_bound, BINDING_LIGHT_PROFILES, LightProfileRef, light_profiles_address)
 SCENE_VALUES(uint, triangle_light_index, TriangleLightIndexBuffer, triangle_light_index_bound, BINDING_TRIANGLE_LIGHT_INDEX, TriangleLightIndexRef, triangle_light_index_address)
 #ifdef LANTERNA_SOFTWARE_TRAVERSAL
 SCENE_ARRAY(BvhNode, bvh_nodes, BvhNodeBuffer, bvh_nodes_bound, BINDING_BVH_NODES, BvhNodeRef, bvh_nodes_address)

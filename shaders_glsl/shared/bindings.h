@@ -50,7 +50,9 @@
 #define BINDING_LIGHT_VISIBILITY 34
 // The light tree's nodes (--source tree, LightTreeNode).
 #define BINDING_LIGHT_TREE 35
-#define BINDING_COUNT 36
+// IES light profiles (EXT_lights_ies; PunctualLight.profile, src/scene/ies.rs).
+#define BINDING_LIGHT_PROFILES 36
+#define BINDING_COUNT 37
 
 // Upper bound on bindless textures in one scene.
 #define MAX_TEXTURES 8192

@@ -187,15 +187,20 @@ struct AliasEntry {
     float pmf;
 };
 
-// KHR_lights_punctual light, in world space.
+// KHR_lights_punctual or EXT_lights_ies light, in world space.
 struct PunctualLight {
     vec3 position;
     uint kind;          // PUNCTUAL_*
-    vec3 direction;     // direction the light travels (spot, directional)
+    vec3 direction;     // direction the light travels (spot, directional); an IES
+                        // profile's vertical angle 0 (the node's −Z)
     float range;        // 0 = infinite
-    vec3 intensity;     // colour × intensity (W/sr for point/spot, W/m² for directional)
+    vec3 intensity;     // colour × intensity (W/sr for point/spot, W/m² for directional;
+                        // an IES light's colour × multiplier, times its profile's candela)
     float cos_inner;
     float cos_outer;
+    uint profile;       // EXT_lights_ies: offset of its profile in the light profile
+                        // array (bit 31: a mirrored frame), INVALID_INDEX without one
+    vec3 tangent;       // the profile's horizontal angle 0 (the node's +X), ⟂ direction
 };
 
 // Per-frame parameters.
@@ -240,6 +245,7 @@ struct FrameParams {
     uvec2 bvh_nodes_address;
     uvec2 bvh_triangles_address;
     uvec2 light_tree_address;
+    uvec2 light_profiles_address;
     // World-space light reuse (inc/light_reuse.glsl): cells in each half of the hash
     // grid (a power of two; 0 without reuse), a cell's edge in pixel footprints at its
     // distance from the camera, and the most canonical reservoirs a cell stands for.

@@ -16,6 +16,7 @@ pub mod tree;
 use crate::gpu;
 use crate::scene::{Scene, SceneError};
 use glam::Vec3;
+use std::collections::HashMap;
 
 /// GPU-ready light data.
 #[derive(Debug)]
@@ -204,9 +205,18 @@ impl LightTable {
         }
 
         let radius = 0.5 * scene.extent();
+        // Each IES profile's flux (∫ candela dω), once per profile.
+        let mut profile_flux: HashMap<u32, f64> = HashMap::new();
         for (i, l) in scene.punctual.iter().enumerate() {
             let lum = luminance(l.intensity) as f64;
             let power = match l.kind {
+                gpu::PUNCTUAL_POINT if l.profile != gpu::INVALID_INDEX => {
+                    let offset = l.profile & 0x7fff_ffff;
+                    let flux = *profile_flux.entry(offset).or_insert_with(|| {
+                        crate::scene::ies::unpack(&scene.light_profiles, offset as usize).flux()
+                    });
+                    flux * lum
+                }
                 gpu::PUNCTUAL_POINT => 4.0 * std::f64::consts::PI * lum,
                 gpu::PUNCTUAL_SPOT => {
                     // Flux of the smooth cone falloff, approximated by its mean cone.

@@ -611,6 +611,8 @@ mod tests {
                 intensity: [1.0; 3],
                 cos_inner: cos_outer + 0.5 * (1.0 - cos_outer),
                 cos_outer,
+                profile: gpu::INVALID_INDEX,
+                tangent: [0.0; 3],
             });
             models.push(model(0, 0, k, 1.0 + r.next()));
         }
@@ -730,6 +732,8 @@ mod tests {
             intensity: [1.0; 3],
             cos_inner: 1.0,
             cos_outer: 1.0,
+            profile: gpu::INVALID_INDEX,
+            tangent: [0.0; 3],
         }
     }
 

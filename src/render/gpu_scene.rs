@@ -32,6 +32,8 @@ pub struct GpuScene {
     pub triangle_alias: Buffer,
     pub light_tree: Buffer,
     pub punctual: Buffer,
+    /// `Scene::light_profiles` (one unread element when empty).
+    pub light_profiles: Buffer,
     pub triangle_light_index: Buffer,
     pub textures: Vec<Texture>,
     /// Sampler of each texture (index into `samplers`).
@@ -166,6 +168,16 @@ impl GpuScene {
         )?;
         let light_tree = Buffer::from_slice(device, &lights.tree, STORAGE, "light tree")?;
         let punctual = Buffer::from_slice(device, &scene.punctual, STORAGE, "punctual lights")?;
+        let light_profiles = Buffer::from_slice(
+            device,
+            if scene.light_profiles.is_empty() {
+                &[0.0f32]
+            } else {
+                &scene.light_profiles
+            },
+            STORAGE,
+            "light profiles",
+        )?;
         let triangle_light_index = Buffer::from_slice(
             device,
             &lights.triangle_light_index,
@@ -238,6 +250,7 @@ impl GpuScene {
             &triangle_alias,
             &light_tree,
             &punctual,
+            &light_profiles,
             &triangle_light_index,
         ]
         .iter()
@@ -275,6 +288,7 @@ impl GpuScene {
             triangle_alias,
             light_tree,
             punctual,
+            light_profiles,
             triangle_light_index,
             textures,
             texture_samplers,

@@ -94,6 +94,7 @@ impl Renderer {
             (gpu::BINDING_TRIANGLE_ALIAS, &g.triangle_alias),
             (gpu::BINDING_LIGHT_TREE, &g.light_tree),
             (gpu::BINDING_PUNCTUAL_LIGHTS, &g.punctual),
+            (gpu::BINDING_LIGHT_PROFILES, &g.light_profiles),
             (gpu::BINDING_TRIANGLE_LIGHT_INDEX, &g.triangle_light_index),
             (gpu::BINDING_FILM, &self.film),
             (gpu::BINDING_AOV, &self.aov),

@@ -422,6 +422,7 @@ impl Renderer {
             bvh_nodes_address: split(bvh_nodes),
             bvh_triangles_address: split(bvh_triangles),
             light_tree_address: split(g.light_tree.address),
+            light_profiles_address: split(g.light_profiles.address),
             reuse_cells: if s.light_reuse.world {
                 self.reuse_cell_count
             } else {

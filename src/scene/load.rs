@@ -6,8 +6,9 @@
 use super::animation::{self, Pose};
 use super::camera::{Camera, ClipPlanes, Projection};
 use super::gltf_check::{self, node_name};
+use super::ies;
 use super::load_instancing;
-use super::load_light::convert_light;
+use super::load_light::{convert_ies_light, convert_light};
 use super::load_primitive::{load_primitive, Geometry};
 use super::material::{self, TextureRegistry};
 use super::meshopt;
@@ -245,6 +246,32 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     materials.push(material::default_material());
     material_names.push("default".into());
 
+    // EXT_lights_ies profiles, each packed once into the scene's profile array.
+    let mut light_profiles = Vec::new();
+    let mut profile_offsets = Vec::new();
+    if let Some(ext) = document.extension_value(ies::EXTENSION) {
+        let list = ext
+            .get("lights")
+            .and_then(|l| l.as_array())
+            .ok_or_else(|| invalid(format!("{} has no `lights` array", ies::EXTENSION)))?;
+        let view = |i: usize| {
+            let v = document.views().nth(i)?;
+            // check_views put the view inside its buffer's data.
+            let data = &buffers[v.buffer().index()].0;
+            Some(data[v.offset()..v.offset() + v.length()].to_vec())
+        };
+        for (i, entry) in list.iter().enumerate() {
+            let mut read_uri = |uri: &str| uris.read(uri, None);
+            let (profile, notes) = ies::load(entry, i, &mut read_uri, &view).map_err(&invalid)?;
+            budget
+                .take(4 * profile.candela.len() as u64, "a light profile")
+                .map_err(&invalid)?;
+            parse_warnings.extend(notes);
+            profile_offsets.push(light_profiles.len() as u32);
+            profile.pack(&mut light_profiles);
+        }
+    }
+
     // Flatten the node hierarchy of the default scene.
     if document.default_scene().is_none() && document.scenes().len() > 1 {
         parse_warnings.push(format!(
@@ -424,6 +451,12 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         }
         if let Some(light) = node.light() {
             punctual.push(convert_light(&light, &world, &node_name(&node)).map_err(&invalid)?);
+        }
+        if let Some(value) = node.extension_value(ies::EXTENSION) {
+            punctual.push(
+                convert_ies_light(value, &profile_offsets, &world, &node_name(&node))
+                    .map_err(&invalid)?,
+            );
         }
         let Some(mesh) = node.mesh() else { continue };
         // A skinned mesh is moved by its joints, in world space; the node's own transform
@@ -652,6 +685,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         textures,
         cameras,
         punctual,
+        light_profiles,
         bounds_min: lo,
         bounds_max: hi,
         hash: String::new(),
@@ -996,6 +1030,7 @@ const MAX_INSTANCES: usize = (1 << 24) - 1;
 /// ignored, which a user should hear about: a `KHR_materials_unlit` material renders
 /// lit.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "EXT_lights_ies",
     "EXT_mesh_gpu_instancing",
     "EXT_meshopt_compression",
     "EXT_texture_webp",
@@ -1109,7 +1144,17 @@ fn content_hash(scene: &Scene) -> String {
         eat(&i.primitive.to_le_bytes());
         eat(bytemuck::cast_slice(&i.transform.to_cols_array()));
     }
-    eat(bytemuck::cast_slice(&scene.punctual));
+    // Lights without a profile hash as they did before profiles existed.
+    let unprofiled = std::mem::offset_of!(crate::gpu::PunctualLight, profile);
+    for l in &scene.punctual {
+        let bytes = bytemuck::bytes_of(l);
+        if l.profile == crate::gpu::INVALID_INDEX {
+            eat(&bytes[..unprofiled]);
+        } else {
+            eat(bytes);
+        }
+    }
+    eat(bytemuck::cast_slice(&scene.light_profiles));
     for t in &scene.textures {
         eat(&t.texels.bytes());
     }

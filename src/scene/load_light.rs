@@ -1,4 +1,5 @@
-//! KHR_lights_punctual → the kernel's punctual lights, placed in world space.
+//! KHR_lights_punctual and EXT_lights_ies → the kernel's punctual lights, placed in
+//! world space.
 
 use crate::gpu;
 use glam::{Mat4, Vec3};
@@ -41,5 +42,73 @@ pub(super) fn convert_light(
         intensity: color.map(|c| c * intensity),
         cos_inner,
         cos_outer,
+        profile: gpu::INVALID_INDEX,
+        tangent: [0.0; 3],
+    })
+}
+
+/// A node's `EXT_lights_ies` light: a point light at the node whose intensity toward
+/// each direction is its profile's candela (packed at `offset` in the scene's light
+/// profile array) times `multiplier × color`. The profile's vertical angle 0 is the
+/// node's −Z and its horizontal angle 0 the node's +X (`ies.rs` says the frame); a
+/// mirroring transform mirrors the profile. The node's scale does not change the
+/// intensity, as the extension says.
+pub(super) fn convert_ies_light(
+    value: &serde_json::Value,
+    offsets: &[u32],
+    world: &Mat4,
+    node: &str,
+) -> Result<gpu::PunctualLight, String> {
+    let ext = super::ies::EXTENSION;
+    let index = value
+        .get("light")
+        .and_then(|l| l.as_u64())
+        .ok_or_else(|| format!("node {node}: {ext} has no `light` index"))?;
+    let &offset = offsets.get(index as usize).ok_or_else(|| {
+        format!(
+            "node {node}: {ext} light {index} does not exist (the file has {})",
+            offsets.len()
+        )
+    })?;
+    let multiplier = match value.get("multiplier") {
+        None => 1.0,
+        Some(m) => m
+            .as_f64()
+            .filter(|m| m.is_finite() && *m >= 0.0)
+            .ok_or_else(|| format!("node {node}: {ext} `multiplier` is not a number ≥ 0"))?
+            as f32,
+    };
+    let color = match value.get("color") {
+        None => [1.0f32; 3],
+        Some(c) => {
+            let c: Vec<f64> = c
+                .as_array()
+                .filter(|a| a.len() == 3)
+                .map(|a| a.iter().filter_map(|x| x.as_f64()).collect())
+                .filter(|v: &Vec<f64>| v.len() == 3 && v.iter().all(|x| x.is_finite()))
+                .ok_or_else(|| format!("node {node}: {ext} `color` is not three numbers"))?;
+            // Linear RGB clamped to [0, 1], as the extension says.
+            [0, 1, 2].map(|i| c[i].clamp(0.0, 1.0) as f32)
+        }
+    };
+    let position = world.transform_point3(Vec3::ZERO);
+    let direction = world
+        .transform_vector3(Vec3::NEG_Z)
+        .normalize_or(Vec3::NEG_Z);
+    let x = world.transform_vector3(Vec3::X);
+    let tangent = (x - x.dot(direction) * direction)
+        .try_normalize()
+        .unwrap_or_else(|| direction.any_orthonormal_vector());
+    let mirrored = glam::Mat3::from_mat4(*world).determinant() < 0.0;
+    Ok(gpu::PunctualLight {
+        position: position.into(),
+        kind: gpu::PUNCTUAL_POINT,
+        direction: direction.into(),
+        range: 0.0,
+        intensity: color.map(|c| c * multiplier),
+        cos_inner: 1.0,
+        cos_outer: 1.0,
+        profile: offset | if mirrored { 1 << 31 } else { 0 },
+        tangent: tangent.into(),
     })
 }

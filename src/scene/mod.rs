@@ -10,6 +10,7 @@ mod camera;
 pub mod export_mitsuba;
 pub mod generate;
 mod gltf_check;
+pub mod ies;
 mod load;
 mod load_instancing;
 mod load_light;
@@ -103,6 +104,9 @@ pub struct Scene {
     pub textures: Vec<TextureData>,
     pub cameras: Vec<Camera>,
     pub punctual: Vec<gpu::PunctualLight>,
+    /// `EXT_lights_ies` profiles in the kernel's form (`ies.rs`), which punctual lights
+    /// with a `profile` point into.
+    pub light_profiles: Vec<f32>,
     pub bounds_min: Vec3,
     pub bounds_max: Vec3,
     /// Hex digest of the loaded content, to tie renders and guiding trees to a scene.
