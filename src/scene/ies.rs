@@ -535,6 +535,36 @@ mod tests {
         assert_eq!(warnings.len(), 1);
     }
 
+    /// Every prefix of a profile, and the profile with any byte changed to any of the
+    /// characters its syntax uses, is read or
+    /// refused: never a panic, never a non-finite or negative value.
+    #[test]
+    fn damaged_profiles_are_errors_never_panics() {
+        let v = [0.0, 22.5, 45.0, 67.5, 90.0];
+        let h = [0.0, 45.0, 90.0];
+        let c: Vec<f64> = (0..15).map(|i| 1.0 + i as f64).collect();
+        let text = file("TILT=INCLUDE\n1\n2\n0 90\n1 1", &v, &h, &c).into_bytes();
+        let check = |bytes: &[u8]| {
+            if let Ok((p, _)) = parse(bytes) {
+                assert!(p.candela.iter().all(|c| c.is_finite() && *c >= 0.0));
+                assert_eq!(p.candela.len(), p.vertical.len() * p.horizontal.len());
+                let _ = p.eval(0.3, 1.0);
+                let _ = p.flux();
+            }
+        };
+        for n in 0..text.len() {
+            check(&text[..n]);
+        }
+        let alphabet = b"0123456789-.e ,\nTILT=NOE";
+        for i in 0..text.len() {
+            for &b in alphabet {
+                let mut bytes = text.clone();
+                bytes[i] = b;
+                check(&bytes);
+            }
+        }
+    }
+
     #[test]
     fn malformed_profiles_are_errors_that_say_why() {
         let ok = |h: &str| file(h, &[0.0, 90.0], &[0.0], &[1.0, 2.0]);

@@ -44,6 +44,8 @@ pub struct SceneStats {
     pub emissive_triangles: u64,
     pub dropped_emissive_triangles: u64,
     pub punctual_lights: u64,
+    /// Punctual lights shaped by an IES profile (`EXT_lights_ies`).
+    pub ies_lights: u64,
     pub total_power: f64,
     pub bounds_min: [f32; 3],
     pub bounds_max: [f32; 3],
@@ -153,6 +155,11 @@ impl SceneStats {
             emissive_triangles: light_triangles as u64,
             dropped_emissive_triangles: lights.map_or(0, |l| l.dropped_triangles),
             punctual_lights: scene.punctual.len() as u64,
+            ies_lights: scene
+                .punctual
+                .iter()
+                .filter(|l| l.profile != crate::gpu::INVALID_INDEX)
+                .count() as u64,
             total_power: lights.map_or(0.0, |l| l.total_power),
             bounds_min: scene.bounds_min.into(),
             bounds_max: scene.bounds_max.into(),
@@ -223,7 +230,15 @@ impl fmt::Display for SceneStats {
             "emissive triangles  {} ({} dropped: zero area, emission or alpha coverage)",
             self.emissive_triangles, self.dropped_emissive_triangles
         )?;
-        writeln!(f, "punctual lights     {}", self.punctual_lights)?;
+        if self.ies_lights > 0 {
+            writeln!(
+                f,
+                "punctual lights     {} ({} with IES profiles)",
+                self.punctual_lights, self.ies_lights
+            )?;
+        } else {
+            writeln!(f, "punctual lights     {}", self.punctual_lights)?;
+        }
         writeln!(f, "total power         {:.4e}", self.total_power)?;
         writeln!(
             f,

@@ -82,11 +82,97 @@ impl Writer<'_> {
         s
     }
 
+    /// An `EXT_lights_ies` light as six Mitsuba spot lights at its position, one per
+    /// cube face around it (world ±X, ±Y, ±Z), each projecting the profile's candela over
+    /// its face through a texture looked up without filtering. The face's square fills
+    /// the texels [m, res − m) exactly (the cutoff's tangent is res / (res − 2m), just
+    /// wide enough for the face's corners), so that every direction lies in exactly one
+    /// spot's texels; within a texel the profile is the texel centre's, the one
+    /// approximation, which the manifest lists.
+    fn ies_xml(&mut self, i: usize, l: &gpu::PunctualLight) -> Result<String, ExportError> {
+        const RES: u32 = 512;
+        const MARGIN: u32 = 75; // ≥ RES·(1 − 1/√2)/2: the cone holds the face's corners
+        let profile = crate::scene::ies::unpack(
+            &self.scene.light_profiles,
+            (l.profile & 0x7fff_ffff) as usize,
+        );
+        let p = Vec3::from(l.position);
+        let d = Vec3::from(l.direction);
+        let x = Vec3::from(l.tangent);
+        let mut y = (-d).cross(x);
+        if l.profile & 0x8000_0000 != 0 {
+            y = -y;
+        }
+        let tan_c = RES as f32 / (RES - 2 * MARGIN) as f32;
+        let cutoff = tan_c.atan().to_degrees();
+        self.approximations.push(format!(
+            "IES light {i}: its profile is projected by six spot lights, {}² texels per cube face, each texel the profile at its centre",
+            RES - 2 * MARGIN
+        ));
+        let mut s = String::new();
+        for (face, n) in [
+            Vec3::X,
+            Vec3::NEG_X,
+            Vec3::Y,
+            Vec3::NEG_Y,
+            Vec3::Z,
+            Vec3::NEG_Z,
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            // A right-handed frame (u, v, n): Mitsuba's spot shines along its local +Z.
+            let u = n.any_orthonormal_vector();
+            let v = n.cross(u);
+            let to_world =
+                Mat4::from_cols(u.extend(0.0), v.extend(0.0), n.extend(0.0), p.extend(1.0));
+            let mut texels = Vec::with_capacity((RES * RES) as usize);
+            for row in 0..RES {
+                for col in 0..RES {
+                    let inside = (MARGIN..RES - MARGIN).contains(&row)
+                        && (MARGIN..RES - MARGIN).contains(&col);
+                    let mut c = 0.0;
+                    if inside {
+                        // Mitsuba's uv = ½ + ½·(x, y)/(z·tan cutoff); row 0 is v = 0.
+                        let a = (2.0 * (col as f32 + 0.5) / RES as f32 - 1.0) * tan_c;
+                        let b = (2.0 * (row as f32 + 0.5) / RES as f32 - 1.0) * tan_c;
+                        let w = (a * u + b * v + n).normalize();
+                        let theta = w.dot(d).clamp(-1.0, 1.0).acos();
+                        let mut phi = w.dot(y).atan2(w.dot(x));
+                        if phi < 0.0 {
+                            phi += std::f32::consts::TAU;
+                        }
+                        c = profile.eval(theta, phi);
+                    }
+                    texels.push([c; 3]);
+                }
+            }
+            let file = format!("textures/ies{i}_{face}.pfm");
+            self.write(&file, &super::files::pfm_bytes(RES, RES, &texels))?;
+            let _ = writeln!(s, "  <emitter type=\"spot\">");
+            let _ = writeln!(s, "    {}", matrix_xml("to_world", &to_world));
+            let _ = writeln!(s, "    {}", rgb_xml("intensity", l.intensity));
+            let _ = writeln!(s, "    <float name=\"cutoff_angle\" value=\"{cutoff}\"/>");
+            let _ = writeln!(s, "    <float name=\"beam_width\" value=\"{cutoff}\"/>");
+            let _ = writeln!(s, "    <texture type=\"bitmap\" name=\"texture\">");
+            let _ = writeln!(s, "      <string name=\"filename\" value=\"{file}\"/>");
+            s.push_str("      <boolean name=\"raw\" value=\"true\"/>\n");
+            s.push_str("      <string name=\"filter_type\" value=\"nearest\"/>\n");
+            s.push_str("      <string name=\"wrap_mode\" value=\"clamp\"/>\n");
+            s.push_str("    </texture>\n");
+            s.push_str("  </emitter>\n");
+        }
+        Ok(s)
+    }
+
     pub(super) fn punctual_xml(
         &mut self,
         i: usize,
         l: &gpu::PunctualLight,
     ) -> Result<String, ExportError> {
+        if l.profile != gpu::INVALID_INDEX {
+            return self.ies_xml(i, l);
+        }
         let mut s = String::new();
         if l.range > 0.0 {
             self.warnings.push(format!(

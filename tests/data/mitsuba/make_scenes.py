@@ -53,6 +53,12 @@ agree up to noise.
                   positions and normals as normalised shorts, the floor and wall as
                   unnormalised unsigned bytes scaled by their nodes, their texture
                   coordinates as normalised unsigned bytes; must load as smooth.gltf does
+  ies.gltf        EXT_lights_ies: a round downlight (0–90°, its profile in a file
+                  beside the scene, ies_downlight.ies), a wall washer whose profile
+                  covers every horizontal angle (in a buffer view) under a mirroring
+                  node, and an uplight on the floor (90–180°, bilateral, in a data URI)
+                  lighting the wall, around a box (the export bakes each profile into
+                  six spot lights' textures, its one approximation)
   glass.gltf      KHR_materials_transmission with specularFactor 0 and roughness 0 (exact
                   against Mitsuba's dielectric of index 1.00001): a ceiling lamp
                   whose light reaches the floor only through an amber pane below it, and
@@ -132,6 +138,7 @@ class Builder:
         self.roots = []
         self.required = []
         self.used = []
+        self.root_extensions = {}
 
     def _view(self, data, stride=None):
         while len(self.bin) % 4:
@@ -342,6 +349,8 @@ class Builder:
             g.update(images=self.images, textures=self.textures, samplers=self.samplers)
         if self.lights:
             g["extensions"] = {"KHR_lights_punctual": {"lights": self.lights}}
+        if self.root_extensions:
+            g.setdefault("extensions", {}).update(self.root_extensions)
         if self.required:
             g["extensionsRequired"] = self.required
         with open(os.path.join(HERE, name), "w") as f:
@@ -1175,6 +1184,63 @@ def instanced_scene():
     b.write("instanced.gltf")
 
 
+def ies_text(vertical, horizontal, candela, multiplier=1.0):
+    """An IES LM-63-2002 profile: candela[h][v] over the angles (degrees)."""
+    lines = ["IESNA:LM-63-2002", "[TEST] lanterna tests/data/mitsuba/make_scenes.py",
+             "[LUMINAIRE] test luminaire", "TILT=NONE",
+             f"1 -1 {multiplier} {len(vertical)} {len(horizontal)} 1 2 0.1 0.1 0.05",
+             "1.0 1.0 15"]
+    lines.append(" ".join(f"{a:g}" for a in vertical))
+    lines.append(" ".join(f"{a:g}" for a in horizontal))
+    lines += [" ".join(f"{c:.4f}" for c in column) for column in candela]
+    return "\n".join(lines) + "\n"
+
+
+def ies_scene():
+    b = Builder()
+    grey = b.lambert((0.6, 0.6, 0.6))
+    floor_and_wall(b, grey)
+    b.node(mesh=b.box(b.lambert((0.8, 0.4, 0.2))), translation=[-0.5, 0.25, -0.3],
+           scale=[0.5, 0.5, 0.5])
+    # A round downlight with a narrow beam (0–90°, one horizontal angle), in a file.
+    v = [5.0 * i for i in range(19)]
+    down = ies_text(v, [0], [[0.5 + 2.5 * math.exp(-(a / 30.0) ** 2) for a in v]], 2.0)
+    with open(os.path.join(HERE, "ies_downlight.ies"), "w") as f:
+        f.write(down)
+    # A wall washer: every horizontal angle, thrown toward 50° (from its +X toward its +Y:
+    # the mirror turns it), in a buffer view.
+    hv = [10.0 * i for i in range(10)]
+    hh = [30.0 * i for i in range(13)]
+    washer = ies_text(hv, hh, [[0.3 + 1.5 * (1 + math.cos(math.radians(h - 50))) * math.sin(math.radians(a)) ** 2
+                                + 0.2 * math.cos(math.radians(a)) for a in hv] for h in hh])
+    washer_view = b._view(washer.encode())
+    # An uplight (90–180°, mirrored across its 0–180° plane), in a data URI.
+    uv = [90.0 + 15.0 * i for i in range(7)]
+    uh = [0.0, 45.0, 90.0, 135.0, 180.0]
+    up = ies_text(uv, uh, [[0.2 + 0.8 * (1 + 0.5 * math.cos(math.radians(h))) * (a - 90.0) / 90.0
+                            for a in uv] for h in uh])
+    b.root_extensions["EXT_lights_ies"] = {"lights": [
+        {"uri": "ies_downlight.ies", "name": "downlight"},
+        {"bufferView": washer_view, "mimeType": "application/x-ies-lm-63", "name": "washer"},
+        {"uri": "data:application/octet-stream;base64," + base64.b64encode(up.encode()).decode(),
+         "name": "uplight"}]}
+    b.uses("EXT_lights_ies")
+    aim_down = [-math.sqrt(0.5), 0, 0, math.sqrt(0.5)]  # −Z → −Y
+    b.node(translation=[-0.5, 1.9, -0.3], rotation=aim_down,
+           extensions={"EXT_lights_ies": {"light": 0, "multiplier": 1.5}})
+    # The washer near the wall, tilted toward it; its node mirrors y.
+    tilt = [-0.56, 0.43, 0.43, 0.56]
+    n = math.sqrt(sum(t * t for t in tilt))
+    b.node(translation=[0.9, 1.6, -1.2], rotation=[t / n for t in tilt], scale=[1, -1, 1],
+           extensions={"EXT_lights_ies": {"light": 1, "color": [1.0, 0.85, 0.6]}})
+    b.node(translation=[0.6, 0.05, -1.7], rotation=aim_down,
+           extensions={"EXT_lights_ies": {"light": 2, "multiplier": 3.0, "color": [0.6, 0.8, 1.0]}})
+    eye = (0.4, 1.6, 3.2)
+    b.node(camera=b.camera(yfov=0.8), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.7, -0.8)))
+    b.write("ies.gltf")
+
+
 if __name__ == "__main__":
     tex_scene()
     tex16_scene()
@@ -1201,3 +1267,4 @@ if __name__ == "__main__":
     diffuse_transmission_scene()
     iridescence_scene()
     instanced_scene()
+    ies_scene()
