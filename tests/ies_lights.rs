@@ -6,7 +6,7 @@
 //! toward its +Y), none of it shared with the loader's unfolding or the kernel's lookup.
 
 use glam::{Mat3, Mat4, Quat, Vec3};
-use lanterna::render::Method;
+use lanterna::render::{LightSource, Method};
 use lanterna::scene::{LoadOptions, Scene};
 use lanterna::stats;
 use lanterna::testing::{self, render_batches};
@@ -287,7 +287,8 @@ fn pixel_mean(x: u32, y: u32, n: u32) -> [f64; 3] {
     sum.map(|s| s / (n * n) as f64)
 }
 
-/// Every pixel of `pt` and `ris` against the closed form, by a t-test on 16 batches at
+/// Every pixel of `pt`, `ris` and `pt` with the light tree (`--source tree`, whose
+/// bounds hold IES lights in their lit cones) against the closed form, by a t-test on 16 batches at
 /// family level 10⁻³ (Šidák over pixels and channels); a pixel also passes within the
 /// film's arithmetic precision and four times the quadrature's own error (its change
 /// from 24² to 48² points).
@@ -312,9 +313,15 @@ fn ies_lights_match_the_closed_form_on_a_lambertian_floor() {
     let max = lum.iter().cloned().fold(0.0, f64::max);
     assert!(max > 0.5 && lum.iter().any(|&l| l < 0.2 * max), "max {max}");
     let n = (SIZE * SIZE * 3) as usize;
-    for method in [Method::Pt, Method::Ris] {
+    let sources = [
+        (Method::Pt, LightSource::Uniform),
+        (Method::Ris, LightSource::Uniform),
+        (Method::Pt, LightSource::Tree),
+    ];
+    for (method, source) in sources {
         let mut s = testing::settings(method, SIZE, SIZE);
         s.max_depth = 2;
+        s.source = source;
         let b = render_batches(&scene, &camera, s, 16, 16);
         let mut worst = (1.0f64, String::new());
         for y in 0..SIZE {
@@ -342,7 +349,7 @@ fn ies_lights_match_the_closed_form_on_a_lambertian_floor() {
         }
         assert!(
             worst.0 > stats::sidak(ALPHA, n),
-            "{method}: p = {:.2e} at {}",
+            "{method} ({source:?}): p = {:.2e} at {}",
             worst.0,
             worst.1
         );

@@ -269,7 +269,7 @@ impl LightTable {
             triangle_alias[range].copy_from_slice(&table);
         }
         let total_power = model_weights.iter().sum();
-        let light_tree = tree::build(&models, &triangles, &scene.punctual);
+        let light_tree = tree::build(&models, &triangles, &scene.punctual, &scene.light_profiles);
         for (m, &(path, depth)) in models.iter_mut().zip(&light_tree.paths) {
             m.tree_path = path;
             m.tree_depth = depth;

@@ -98,11 +98,13 @@ fn cone_union(a: Vec3, theta_a: f32, b: Vec3, theta_b: f32) -> (Vec3, f32) {
     (axis, (theta_o * 1.0001 + 1e-5).min(PI))
 }
 
-/// The bounds of one light model, or None for a directional light.
+/// The bounds of one light model, or None for a directional light. `profiles` holds the
+/// IES profiles of punctual lights (`Scene::light_profiles`).
 fn model_bounds(
     m: &gpu::LightModel,
     triangles: &[gpu::LightTriangle],
     punctual: &[gpu::PunctualLight],
+    profiles: &[f32],
 ) -> Option<Bounds> {
     use std::f32::consts::{FRAC_PI_2, PI};
     if m.punctual != gpu::INVALID_INDEX {
@@ -119,6 +121,39 @@ fn model_bounds(
                 // A little wider than the outer cone: the bound must hold it.
                 theta_e: (l.cos_outer.clamp(-1.0, 1.0).acos() * 1.0001 + 1e-5).min(PI),
             }),
+            gpu::PUNCTUAL_POINT if l.profile != gpu::INVALID_INDEX => {
+                // An IES light emits only within its lit vertical angles: a cone about
+                // its direction (a downlight) or about the opposite one (an uplight),
+                // whichever is narrower; a little wider, as the bound must hold it.
+                let profile =
+                    crate::scene::ies::unpack(profiles, (l.profile & 0x7fff_ffff) as usize);
+                let (lo, hi) = profile.lit_vertical_range().unwrap_or((0.0, PI));
+                let d = Vec3::from(l.direction).normalize_or(Vec3::NEG_Z);
+                let (axis, cone) = if hi <= PI - lo {
+                    (d, hi)
+                } else {
+                    (-d, PI - lo)
+                };
+                let cone = cone * 1.0001 + 1e-5;
+                // The importance weighs cos θ′ (θ′ the angle beyond θo), clamped at 0: a
+                // cone wider than a hemisphere is normals within cone − 90° of the axis,
+                // each emitting over a hemisphere, as an omnidirectional light is.
+                let (theta_o, theta_e) = if cone >= PI {
+                    (PI, FRAC_PI_2)
+                } else if cone > FRAC_PI_2 {
+                    (cone - FRAC_PI_2, FRAC_PI_2)
+                } else {
+                    (0.0, cone)
+                };
+                Some(Bounds {
+                    min: p,
+                    max: p,
+                    power: m.power as f64,
+                    axis,
+                    theta_o,
+                    theta_e,
+                })
+            }
             _ => Some(Bounds {
                 min: p,
                 max: p,
@@ -162,11 +197,12 @@ pub fn build(
     models: &[gpu::LightModel],
     triangles: &[gpu::LightTriangle],
     punctual: &[gpu::PunctualLight],
+    profiles: &[f32],
 ) -> LightTree {
     let mut finite = Vec::new();
     let mut directional = Vec::new();
     for (i, m) in models.iter().enumerate() {
-        match model_bounds(m, triangles, punctual) {
+        match model_bounds(m, triangles, punctual, profiles) {
             Some(b) => finite.push((i as u32, b)),
             None => directional.push(i as u32),
         }
@@ -622,7 +658,7 @@ mod tests {
     #[test]
     fn probabilities_sum_to_one_and_sampling_follows_them() {
         let (models, tris, punctual) = scene(7);
-        let tree = build(&models, &tris, &punctual);
+        let tree = build(&models, &tris, &punctual, &[]);
         let mut r = Rng(3);
         for i in 0..20 {
             let p = r.vec(30.0);
@@ -660,6 +696,89 @@ mod tests {
         }
     }
 
+    /// An IES light's bound is its lit vertical angles' cone: wherever its profile
+    /// sends light toward p (a downlight, an uplight, a band between 40° and 120°), the
+    /// tree gives it a positive probability; and the cone does prune (a downlight has
+    /// none above it).
+    #[test]
+    fn ies_bounds_never_rule_out_their_light() {
+        use crate::scene::ies::IesProfile;
+        let deg = |a: f32| a.to_radians();
+        let profiles = [
+            IesProfile {
+                vertical: [0.0, 30.0, 60.0, 90.0].map(deg).to_vec(),
+                horizontal: vec![0.0],
+                candela: vec![5.0, 3.0, 1.0, 0.0],
+            },
+            IesProfile {
+                vertical: [90.0, 120.0, 180.0].map(deg).to_vec(),
+                horizontal: vec![0.0],
+                candela: vec![0.0, 2.0, 4.0],
+            },
+            IesProfile {
+                vertical: [0.0, 40.0, 80.0, 120.0, 180.0].map(deg).to_vec(),
+                horizontal: vec![0.0, deg(180.0), deg(360.0)],
+                candela: [
+                    [0.0, 0.0, 3.0, 0.0, 0.0],
+                    [0.0, 0.0, 1.0, 0.0, 0.0],
+                    [0.0, 0.0, 3.0, 0.0, 0.0],
+                ]
+                .concat(),
+            },
+        ];
+        let mut packed = Vec::new();
+        let mut offsets = Vec::new();
+        for p in &profiles {
+            offsets.push(packed.len() as u32);
+            p.pack(&mut packed);
+        }
+        let mut r = Rng(77);
+        let mut punctual = Vec::new();
+        let mut models = Vec::new();
+        for k in 0..12u32 {
+            let d = r.vec(2.0).normalize();
+            let t = d.any_orthonormal_vector();
+            punctual.push(gpu::PunctualLight {
+                position: r.vec(20.0).into(),
+                kind: gpu::PUNCTUAL_POINT,
+                direction: d.into(),
+                range: 0.0,
+                intensity: [1.0; 3],
+                cos_inner: 1.0,
+                cos_outer: 1.0,
+                profile: offsets[k as usize % 3],
+                tangent: t.into(),
+            });
+            models.push(model(0, 0, k, 1.0 + r.next()));
+        }
+        let tree = build(&models, &[], &punctual, &packed);
+        let (mut lit, mut pruned) = (0, 0);
+        for _ in 0..2000 {
+            let p = r.vec(30.0);
+            for (m, l) in punctual.iter().enumerate() {
+                let w = (p - Vec3::from(l.position)).normalize();
+                let d = Vec3::from(l.direction);
+                let x = Vec3::from(l.tangent);
+                let y = (-d).cross(x);
+                let theta = w.dot(d).clamp(-1.0, 1.0).acos();
+                let phi = w.dot(y).atan2(w.dot(x)).rem_euclid(std::f32::consts::TAU);
+                let emits = profiles[m % 3].eval(theta, phi) > 0.0;
+                let probability = pmf(&tree, m as u32, p, Vec3::ZERO);
+                if emits {
+                    lit += 1;
+                    assert!(
+                        probability > 0.0,
+                        "light {m} emits toward {p} (θ {}°) but has pmf 0",
+                        theta.to_degrees()
+                    );
+                } else if probability == 0.0 {
+                    pruned += 1;
+                }
+            }
+        }
+        assert!(lit > 1000 && pruned > 1000, "lit {lit}, pruned {pruned}");
+    }
+
     /// Wherever a model's light can reach p from above its receiver's tangent plane, the
     /// tree gives it a positive probability: the bounds never rule out an emitter that
     /// emits toward the point.
@@ -667,7 +786,7 @@ mod tests {
     fn bounds_never_rule_out_light_that_reaches_the_point() {
         for seed in 1..6 {
             let (models, tris, punctual) = scene(seed);
-            let tree = build(&models, &tris, &punctual);
+            let tree = build(&models, &tris, &punctual, &[]);
             let mut r = Rng(seed + 100);
             for i in 0..400 {
                 let p = r.vec(30.0);
@@ -745,7 +864,7 @@ mod tests {
             point_light(Vec3::new(10.0, 0.0, 0.0)),
         ];
         let models = vec![model(0, 0, 0, 1.0), model(0, 0, 1, 1.0)];
-        let tree = build(&models, &[], &punctual);
+        let tree = build(&models, &[], &punctual, &[]);
         let p = Vec3::new(1.0, 0.0, 0.0);
         // 1/1² against 1/9²: 81/82.
         assert!((pmf(&tree, 0, p, Vec3::ZERO) - 81.0 / 82.0).abs() < 1e-5);
@@ -764,7 +883,7 @@ mod tests {
             .map(|k| point_light(Vec3::new(1.02f32.powi(k), 0.0, 0.0)))
             .collect();
         let models: Vec<_> = (0..n as u32).map(|k| model(0, 0, k, 1.0)).collect();
-        let tree = build(&models, &[], &punctual);
+        let tree = build(&models, &[], &punctual, &[]);
         let deepest = tree.paths.iter().map(|&(_, d)| d).max().unwrap();
         assert!(
             deepest > ceil_log2(n as usize),
@@ -783,7 +902,7 @@ mod tests {
         let s3 = 3f32.sqrt() / 2.0;
         let punctual = vec![point_light(Vec3::Y), point_light(Vec3::new(s3, 0.5, 0.0))];
         let models = vec![model(0, 0, 0, 1.0), model(0, 0, 1, 1.0)];
-        let tree = build(&models, &[], &punctual);
+        let tree = build(&models, &[], &punctual, &[]);
         assert!((pmf(&tree, 0, Vec3::ZERO, Vec3::Y) - 2.0 / 3.0).abs() < 1e-5);
     }
 }

@@ -308,6 +308,20 @@ impl IesProfile {
         sum
     }
 
+    /// The vertical angles (radians) outside which the profile is dark: from the
+    /// angle before its first lit one to the angle after its last (the interpolation
+    /// reaches those), or None when it is dark everywhere.
+    pub fn lit_vertical_range(&self) -> Option<(f32, f32)> {
+        let nv = self.vertical.len();
+        let lit = |v: usize| (0..self.horizontal.len()).any(|h| self.candela[h * nv + v] > 0.0);
+        let first = (0..nv).find(|&v| lit(v))?;
+        let last = (0..nv).rfind(|&v| lit(v))?;
+        Some((
+            self.vertical[first.saturating_sub(1)],
+            self.vertical[(last + 1).min(nv - 1)],
+        ))
+    }
+
     /// The largest candela value.
     pub fn peak(&self) -> f32 {
         self.candela.iter().fold(0.0, |m, &c| m.max(c))
