@@ -96,7 +96,8 @@ fn seeds(scratch: &Path) -> Vec<Seed> {
 
 /// `cornell-lights` with an animation of its blockers and camera (translation LINEAR,
 /// rotation CUBICSPLINE, scale STEP) in a second, data-URI buffer, for the cases that
-/// pose the scene (`--animation-time`), and two material variants (`--variant`).
+/// pose the scene (`--animation-time`), two material variants (`--variant`) and an IES
+/// light (`EXT_lights_ies`) on the animated node.
 fn animated(cornell: &Seed) -> Seed {
     use base64::Engine as _;
     let floats: Vec<f32> = [
@@ -166,14 +167,22 @@ fn animated(cornell: &Seed) -> Seed {
             {"sampler": 0, "target": {"node": camera, "path": "translation"}}
         ]
     }]);
-    // Two material variants: the blockers red in the second.
-    json["extensionsUsed"] = serde_json::json!(["KHR_materials_variants"]);
-    json["extensions"] = serde_json::json!({"KHR_materials_variants":
-        {"variants": [{"name": "white"}, {"name": "red"}]}});
+    // Two material variants: the blockers red in the second. And an IES downlight on the
+    // animated blocker (its profile in a data URI), which the animation carries.
+    json["extensionsUsed"] = serde_json::json!(["KHR_materials_variants", "EXT_lights_ies"]);
+    let profile = "IESNA:LM-63-2002\nTILT=NONE\n1 -1 1 3 2 1 2 0 0 0\n1 1 10\n0 45 90\n0 180\n\
+                   5 3 0\n4 2 0\n";
+    json["extensions"] = serde_json::json!({
+        "KHR_materials_variants": {"variants": [{"name": "white"}, {"name": "red"}]},
+        "EXT_lights_ies": {"lights": [{"uri": format!("data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(profile))}]}
+    });
+    json["nodes"][1]["extensions"] =
+        serde_json::json!({"EXT_lights_ies": {"light": 0, "multiplier": 0.5}});
     json["meshes"][1]["primitives"][0]["extensions"] = serde_json::json!({"KHR_materials_variants":
         {"mappings": [{"material": 1, "variants": [1]}, {"material": 0, "variants": [0]}]}});
     Seed {
-        name: "cornell-lights, animated, with material variants".into(),
+        name: "cornell-lights, animated, with material variants and an IES light".into(),
         json,
         bin_name: cornell.bin_name.clone(),
         bin: cornell.bin.clone(),
@@ -457,6 +466,18 @@ fn mutated_scenes_load_or_fail_without_panicking() {
         for (name, bytes) in &seed.others {
             std::fs::write(work.join(name), bytes).unwrap();
         }
+    }
+
+    // Every seed loads as written: a broken seed would only test refusals.
+    for seed in &seeds {
+        std::fs::write(work.join(&seed.bin_name), &seed.bin).unwrap();
+        let p = work.join("case.gltf");
+        std::fs::write(&p, serde_json::to_vec(&seed.json).unwrap()).unwrap();
+        assert!(
+            matches!(load_case(&p, false, None, None), Outcome::Loaded),
+            "seed {} does not load",
+            seed.name
+        );
     }
 
     // Panics inside a load are counted below, not printed; any other is printed.
