@@ -65,11 +65,12 @@ uint reuse_checksum(ReuseCell c) {
 }
 
 // A stored light (ReuseCell.light, with barycentrics b on a triangle) seen from x, with
-// the emission RIS's target uses (the record's stand-in on textured emitters).
+// the emission RIS's target uses (the record's stand-in on textured emitters and IES
+// lights).
 LightSample reuse_light_at(uint light, vec2 b, vec3 x) {
     if ((light & REUSE_PUNCTUAL) != 0u) {
         uint model = light & ~REUSE_PUNCTUAL;
-        LightSample s = sample_punctual(light_models(model).punctual, x);
+        LightSample s = sample_punctual(light_models(model).punctual, x, false);
         s.model = model;
         return s;
     }

@@ -30,8 +30,9 @@ struct LightSample {
     vec3 n;         // geometric normal at the light point, on the side facing x (area
                     // lights; shadow rays start their far end off the light along it)
     vec2 bary;      // barycentrics of the point on triangle `tri` (of its corners 1, 2)
-    bool textured;  // Le_G holds the stand-in of a textured or alpha-masked emitter
-                    // (sample_light without exact emission; light_sample_complete)
+    bool textured;  // Le_G holds the stand-in of a textured or alpha-masked emitter or
+                    // of an IES light (sample_light without exact emission;
+                    // light_sample_complete)
 };
 
 uint alias_sample(uint begin, uint count, float u, bool models) {
@@ -202,7 +203,28 @@ float punctual_profile(PunctualLight l, vec3 w) {
     return mix(c0, c1, th);
 }
 
-LightSample sample_punctual(uint index, vec3 x) {
+// The stand-in of punctual_profile that RIS's candidates weigh: the profile's largest
+// candela over a cell of a 16 × 32 grid in (cos θ, φ) (src/scene/ies.rs, IesProfile::bounds),
+// so positive wherever the profile is; one read instead of two searches of the table.
+float punctual_profile_bound(PunctualLight l, vec3 w) {
+    uint o = l.profile & 0x7fffffffu;
+    uint nv = floatBitsToUint(light_profiles(o));
+    uint nh = floatBitsToUint(light_profiles(o + 1u));
+    uint grid = o + 2u + nv + nh + nv * nh;
+    vec3 y = cross(-l.direction, l.tangent);
+    if ((l.profile & 0x80000000u) != 0u) y = -y;
+    float phi = atan(dot(w, y), dot(w, l.tangent));
+    if (phi < 0.0) phi += 2.0 * PI;
+    // Rows uniform in cos θ, from the light's direction (1) to its opposite (−1).
+    uint row = min(uint(max(1.0 - dot(w, l.direction), 0.0) * 8.0), 15u);
+    uint column = min(uint(phi * (32.0 / (2.0 * PI))), 31u);
+    return light_profiles(grid + row * 32u + column);
+}
+
+// Punctual light `index` seen from x. With exact_emission false an IES light's Le_G is
+// the stand-in of punctual_profile_bound (`textured` set: light_sample_complete makes it
+// exact), as sample_light gives RIS's candidates.
+LightSample sample_punctual(uint index, vec3 x, const bool exact_emission) {
     PunctualLight l = punctual_lights(index);
     LightSample s;
     s.area = false;
@@ -229,7 +251,10 @@ LightSample sample_punctual(uint index, vec3 x) {
             float t = clamp((c - l.cos_outer) / max(l.cos_inner - l.cos_outer, 1e-4), 0.0, 1.0);
             falloff = t * t;
         }
-        if (l.profile != INVALID_INDEX) falloff = punctual_profile(l, -s.wi);
+        if (l.profile != INVALID_INDEX) {
+            s.textured = !exact_emission;
+            falloff = exact_emission ? punctual_profile(l, -s.wi) : punctual_profile_bound(l, -s.wi);
+        }
         s.Le_G = l.intensity * falloff / d2;
     }
     return s;
@@ -324,7 +349,7 @@ LightSample sample_light(LightContext ctx, vec4 u, const bool exact_emission) {
         : source_pmf == 0.0 ? 0.0  // the walk found no leaf: not a sample (pdf 0)
         : model_pmf(ctx, model);
     if (m.punctual != INVALID_INDEX) {
-        LightSample s = sample_punctual(m.punctual, x);
+        LightSample s = sample_punctual(m.punctual, x, exact_emission);
         s.pdf = pm;
         s.model = model;
         return s;
@@ -344,6 +369,12 @@ void light_sample_complete(inout LightSample s) {
     if (!s.textured) return;
     s.textured = false;
     if (max3(s.Le_G) <= 0.0) return;
+    if (s.tri == INVALID_INDEX) {
+        // An IES light's stand-in: its exact intensity toward the shading point.
+        PunctualLight l = punctual_lights(light_models(s.model).punctual);
+        s.Le_G = l.intensity * punctual_profile(l, -s.wi) / max(s.dist * s.dist, 1e-12);
+        return;
+    }
     vec3 Le = light_triangle_radiance(light_triangles(s.tri), s.bary, -s.wi);
     s.Le_G = Le * s.cos_y / max(s.dist * s.dist, 1e-20);
 }
