@@ -443,3 +443,24 @@ fn light_reuse_of_ies_lights_agrees_with_pt() {
     };
     testing::assert_agrees_with_pt(&t, s, 16, 64, "IES lights, light reuse against pt");
 }
+
+/// A node hidden by `KHR_node_visibility` hides its IES light too, and a hidden parent
+/// its children's (seen to fail with the visibility check after the IES lights').
+#[test]
+fn hidden_nodes_hide_their_ies_lights() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_scene(dir.path());
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    doc["extensionsUsed"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!("KHR_node_visibility"));
+    doc["nodes"][1]["extensions"]["KHR_node_visibility"] = json!({"visible": false});
+    let hidden = dir.path().join("hidden.gltf");
+    std::fs::write(&hidden, serde_json::to_string(&doc).unwrap()).unwrap();
+    let scene = Scene::load(&hidden, &LoadOptions::default()).unwrap();
+    assert_eq!(scene.punctual.len(), 1);
+    // Lamp A's profile is packed first (offset 0): the light left is lamp B's.
+    assert_ne!(scene.punctual[0].profile & 0x7fff_ffff, 0);
+}

@@ -446,7 +446,11 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
             cameras.push((node.index(), camera));
         }
         if !visible {
-            hidden += usize::from(node.light().is_some() || node.mesh().is_some());
+            hidden += usize::from(
+                node.light().is_some()
+                    || node.mesh().is_some()
+                    || node.extension_value(ies::EXTENSION).is_some(),
+            );
             continue;
         }
         if let Some(light) = node.light() {
