@@ -14,7 +14,7 @@ pub mod reservoir;
 pub mod tree;
 
 use crate::gpu;
-use crate::scene::{Scene, SceneError};
+use crate::scene::{ies, Scene, SceneError};
 use glam::Vec3;
 use std::collections::HashMap;
 
@@ -206,19 +206,18 @@ impl LightTable {
 
         let radius = 0.5 * scene.extent();
         // Each IES profile's flux (∫ candela dω), once per profile.
-        let mut profile_flux: HashMap<u32, f64> = HashMap::new();
+        let mut profile_flux: HashMap<usize, f64> = HashMap::new();
         for (i, l) in scene.punctual.iter().enumerate() {
             let lum = luminance(l.intensity) as f64;
-            let power = match l.kind {
-                gpu::PUNCTUAL_POINT if l.profile != gpu::INVALID_INDEX => {
-                    let offset = l.profile & 0x7fff_ffff;
-                    let flux = *profile_flux.entry(offset).or_insert_with(|| {
-                        crate::scene::ies::unpack(&scene.light_profiles, offset as usize).flux()
-                    });
+            let power = match (l.kind, ies::profile_offset(l)) {
+                (gpu::PUNCTUAL_POINT, Some(offset)) => {
+                    let flux = *profile_flux
+                        .entry(offset)
+                        .or_insert_with(|| ies::unpack(&scene.light_profiles, offset).flux());
                     flux * lum
                 }
-                gpu::PUNCTUAL_POINT => 4.0 * std::f64::consts::PI * lum,
-                gpu::PUNCTUAL_SPOT => {
+                (gpu::PUNCTUAL_POINT, None) => 4.0 * std::f64::consts::PI * lum,
+                (gpu::PUNCTUAL_SPOT, _) => {
                     // Flux of the smooth cone falloff, approximated by its mean cone.
                     let c = 0.5 * (l.cos_inner + l.cos_outer) as f64;
                     2.0 * std::f64::consts::PI * (1.0 - c) * lum

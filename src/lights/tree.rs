@@ -14,7 +14,9 @@
 //! importance and probabilities (`inc/light_tree.glsl`) for the tests.
 
 use crate::gpu;
+use crate::scene::ies;
 use glam::Vec3;
+use std::collections::HashMap;
 
 /// The largest depth a model's path can describe (the bits of `tree_path`).
 pub const MAX_DEPTH: u32 = 32;
@@ -98,13 +100,15 @@ fn cone_union(a: Vec3, theta_a: f32, b: Vec3, theta_b: f32) -> (Vec3, f32) {
     (axis, (theta_o * 1.0001 + 1e-5).min(PI))
 }
 
-/// The bounds of one light model, or None for a directional light. `profiles` holds the
-/// IES profiles of punctual lights (`Scene::light_profiles`).
+/// The bounds of one light model, or None for a directional light. `lit` gives the lit
+/// vertical angles of each IES profile by its offset ([`IesProfile::lit_vertical_range`]).
+///
+/// [`IesProfile::lit_vertical_range`]: crate::scene::ies::IesProfile::lit_vertical_range
 fn model_bounds(
     m: &gpu::LightModel,
     triangles: &[gpu::LightTriangle],
     punctual: &[gpu::PunctualLight],
-    profiles: &[f32],
+    lit: &HashMap<usize, Option<(f32, f32)>>,
 ) -> Option<Bounds> {
     use std::f32::consts::{FRAC_PI_2, PI};
     if m.punctual != gpu::INVALID_INDEX {
@@ -121,13 +125,12 @@ fn model_bounds(
                 // A little wider than the outer cone: the bound must hold it.
                 theta_e: (l.cos_outer.clamp(-1.0, 1.0).acos() * 1.0001 + 1e-5).min(PI),
             }),
-            gpu::PUNCTUAL_POINT if l.profile != gpu::INVALID_INDEX => {
+            gpu::PUNCTUAL_POINT if ies::profile_offset(l).is_some() => {
                 // An IES light emits only within its lit vertical angles: a cone about
                 // its direction (a downlight) or about the opposite one (an uplight),
                 // whichever is narrower; a little wider, as the bound must hold it.
-                let profile =
-                    crate::scene::ies::unpack(profiles, (l.profile & 0x7fff_ffff) as usize);
-                let (lo, hi) = profile.lit_vertical_range().unwrap_or((0.0, PI));
+                let range = ies::profile_offset(l).and_then(|o| lit.get(&o).copied().flatten());
+                let (lo, hi) = range.unwrap_or((0.0, PI));
                 let d = Vec3::from(l.direction).normalize_or(Vec3::NEG_Z);
                 let (axis, cone) = if hi <= PI - lo {
                     (d, hi)
@@ -199,10 +202,16 @@ pub fn build(
     punctual: &[gpu::PunctualLight],
     profiles: &[f32],
 ) -> LightTree {
+    // Each IES profile's lit vertical angles, once per profile.
+    let mut lit = HashMap::new();
+    for offset in punctual.iter().filter_map(ies::profile_offset) {
+        lit.entry(offset)
+            .or_insert_with(|| ies::unpack(profiles, offset).lit_vertical_range());
+    }
     let mut finite = Vec::new();
     let mut directional = Vec::new();
     for (i, m) in models.iter().enumerate() {
-        match model_bounds(m, triangles, punctual, profiles) {
+        match model_bounds(m, triangles, punctual, &lit) {
             Some(b) => finite.push((i as u32, b)),
             None => directional.push(i as u32),
         }

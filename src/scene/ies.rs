@@ -23,6 +23,15 @@ const MIME_TYPE: &str = "application/x-ies-lm-63";
 pub const BOUND_ROWS: usize = 16;
 pub const BOUND_COLUMNS: usize = 32;
 
+/// `PunctualLight::profile`'s bit that marks a mirrored frame (the node's transform has a
+/// negative determinant); the bits below it are the profile's offset.
+pub const PROFILE_MIRRORED: u32 = 1 << 31;
+
+/// The offset of light `l`'s profile in the scene's profile array, None without one.
+pub fn profile_offset(l: &crate::gpu::PunctualLight) -> Option<usize> {
+    (l.profile != crate::gpu::INVALID_INDEX).then_some((l.profile & !PROFILE_MIRRORED) as usize)
+}
+
 /// The most candela values a profile may have (a 1° web over the sphere has 65,341).
 const MAX_VALUES: usize = 1 << 20;
 

@@ -1152,10 +1152,9 @@ fn content_hash(scene: &Scene) -> String {
     let unprofiled = std::mem::offset_of!(crate::gpu::PunctualLight, profile);
     for l in &scene.punctual {
         let bytes = bytemuck::bytes_of(l);
-        if l.profile == crate::gpu::INVALID_INDEX {
-            eat(&bytes[..unprofiled]);
-        } else {
-            eat(bytes);
+        match ies::profile_offset(l) {
+            None => eat(&bytes[..unprofiled]),
+            Some(_) => eat(bytes),
         }
     }
     eat(bytemuck::cast_slice(&scene.light_profiles));

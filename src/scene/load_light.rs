@@ -108,7 +108,12 @@ pub(super) fn convert_ies_light(
         intensity: color.map(|c| c * multiplier),
         cos_inner: 1.0,
         cos_outer: 1.0,
-        profile: offset | if mirrored { 1 << 31 } else { 0 },
+        profile: offset
+            | if mirrored {
+                super::ies::PROFILE_MIRRORED
+            } else {
+                0
+            },
         tangent: tangent.into(),
     })
 }

@@ -158,7 +158,7 @@ impl SceneStats {
             ies_lights: scene
                 .punctual
                 .iter()
-                .filter(|l| l.profile != crate::gpu::INVALID_INDEX)
+                .filter(|l| super::ies::profile_offset(l).is_some())
                 .count() as u64,
             total_power: lights.map_or(0.0, |l| l.total_power),
             bounds_min: scene.bounds_min.into(),

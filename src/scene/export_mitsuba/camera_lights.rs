@@ -89,18 +89,20 @@ impl Writer<'_> {
     /// wide enough for the face's corners), so that every direction lies in exactly one
     /// spot's texels; within a texel the profile is the texel centre's, the one
     /// approximation, which the manifest lists.
-    fn ies_xml(&mut self, i: usize, l: &gpu::PunctualLight) -> Result<String, ExportError> {
+    fn ies_xml(
+        &mut self,
+        i: usize,
+        l: &gpu::PunctualLight,
+        offset: usize,
+    ) -> Result<String, ExportError> {
         const RES: u32 = 512;
         const MARGIN: u32 = 75; // ≥ RES·(1 − 1/√2)/2: the cone holds the face's corners
-        let profile = crate::scene::ies::unpack(
-            &self.scene.light_profiles,
-            (l.profile & 0x7fff_ffff) as usize,
-        );
+        let profile = crate::scene::ies::unpack(&self.scene.light_profiles, offset);
         let p = Vec3::from(l.position);
         let d = Vec3::from(l.direction);
         let x = Vec3::from(l.tangent);
         let mut y = (-d).cross(x);
-        if l.profile & 0x8000_0000 != 0 {
+        if l.profile & crate::scene::ies::PROFILE_MIRRORED != 0 {
             y = -y;
         }
         let tan_c = RES as f32 / (RES - 2 * MARGIN) as f32;
@@ -170,8 +172,8 @@ impl Writer<'_> {
         i: usize,
         l: &gpu::PunctualLight,
     ) -> Result<String, ExportError> {
-        if l.profile != gpu::INVALID_INDEX {
-            return self.ies_xml(i, l);
+        if let Some(offset) = crate::scene::ies::profile_offset(l) {
+            return self.ies_xml(i, l, offset);
         }
         let mut s = String::new();
         if l.range > 0.0 {
