@@ -3,7 +3,7 @@
 
 use super::textures::spot_falloff_pfm;
 use super::writer::Writer;
-use super::xml::{matrix_xml, rgb_xml};
+use super::xml::{matrix_xml, rgb_xml, spot_texture_xml};
 use super::{ExportError, ExportOptions};
 use crate::gpu;
 use crate::scene::{Camera, Projection};
@@ -156,12 +156,7 @@ impl Writer<'_> {
             let _ = writeln!(s, "    {}", rgb_xml("intensity", l.intensity));
             let _ = writeln!(s, "    <float name=\"cutoff_angle\" value=\"{cutoff}\"/>");
             let _ = writeln!(s, "    <float name=\"beam_width\" value=\"{cutoff}\"/>");
-            let _ = writeln!(s, "    <texture type=\"bitmap\" name=\"texture\">");
-            let _ = writeln!(s, "      <string name=\"filename\" value=\"{file}\"/>");
-            s.push_str("      <boolean name=\"raw\" value=\"true\"/>\n");
-            s.push_str("      <string name=\"filter_type\" value=\"nearest\"/>\n");
-            s.push_str("      <string name=\"wrap_mode\" value=\"clamp\"/>\n");
-            s.push_str("    </texture>\n");
+            s.push_str(&spot_texture_xml(&file, true));
             s.push_str("  </emitter>\n");
         }
         Ok(s)
@@ -247,11 +242,7 @@ impl Writer<'_> {
                     );
                     let file = format!("textures/spot{i}.pfm");
                     self.write(&file, &spot_falloff_pfm(l, outer, 256))?;
-                    let _ = writeln!(s, "    <texture type=\"bitmap\" name=\"texture\">");
-                    let _ = writeln!(s, "      <string name=\"filename\" value=\"{file}\"/>");
-                    s.push_str("      <boolean name=\"raw\" value=\"true\"/>\n");
-                    s.push_str("      <string name=\"wrap_mode\" value=\"clamp\"/>\n");
-                    s.push_str("    </texture>\n");
+                    s.push_str(&spot_texture_xml(&file, false));
                 }
             }
             k => {

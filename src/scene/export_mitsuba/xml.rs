@@ -41,6 +41,20 @@ pub(super) fn uv_matrix(t: &gpu::TextureRef) -> Mat3 {
     )
 }
 
+/// A spot light's projected texture (`file`, linear values, clamped at its edges),
+/// indented for an emitter's body; `nearest` looks texels up without filtering.
+pub(super) fn spot_texture_xml(file: &str, nearest: bool) -> String {
+    let mut s = String::from("    <texture type=\"bitmap\" name=\"texture\">\n");
+    s += &format!("      <string name=\"filename\" value=\"{file}\"/>\n");
+    s.push_str("      <boolean name=\"raw\" value=\"true\"/>\n");
+    if nearest {
+        s.push_str("      <string name=\"filter_type\" value=\"nearest\"/>\n");
+    }
+    s.push_str("      <string name=\"wrap_mode\" value=\"clamp\"/>\n");
+    s.push_str("    </texture>\n");
+    s
+}
+
 pub(super) fn rgb_xml(name: &str, c: [f32; 3]) -> String {
     format!(
         "<rgb name=\"{name}\" value=\"{}, {}, {}\"/>",
