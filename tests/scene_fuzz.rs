@@ -96,8 +96,9 @@ fn seeds(scratch: &Path) -> Vec<Seed> {
 
 /// `cornell-lights` with an animation of its blockers and camera (translation LINEAR,
 /// rotation CUBICSPLINE, scale STEP) in a second, data-URI buffer, for the cases that
-/// pose the scene (`--animation-time`), two material variants (`--variant`) and an IES
-/// light (`EXT_lights_ies`) on the animated node.
+/// pose the scene (`--animation-time`), with a `KHR_animation_pointer` channel that
+/// animates a material's emission, two material variants (`--variant`) and an IES light
+/// (`EXT_lights_ies`) on the animated node.
 fn animated(cornell: &Seed) -> Seed {
     use base64::Engine as _;
     let floats: Vec<f32> = [
@@ -164,12 +165,18 @@ fn animated(cornell: &Seed) -> Seed {
             {"sampler": 0, "target": {"node": 1, "path": "translation"}},
             {"sampler": 1, "target": {"node": 1, "path": "rotation"}},
             {"sampler": 2, "target": {"node": 1, "path": "scale"}},
-            {"sampler": 0, "target": {"node": camera, "path": "translation"}}
+            {"sampler": 0, "target": {"node": camera, "path": "translation"}},
+            {"sampler": 0, "target": {"path": "pointer", "extensions": {"KHR_animation_pointer":
+                {"pointer": "/materials/0/emissiveFactor"}}}}
         ]
     }]);
     // Two material variants: the blockers red in the second. And an IES downlight on the
     // animated blocker (its profile in a data URI), which the animation carries.
-    json["extensionsUsed"] = serde_json::json!(["KHR_materials_variants", "EXT_lights_ies"]);
+    json["extensionsUsed"] = serde_json::json!([
+        "KHR_materials_variants",
+        "EXT_lights_ies",
+        "KHR_animation_pointer"
+    ]);
     let profile = "IESNA:LM-63-2002\nTILT=NONE\n1 -1 1 3 2 1 2 0 0 0\n1 1 10\n0 45 90\n0 180\n\
                    5 3 0\n4 2 0\n";
     json["extensions"] = serde_json::json!({

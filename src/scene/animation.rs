@@ -8,9 +8,13 @@
 //! Before the first key and after the last the value is held. Cameras, punctual lights,
 //! skins' joints and instanced nodes follow their nodes.
 
+use super::animation_pointer::{
+    self, Kind, NodeProperty, PointerChannel, Taken, Target, EXTENSION as POINTER_EXTENSION,
+};
 use super::gltf_check::{self, Role};
 use glam::{Mat4, Quat, Vec3};
 use gltf::animation::{Interpolation, Property};
+use std::collections::HashMap;
 
 /// Which pose of the file's animations to render.
 #[derive(Clone, Debug, PartialEq)]
@@ -32,8 +36,8 @@ pub struct AnimationInfo {
     pub channels: usize,
 }
 
-/// The file's animations, for statistics.
-pub(super) fn summaries(document: &gltf::Document) -> Vec<AnimationInfo> {
+/// The file's animations, for statistics (`taken`: their pointer channels).
+pub(super) fn summaries(document: &gltf::Document, taken: &Taken) -> Vec<AnimationInfo> {
     document
         .animations()
         .map(|a| {
@@ -54,7 +58,7 @@ pub(super) fn summaries(document: &gltf::Document) -> Vec<AnimationInfo> {
                 name: name(&a),
                 start,
                 end,
-                channels: a.channels().count(),
+                channels: a.channels().count() + taken.pointer_count(a.index()),
             }
         })
         .collect()
@@ -73,6 +77,10 @@ pub(super) struct Posed {
     pub locals: Vec<Mat4>,
     /// Morph weights set by a channel, per node.
     pub weights: Vec<Option<Vec<f32>>>,
+    /// The file's JSON with the values of the `KHR_animation_pointer` channels that
+    /// target other properties than nodes' transforms and weights written in, when
+    /// there are any.
+    pub json: Option<serde_json::Value>,
 }
 
 /// Every node's local transform from the file, without animation.
@@ -83,14 +91,57 @@ pub(super) fn static_locals(document: &gltf::Document) -> Vec<Mat4> {
         .collect()
 }
 
-const PATHS: [&str; 4] = ["translation", "rotation", "scale", "weights"];
+/// One channel of an animation: the crate's, or a pointer channel it could not read.
+enum Channel<'a> {
+    Core(gltf::animation::Channel<'a>),
+    Pointer(&'a PointerChannel),
+}
 
-/// Samples the animations `pose` selects at its time. Errors name the animation, channel
-/// and what is wrong; `max_bytes` bounds what reading keyframes may allocate. Two
-/// animations that move one property of one node: the first in the file wins, with a
-/// warning.
+/// Where a channel's value goes.
+enum Destination {
+    Node(usize, NodeProperty),
+    Json {
+        segments: Vec<String>,
+        kind: Kind,
+        default: Option<Vec<f32>>,
+    },
+}
+
+/// Which animation animates each property, by its pointer (a core channel's as the
+/// equivalent pointer): an animation may animate a property once, and across animations
+/// the first in the file wins. A morph weight array and its elements are one property.
+#[derive(Default)]
+struct Owners {
+    exact: HashMap<String, usize>,
+    /// Arrays some of whose elements are animated, with the first animation to do so.
+    elements: HashMap<String, usize>,
+}
+
+impl Owners {
+    /// The animation that already animates `key` (or its array, or its elements).
+    fn owner(&self, key: &str, array: Option<&str>) -> Option<usize> {
+        self.exact
+            .get(key)
+            .or_else(|| array.and_then(|a| self.exact.get(a)))
+            .or_else(|| self.elements.get(key))
+            .copied()
+    }
+
+    fn claim(&mut self, key: String, array: Option<String>, animation: usize) {
+        if let Some(a) = array {
+            self.elements.entry(a).or_insert(animation);
+        }
+        self.exact.insert(key, animation);
+    }
+}
+
+/// Samples the animations `pose` selects at its time, their pointer channels (`taken`)
+/// included. Errors name the animation, channel and what is wrong; `max_bytes` bounds
+/// what reading keyframes may allocate. Two animations that animate one property: the
+/// first in the file wins, with a warning.
 pub(super) fn pose(
     document: &gltf::Document,
+    taken: &Taken,
     buffers: &[gltf::buffer::Data],
     pose: &Pose,
     max_bytes: u64,
@@ -137,142 +188,285 @@ pub(super) fn pose(
         .collect();
     let mut moved = vec![false; count];
     let mut weights: Vec<Option<Vec<f32>>> = vec![None; count];
-    // Which animation set each (node, property) first.
-    let mut owner: std::collections::HashMap<(usize, usize), usize> = Default::default();
+    let mut owners = Owners::default();
+    let mut json: Option<serde_json::Value> = None;
     let root = document.as_json();
     let get = |b: gltf::Buffer<'_>| buffers.get(b.index()).map(|d| &d.0[..]);
+    let targets_of = |mesh: Option<gltf::Mesh<'_>>| {
+        mesh.and_then(|m| m.primitives().next())
+            .map_or(0, |p| p.morph_targets().count())
+    };
     for animation in &animations {
-        for channel in animation.channels() {
-            let what = format!("animation {} channel {}", name(animation), channel.index());
-            let node = channel.target().node();
-            let property = channel.target().property();
-            let path = match property {
-                Property::Translation => 0,
-                Property::Rotation => 1,
-                Property::Scale => 2,
-                Property::MorphTargetWeights => 3,
+        let a = animation.index();
+        let mut channels: Vec<(usize, Channel<'_>)> = animation
+            .channels()
+            .map(|c| (taken.file_index(a, c.index()), Channel::Core(c)))
+            .chain(
+                taken
+                    .pointers
+                    .iter()
+                    .filter(|p| p.animation == a)
+                    .map(|p| (p.channel, Channel::Pointer(p))),
+            )
+            .collect();
+        channels.sort_by_key(|(i, _)| *i);
+        for (file_index, channel) in channels {
+            let what = format!("animation {} channel {file_index}", name(animation));
+            let pointer_channel = matches!(channel, Channel::Pointer(_));
+            let (sampler, destination) = match channel {
+                Channel::Core(c) => {
+                    let property = match c.target().property() {
+                        Property::Translation => NodeProperty::Translation,
+                        Property::Rotation => NodeProperty::Rotation,
+                        Property::Scale => NodeProperty::Scale,
+                        Property::MorphTargetWeights => NodeProperty::Weights,
+                    };
+                    let node = c.target().node().index();
+                    (c.sampler(), Destination::Node(node, property))
+                }
+                Channel::Pointer(p) => {
+                    let pointer = p.pointer.as_deref().ok_or_else(|| {
+                        format!(
+                            "{what}: its target's path is `pointer` but it has no \
+                             {POINTER_EXTENSION} pointer"
+                        )
+                    })?;
+                    let segments =
+                        animation_pointer::segments(pointer).map_err(|e| format!("{what}: {e}"))?;
+                    let destination = match animation_pointer::resolve(&segments) {
+                        Some(Target::Node(node, property)) => Destination::Node(node, property),
+                        Some(Target::Json {
+                            segments,
+                            kind,
+                            default,
+                        }) => Destination::Json {
+                            segments,
+                            kind,
+                            default,
+                        },
+                        None => {
+                            warnings.push(format!(
+                                "{what} animates `{pointer}`, a property lanterna does not \
+                                 animate: the channel is ignored"
+                            ));
+                            continue;
+                        }
+                    };
+                    let sampler = p
+                        .sampler
+                        .and_then(|s| animation.samplers().nth(s))
+                        .ok_or_else(|| {
+                            format!("{what}: its sampler is not one of the animation's")
+                        })?;
+                    (sampler, destination)
+                }
             };
-            match owner.get(&(node.index(), path)) {
-                Some(&a) if a == animation.index() => {
-                    return Err(format!(
-                        "{what}: a second channel for the {} of node {}; an animation may \
-                         target each property of a node once",
-                        PATHS[path],
+            // The property's pointer, and its array's for one morph weight.
+            let (key, array) = match &destination {
+                Destination::Node(n, NodeProperty::Weight(k)) => (
+                    format!("/nodes/{n}/weights/{k}"),
+                    Some(format!("/nodes/{n}/weights")),
+                ),
+                Destination::Node(n, p) => (format!("/nodes/{n}/{}", PATHS[path_index(*p)]), None),
+                Destination::Json { segments, .. } => {
+                    let key = animation_pointer::pointer_text(segments);
+                    let array = match &segments[..] {
+                        [m, _, w, _] if m == "meshes" && w == "weights" => {
+                            Some(animation_pointer::pointer_text(&segments[..3]))
+                        }
+                        _ => None,
+                    };
+                    (key, array)
+                }
+            };
+            // The property in words, for messages.
+            let label = match &destination {
+                Destination::Node(n, p) => match document.nodes().nth(*n) {
+                    Some(node) => format!(
+                        "the {} of node {}",
+                        match p {
+                            NodeProperty::Weight(k) => format!("morph weight {k}"),
+                            p => PATHS[path_index(*p)].to_string(),
+                        },
                         gltf_check::node_name(&node)
+                    ),
+                    None => format!("`{key}`"),
+                },
+                Destination::Json { .. } => format!("`{key}`"),
+            };
+            match owners.owner(&key, array.as_deref()) {
+                Some(owner) if owner == a => {
+                    return Err(format!(
+                        "{what}: a second channel for {label}; an animation may animate \
+                         each property once"
                     ));
                 }
-                Some(&a) => {
+                Some(owner) => {
                     warnings.push(format!(
-                        "{what} moves the {} of node {}, which animation {a} moves too: \
-                         animation {a}'s channel is used",
-                        PATHS[path],
-                        gltf_check::node_name(&node)
+                        "{what} animates {label}, which animation {owner} animates too: \
+                         animation {owner}'s channel is used"
                     ));
                     continue;
                 }
-                None => {
-                    owner.insert((node.index(), path), animation.index());
-                }
+                None => owners.claim(key.clone(), array, a),
             }
-            if path < 3 && matches!(node.transform(), gltf::scene::Transform::Matrix { .. }) {
-                // glTF: an animated node has translation, rotation and scale, not a matrix.
-                let identity = node.transform().matrix() == Mat4::IDENTITY.to_cols_array_2d();
-                if !identity {
-                    return Err(format!(
-                        "{what} animates node {}, which has a matrix; an animated node must \
-                         give translation, rotation and scale instead",
-                        gltf_check::node_name(&node)
-                    ));
-                }
-            }
-            let sampler = channel.sampler();
-            let input = sampler.input();
-            gltf_check::check_accessor(root, input.index(), Role::AnimationInput, max_bytes)
-                .map_err(|e| format!("{what}: {e}"))?;
-            let times: Vec<f32> = read_scalars(input, get)
-                .ok_or_else(|| format!("{what}: unreadable keyframe times"))?;
-            if let Some(k) = times
-                .iter()
-                .position(|t| !t.is_finite())
-                .or_else(|| times.windows(2).position(|w| w[1] <= w[0]).map(|k| k + 1))
-            {
-                return Err(format!(
-                    "{what}: keyframe time {k} is {}, which is not finite or not after the \
-                     one before; keyframe times must increase",
-                    times[k]
-                ));
-            }
-            let role = match property {
-                Property::Translation | Property::Scale => Role::AnimationVec3,
-                Property::Rotation => Role::AnimationRotation,
-                Property::MorphTargetWeights => Role::AnimationWeights,
-            };
-            let output = sampler.output();
-            gltf_check::check_accessor(root, output.index(), role, max_bytes)
-                .map_err(|e| format!("{what}: {e}"))?;
-            let values: Vec<f32> = match property {
-                Property::Translation | Property::Scale => {
-                    super::load_primitive::read_floats::<3>(output, get, false).map(|v| v.concat())
-                }
-                Property::Rotation => {
-                    super::load_primitive::read_floats::<4>(output, get, false).map(|v| v.concat())
-                }
-                Property::MorphTargetWeights => read_scalars(output, get),
-            }
-            .ok_or_else(|| format!("{what}: unreadable keyframe values"))?;
-            if let Some(v) = values.iter().find(|v| !v.is_finite()) {
-                return Err(format!("{what}: a keyframe value is {v}"));
-            }
-            let width = match property {
-                Property::Translation | Property::Scale => 3,
-                Property::Rotation => 4,
-                Property::MorphTargetWeights => {
-                    let targets = node
-                        .mesh()
-                        .and_then(|m| m.primitives().next())
-                        .map_or(0, |p| p.morph_targets().count());
-                    if targets == 0 {
+            // The values' accessor role and the floats per key.
+            let (role, width, rotation) = match &destination {
+                Destination::Node(n, property) => {
+                    let node = document
+                        .nodes()
+                        .nth(*n)
+                        .ok_or_else(|| format!("{what}: the file has no node {n}"))?;
+                    let rotation = *property == NodeProperty::Rotation;
+                    if matches!(
+                        property,
+                        NodeProperty::Translation | NodeProperty::Rotation | NodeProperty::Scale
+                    ) && matches!(node.transform(), gltf::scene::Transform::Matrix { .. })
+                        && node.transform().matrix() != Mat4::IDENTITY.to_cols_array_2d()
+                    {
+                        // glTF: an animated node has translation, rotation and scale.
+                        return Err(format!(
+                            "{what} animates node {}, which has a matrix; an animated node \
+                             must give translation, rotation and scale instead",
+                            gltf_check::node_name(&node)
+                        ));
+                    }
+                    let targets = targets_of(node.mesh());
+                    if matches!(property, NodeProperty::Weights | NodeProperty::Weight(_))
+                        && targets == 0
+                    {
                         return Err(format!(
                             "{what} animates the morph weights of node {}, whose mesh has no \
                              morph targets",
                             gltf_check::node_name(&node)
                         ));
                     }
-                    targets
+                    if let NodeProperty::Weight(k) = property {
+                        if *k >= targets {
+                            return Err(format!(
+                                "{what} animates morph weight {k} of node {}, whose mesh has \
+                                 {targets} morph target(s)",
+                                gltf_check::node_name(&node)
+                            ));
+                        }
+                    }
+                    match (property, pointer_channel) {
+                        (NodeProperty::Translation | NodeProperty::Scale, false) => {
+                            (Role::AnimationVec3, 3, false)
+                        }
+                        (NodeProperty::Rotation, false) => (Role::AnimationRotation, 4, true),
+                        (NodeProperty::Weights, false) => (Role::AnimationWeights, targets, false),
+                        (NodeProperty::Translation | NodeProperty::Scale, true) => {
+                            (Role::PointerVec3, 3, false)
+                        }
+                        (NodeProperty::Rotation, true) => (Role::PointerVec4, 4, rotation),
+                        (NodeProperty::Weights, true) => (Role::PointerScalar, targets, false),
+                        (NodeProperty::Weight(_), _) => (Role::PointerScalar, 1, false),
+                    }
+                }
+                Destination::Json {
+                    segments,
+                    kind,
+                    default,
+                } => {
+                    let working = match &mut json {
+                        Some(v) => v,
+                        None => json.insert(
+                            serde_json::to_value(root).map_err(|e| format!("{what}: {e}"))?,
+                        ),
+                    };
+                    // A mesh's morph weights: as many as its targets, zeros where the
+                    // file leaves them out.
+                    let mesh_targets = match &segments[..] {
+                        [m, i, w, ..] if m == "meshes" && w == "weights" => {
+                            let Some(mesh) = i.parse().ok().and_then(|i| document.meshes().nth(i))
+                            else {
+                                return Err(format!(
+                                    "{what} animates `{key}`, but the file has no mesh {i}"
+                                ));
+                            };
+                            let targets = targets_of(Some(mesh.clone()));
+                            if targets == 0 {
+                                return Err(format!(
+                                    "{what} animates `{key}`, but that mesh has no morph \
+                                     targets"
+                                ));
+                            }
+                            let mesh = &mut working["meshes"][mesh.index()];
+                            if mesh.get("weights").is_none_or(serde_json::Value::is_null) {
+                                mesh["weights"] = serde_json::json!(vec![0.0; targets]);
+                            }
+                            Some(targets)
+                        }
+                        _ => None,
+                    };
+                    if !animation_pointer::defined(working, segments, default.is_some()) {
+                        return Err(format!(
+                            "{what} animates `{key}`, which the file does not define (the \
+                             property must be in the file, or have a default and its \
+                             object be in the file)"
+                        ));
+                    }
+                    match kind {
+                        Kind::Float => (Role::PointerScalar, 1, false),
+                        Kind::Vector(2) => (Role::PointerVec2, 2, false),
+                        Kind::Vector(3) => (Role::PointerVec3, 3, false),
+                        Kind::Vector(_) => (Role::PointerVec4, 4, false),
+                        Kind::Weights => (Role::PointerScalar, mesh_targets.unwrap_or(1), false),
+                        Kind::Bool => (Role::PointerBool, 1, false),
+                    }
                 }
             };
-            let cubic = sampler.interpolation() == Interpolation::CubicSpline;
-            let per_key = width * if cubic { 3 } else { 1 };
-            if values.len() != times.len() * per_key {
+            if role == Role::PointerBool && sampler.interpolation() != Interpolation::Step {
                 return Err(format!(
-                    "{what}: {} keyframe times but {} output values; {} {} needs {} per key",
-                    times.len(),
-                    values.len() / width,
-                    match sampler.interpolation() {
-                        Interpolation::Linear => "LINEAR",
-                        Interpolation::Step => "STEP",
-                        Interpolation::CubicSpline => "CUBICSPLINE",
-                    },
-                    PATHS[path],
-                    if cubic { 3 } else { 1 }
+                    "{what} animates the boolean `{key}`, which must use STEP interpolation"
                 ));
             }
-            let keys = Keys {
-                times: &times,
-                values: &values,
-                width,
-                interpolation: sampler.interpolation(),
-            };
-            let value = keys.sample(pose.time, property == Property::Rotation);
-            let node_index = node.index();
-            match property {
-                Property::Translation => trs[node_index].0 = Vec3::from_slice(&value),
-                Property::Rotation => trs[node_index].1 = Quat::from_slice(&value),
-                Property::Scale => trs[node_index].2 = Vec3::from_slice(&value),
-                Property::MorphTargetWeights => weights[node_index] = Some(value),
+            let value = sample(
+                &sampler,
+                root,
+                get,
+                max_bytes,
+                &what,
+                &label,
+                (role, width, rotation),
+                pose.time,
+            )?;
+            if let Destination::Node(
+                n,
+                NodeProperty::Translation | NodeProperty::Rotation | NodeProperty::Scale,
+            ) = destination
+            {
+                moved[n] = true;
             }
-            if path < 3 {
-                moved[node_index] = true;
+            match destination {
+                Destination::Node(n, property) => match property {
+                    NodeProperty::Translation => trs[n].0 = Vec3::from_slice(&value),
+                    NodeProperty::Rotation => trs[n].1 = Quat::from_slice(&value),
+                    NodeProperty::Scale => trs[n].2 = Vec3::from_slice(&value),
+                    NodeProperty::Weights => weights[n] = Some(value),
+                    NodeProperty::Weight(k) => {
+                        let node = document.nodes().nth(n).expect("checked above");
+                        let own = weights[n].take().or_else(|| {
+                            node.weights()
+                                .or_else(|| node.mesh().and_then(|m| m.weights()))
+                                .map(<[f32]>::to_vec)
+                        });
+                        let mut all = own.unwrap_or_default();
+                        all.resize(targets_of(node.mesh()), 0.0);
+                        all[k] = value[0];
+                        weights[n] = Some(all);
+                    }
+                },
+                Destination::Json { segments, kind, .. } => {
+                    let working = json.as_mut().expect("made above");
+                    animation_pointer::set(
+                        working,
+                        &segments,
+                        animation_pointer::json_value(kind, &value),
+                    )
+                    .map_err(|e| format!("{what}: {e}"))?;
+                }
             }
         }
     }
@@ -290,17 +484,115 @@ pub(super) fn pose(
             *local = Mat4::from_scale_rotation_translation(s, r / len, t);
         }
     }
-    Ok(Posed { locals, weights })
+    Ok(Posed {
+        locals,
+        weights,
+        json,
+    })
+}
+
+const PATHS: [&str; 4] = ["translation", "rotation", "scale", "weights"];
+
+fn path_index(property: NodeProperty) -> usize {
+    match property {
+        NodeProperty::Translation => 0,
+        NodeProperty::Rotation => 1,
+        NodeProperty::Scale => 2,
+        NodeProperty::Weights | NodeProperty::Weight(_) => 3,
+    }
+}
+
+/// A sampler's value at `time`: its keyframe times and values read (`role`: the values'
+/// accessor role, `width` floats per key, `rotation`: quaternions, slerped) and checked,
+/// errors naming `what` and the `property` it animates.
+#[allow(clippy::too_many_arguments)]
+fn sample<'a, 's>(
+    sampler: &gltf::animation::Sampler<'a>,
+    root: &gltf::json::Root,
+    get: impl Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+    max_bytes: u64,
+    what: &str,
+    property: &str,
+    (role, width, rotation): (Role, usize, bool),
+    time: f32,
+) -> Result<Vec<f32>, String> {
+    let input = sampler.input();
+    gltf_check::check_accessor(root, input.index(), Role::AnimationInput, max_bytes)
+        .map_err(|e| format!("{what}: {e}"))?;
+    let times: Vec<f32> = read_scalars(input, get.clone())
+        .ok_or_else(|| format!("{what}: unreadable keyframe times"))?;
+    if let Some(k) = times
+        .iter()
+        .position(|t| !t.is_finite())
+        .or_else(|| times.windows(2).position(|w| w[1] <= w[0]).map(|k| k + 1))
+    {
+        return Err(format!(
+            "{what}: keyframe time {k} is {}, which is not finite or not after the \
+             one before; keyframe times must increase",
+            times[k]
+        ));
+    }
+    let output = sampler.output();
+    gltf_check::check_accessor(root, output.index(), role, max_bytes)
+        .map_err(|e| format!("{what}: {e}"))?;
+    use super::load_primitive::read_floats;
+    let values: Vec<f32> = match output.dimensions() {
+        gltf::accessor::Dimensions::Vec2 => {
+            read_floats::<2>(output, get, false).map(|v| v.concat())
+        }
+        gltf::accessor::Dimensions::Vec3 => {
+            read_floats::<3>(output, get, false).map(|v| v.concat())
+        }
+        gltf::accessor::Dimensions::Vec4 => {
+            read_floats::<4>(output, get, false).map(|v| v.concat())
+        }
+        _ => read_scalars(output, get),
+    }
+    .ok_or_else(|| format!("{what}: unreadable keyframe values"))?;
+    if let Some(v) = values.iter().find(|v| !v.is_finite()) {
+        return Err(format!("{what}: a keyframe value is {v}"));
+    }
+    let cubic = sampler.interpolation() == Interpolation::CubicSpline;
+    let per_key = width * if cubic { 3 } else { 1 };
+    if values.len() != times.len() * per_key {
+        return Err(format!(
+            "{what}: {} keyframe times but {} output values; with {} interpolation {property} \
+             needs {} per key",
+            times.len(),
+            values.len() / width,
+            match sampler.interpolation() {
+                Interpolation::Linear => "LINEAR",
+                Interpolation::Step => "STEP",
+                Interpolation::CubicSpline => "CUBICSPLINE",
+            },
+            if cubic { 3 } else { 1 }
+        ));
+    }
+    let keys = Keys {
+        times: &times,
+        values: &values,
+        width,
+        interpolation: sampler.interpolation(),
+    };
+    Ok(keys.sample(time, rotation))
 }
 
 /// A SCALAR accessor's elements as floats, normalised integers mapped as the glTF spec
-/// says (`check_accessor` refuses integers that are not normalised).
+/// says and others converted as they are (`KHR_animation_pointer` allows them; for core
+/// channels `check_accessor` refuses integers that are not normalised).
 fn read_scalars<'a, 's>(
     accessor: gltf::Accessor<'a>,
     get: impl Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
 ) -> Option<Vec<f32>> {
     use gltf::accessor::{DataType, Iter};
-    let scaled = |c: f32, largest: f32| (c / largest).max(-1.0);
+    let normalized = accessor.normalized();
+    let scaled = |c: f32, largest: f32| {
+        if normalized {
+            (c / largest).max(-1.0)
+        } else {
+            c
+        }
+    };
     Some(match accessor.data_type() {
         DataType::F32 => Iter::<f32>::new(accessor, get)?.collect(),
         DataType::I8 => Iter::<i8>::new(accessor, get)?

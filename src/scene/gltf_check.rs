@@ -97,6 +97,13 @@ pub(super) enum Role {
     AnimationVec3,
     AnimationRotation,
     AnimationWeights,
+    /// `KHR_animation_pointer` values: floats (any component type, normalized or not),
+    /// one per property, or a boolean's unsigned bytes.
+    PointerScalar,
+    PointerVec2,
+    PointerVec3,
+    PointerVec4,
+    PointerBool,
 }
 
 impl Role {
@@ -118,6 +125,11 @@ impl Role {
             Role::AnimationVec3 => "translation or scale keyframes",
             Role::AnimationRotation => "rotation keyframes",
             Role::AnimationWeights => "morph weight keyframes",
+            Role::PointerScalar
+            | Role::PointerVec2
+            | Role::PointerVec3
+            | Role::PointerVec4
+            | Role::PointerBool => "pointer keyframes",
         }
     }
 
@@ -153,6 +165,11 @@ impl Role {
             Role::AnimationVec3 => ty == Type::Vec3 && ct == F32,
             Role::AnimationRotation => ty == Type::Vec4 && ct != U32,
             Role::AnimationWeights => ty == Type::Scalar && ct != U32,
+            Role::PointerScalar => ty == Type::Scalar && ct != U32,
+            Role::PointerVec2 => ty == Type::Vec2 && ct != U32,
+            Role::PointerVec3 => ty == Type::Vec3 && ct != U32,
+            Role::PointerVec4 => ty == Type::Vec4 && ct != U32,
+            Role::PointerBool => ty == Type::Scalar && ct == U8,
         }
     }
 
@@ -183,6 +200,11 @@ impl Role {
             Role::AnimationVec3 => "float VEC3",
             Role::AnimationRotation => "VEC4 of float or of normalized (unsigned) bytes or shorts",
             Role::AnimationWeights => "SCALAR float or normalized (unsigned) byte or short",
+            Role::PointerScalar => "SCALAR of float, (unsigned) byte or (unsigned) short",
+            Role::PointerVec2 => "VEC2 of float, (unsigned) byte or (unsigned) short",
+            Role::PointerVec3 => "VEC3 of float, (unsigned) byte or (unsigned) short",
+            Role::PointerVec4 => "VEC4 of float, (unsigned) byte or (unsigned) short",
+            Role::PointerBool => "SCALAR unsigned byte (a boolean)",
         }
     }
 }

@@ -4,6 +4,7 @@
 //! placed in world space.
 
 use super::animation::{self, Pose};
+use super::animation_pointer;
 use super::camera::{Camera, ClipPlanes, Projection};
 use super::gltf_check::{self, node_name};
 use super::ies;
@@ -49,7 +50,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         message: e.to_string(),
     };
     let mut parse_warnings = Vec::new();
-    let gltf::Gltf { document, mut blob } =
+    let (gltf::Gltf { document, mut blob }, taken) =
         parse(&bytes, &mut parse_warnings).map_err(gltf_error)?;
     drop(bytes);
     let mut root = document.into_json();
@@ -134,6 +135,51 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     if meshopt_used {
         decompress_views(&document, &mut buffers).map_err(&invalid)?;
     }
+
+    // Every node's local transform and morph weights, posed by the animations when asked.
+    // Their pointer channels' other properties are written into the JSON, and everything
+    // below reads the document rebuilt from it, as it would a file stating those values.
+    let mut pose_warnings = Vec::new();
+    let (locals, animated_weights, document, patched) = match &options.pose {
+        None => (
+            animation::static_locals(&document),
+            Vec::new(),
+            document,
+            false,
+        ),
+        Some(pose) => {
+            let posed = animation::pose(
+                &document,
+                &taken,
+                &buffers,
+                pose,
+                budget.left(),
+                &mut pose_warnings,
+            )
+            .map_err(&invalid)?;
+            match posed.json {
+                None => (posed.locals, posed.weights, document, false),
+                Some(json) => {
+                    let document = animation_pointer::rebuild(json).map_err(|e| {
+                        invalid(format!(
+                            "its animated properties at time {} cannot be read: {e}",
+                            pose.time
+                        ))
+                    })?;
+                    (posed.locals, posed.weights, document, true)
+                }
+            }
+        }
+    };
+    // A property an animation set, found wrong below, is named as posed.
+    let posed_note = match &options.pose {
+        Some(pose) if patched => format!(" (as its animations pose it at time {} s)", pose.time),
+        _ => String::new(),
+    };
+    let invalid = |message: String| SceneError::Invalid {
+        path: path.to_path_buf(),
+        message: format!("{message}{posed_note}"),
+    };
 
     // Images that materials use (decoded lazily: unused images are skipped).
     let mut used_images = vec![false; document.images().len()];
@@ -309,18 +355,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     // own geometry.
     type PrimitiveKey = (usize, usize, Vec<u32>, Option<usize>);
     let mut primitive_ids: HashMap<PrimitiveKey, Option<u32>> = HashMap::new();
-    // Every node's local transform, posed by the animations when asked, and its world
-    // transform, for skins' joints (which may lie anywhere).
-    let mut pose_warnings = Vec::new();
-    let (locals, animated_weights) = match &options.pose {
-        None => (animation::static_locals(&document), Vec::new()),
-        Some(pose) => {
-            let posed =
-                animation::pose(&document, &buffers, pose, budget.left(), &mut pose_warnings)
-                    .map_err(&invalid)?;
-            (posed.locals, posed.weights)
-        }
-    };
+    // Every node's world transform, for skins' joints (which may lie anywhere).
     let node_worlds = node_world_matrices(&document, &locals).map_err(&invalid)?;
     let mut instances = Vec::new();
     let mut cameras = Vec::new();
@@ -696,7 +731,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         extras,
         origin: Vec3::ZERO,
         files: uris.files,
-        animations: animation::summaries(&document),
+        animations: animation::summaries(&document, &taken),
         pose: options.pose.clone(),
         variant: variant.map(|v| variant_names[v].clone()),
         variants: variant_names,
@@ -946,9 +981,14 @@ fn rebase(scene: &mut Scene) {
 /// * `EXT_texture_webp`: a texture's WebP image is used in place of its `source` (a
 ///   fallback for viewers without WebP, which the extension lets a file leave out, and
 ///   the crate cannot read a texture without one);
-/// * animations the crate cannot read (`KHR_animation_pointer` channels have no node)
-///   are left out with a warning: the file renders its static pose.
-fn parse(bytes: &[u8], warnings: &mut Vec<String>) -> Result<gltf::Gltf, gltf::Error> {
+/// * animation channels the crate cannot read, whose targets have no node, are taken
+///   out: `KHR_animation_pointer` channels are returned for posing, others ignored with
+///   a warning, as the glTF specification says. Animations that still cannot be read are
+///   left out with a warning: the file renders its static pose.
+fn parse(
+    bytes: &[u8],
+    warnings: &mut Vec<String>,
+) -> Result<(gltf::Gltf, animation_pointer::Taken), gltf::Error> {
     // The name in quotes anywhere in the JSON (a GLB's first chunk): it must be listed
     // in `extensionsUsed` wherever it is used.
     let json_part = match bytes.get(12..16) {
@@ -958,12 +998,16 @@ fn parse(bytes: &[u8], warnings: &mut Vec<String>) -> Result<gltf::Gltf, gltf::E
         }
         _ => bytes,
     };
-    let quoted = format!("\"{WEBP}\"");
-    let webp = json_part
-        .windows(quoted.len())
-        .any(|w| w == quoted.as_bytes());
+    let quoted = |name: &str| {
+        let quoted = format!("\"{name}\"");
+        json_part
+            .windows(quoted.len())
+            .any(|w| w == quoted.as_bytes())
+    };
+    let webp = quoted(WEBP);
+    let pointers = quoted(animation_pointer::EXTENSION);
     let first = match gltf::Gltf::from_slice_without_validation(bytes) {
-        Ok(g) if !webp => return Ok(g),
+        Ok(g) if !webp && !pointers => return Ok((g, Default::default())),
         Ok(_) => None,
         Err(e) => Some(e),
     };
@@ -980,6 +1024,7 @@ fn parse(bytes: &[u8], warnings: &mut Vec<String>) -> Result<gltf::Gltf, gltf::E
     if webp {
         prefer_webp_sources(&mut value);
     }
+    let mut taken = animation_pointer::take_channels(&mut value, warnings);
     let root = match gltf::json::deserialize::from_value::<gltf::json::Root>(value.clone()) {
         Ok(root) => root,
         Err(e) => {
@@ -993,17 +1038,19 @@ fn parse(bytes: &[u8], warnings: &mut Vec<String>) -> Result<gltf::Gltf, gltf::E
             };
             let count = animations.as_array().map_or(0, Vec::len);
             warnings.push(format!(
-                "has {count} animation(s) that cannot be read ({first}), such as \
-                 KHR_animation_pointer channels: they are left out (the scene renders its \
-                 static pose, and --animation-time finds no animation to play)"
+                "has {count} animation(s) that cannot be read ({first}): they are left out \
+                 (the scene renders its static pose, and --animation-time finds no \
+                 animation to play)"
             ));
+            taken = Default::default();
             root
         }
     };
-    Ok(gltf::Gltf {
+    let gltf = gltf::Gltf {
         document: gltf::Document::from_json_without_validation(root),
         blob,
-    })
+    };
+    Ok((gltf, taken))
 }
 
 const WEBP: &str = "EXT_texture_webp";
@@ -1035,6 +1082,7 @@ const MAX_INSTANCES: usize = (1 << 24) - 1;
 /// lit.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "EXT_lights_ies",
+    "KHR_animation_pointer",
     "EXT_mesh_gpu_instancing",
     "EXT_meshopt_compression",
     "EXT_texture_webp",

@@ -6,6 +6,7 @@
 //! derived from it by [`crate::lights`].
 
 mod animation;
+mod animation_pointer;
 mod camera;
 pub mod export_mitsuba;
 pub mod generate;
