@@ -97,16 +97,6 @@ enum Channel<'a> {
     Pointer(&'a PointerChannel),
 }
 
-/// Where a channel's value goes.
-enum Destination {
-    Node(usize, NodeProperty),
-    Json {
-        segments: Vec<String>,
-        kind: Kind,
-        default: Option<Vec<f32>>,
-    },
-}
-
 /// Which animation animates each property, by its pointer (a core channel's as the
 /// equivalent pointer): an animation may animate a property once, and across animations
 /// the first in the file wins. A morph weight array and its elements are one property.
@@ -222,7 +212,7 @@ pub(super) fn pose(
                         Property::MorphTargetWeights => NodeProperty::Weights,
                     };
                     let node = c.target().node().index();
-                    (c.sampler(), Destination::Node(node, property))
+                    (c.sampler(), Target::Node(node, property))
                 }
                 Channel::Pointer(p) => {
                     let pointer = p.pointer.as_deref().ok_or_else(|| {
@@ -234,16 +224,7 @@ pub(super) fn pose(
                     let segments =
                         animation_pointer::segments(pointer).map_err(|e| format!("{what}: {e}"))?;
                     let destination = match animation_pointer::resolve(&segments) {
-                        Some(Target::Node(node, property)) => Destination::Node(node, property),
-                        Some(Target::Json {
-                            segments,
-                            kind,
-                            default,
-                        }) => Destination::Json {
-                            segments,
-                            kind,
-                            default,
-                        },
+                        Some(target) => target,
                         None => {
                             warnings.push(format!(
                                 "{what} animates `{pointer}`, a property lanterna does not \
@@ -263,12 +244,12 @@ pub(super) fn pose(
             };
             // The property's pointer, and its array's for one morph weight.
             let (key, array) = match &destination {
-                Destination::Node(n, NodeProperty::Weight(k)) => (
+                Target::Node(n, NodeProperty::Weight(k)) => (
                     format!("/nodes/{n}/weights/{k}"),
                     Some(format!("/nodes/{n}/weights")),
                 ),
-                Destination::Node(n, p) => (format!("/nodes/{n}/{}", PATHS[path_index(*p)]), None),
-                Destination::Json { segments, .. } => {
+                Target::Node(n, p) => (format!("/nodes/{n}/{}", PATHS[path_index(*p)]), None),
+                Target::Json { segments, .. } => {
                     let key = animation_pointer::pointer_text(segments);
                     let array = match &segments[..] {
                         [m, _, w, _] if m == "meshes" && w == "weights" => {
@@ -281,7 +262,7 @@ pub(super) fn pose(
             };
             // The property in words, for messages.
             let label = match &destination {
-                Destination::Node(n, p) => match document.nodes().nth(*n) {
+                Target::Node(n, p) => match document.nodes().nth(*n) {
                     Some(node) => format!(
                         "the {} of node {}",
                         match p {
@@ -292,7 +273,7 @@ pub(super) fn pose(
                     ),
                     None => format!("`{key}`"),
                 },
-                Destination::Json { .. } => format!("`{key}`"),
+                Target::Json { .. } => format!("`{key}`"),
             };
             match owners.owner(&key, array.as_deref()) {
                 Some(owner) if owner == a => {
@@ -312,7 +293,7 @@ pub(super) fn pose(
             }
             // The values' accessor role and the floats per key.
             let (role, width, rotation) = match &destination {
-                Destination::Node(n, property) => {
+                Target::Node(n, property) => {
                     let node = document
                         .nodes()
                         .nth(*n)
@@ -364,7 +345,7 @@ pub(super) fn pose(
                         (NodeProperty::Weight(_), _) => (Role::PointerScalar, 1, false),
                     }
                 }
-                Destination::Json {
+                Target::Json {
                     segments,
                     kind,
                     default,
@@ -432,7 +413,7 @@ pub(super) fn pose(
                 (role, width, rotation),
                 pose.time,
             )?;
-            if let Destination::Node(
+            if let Target::Node(
                 n,
                 NodeProperty::Translation | NodeProperty::Rotation | NodeProperty::Scale,
             ) = destination
@@ -440,7 +421,7 @@ pub(super) fn pose(
                 moved[n] = true;
             }
             match destination {
-                Destination::Node(n, property) => match property {
+                Target::Node(n, property) => match property {
                     NodeProperty::Translation => trs[n].0 = Vec3::from_slice(&value),
                     NodeProperty::Rotation => trs[n].1 = Quat::from_slice(&value),
                     NodeProperty::Scale => trs[n].2 = Vec3::from_slice(&value),
@@ -458,7 +439,7 @@ pub(super) fn pose(
                         weights[n] = Some(all);
                     }
                 },
-                Destination::Json { segments, kind, .. } => {
+                Target::Json { segments, kind, .. } => {
                     let working = json.as_mut().expect("made above");
                     animation_pointer::set(
                         working,
