@@ -55,8 +55,10 @@ impl SceneArgs {
 #[derive(clap::Args, Clone, Debug, Default)]
 pub struct VersionArgs {
     /// Pose the scene's animations at this time in seconds (nodes, cameras, lights,
-    /// skins and morph weights; keys held before the first and after the last). Without
-    /// it (and without --animation) the nodes' own transforms are rendered.
+    /// skins and morph weights, and by KHR_animation_pointer materials, light colours
+    /// and intensities, fields of view and visibility; keys held before the first and
+    /// after the last). Without it (and without --animation) the file's own values are
+    /// rendered.
     #[arg(long, value_name = "SECONDS", value_parser = parse_time, allow_negative_numbers = true)]
     pub animation_time: Option<f32>,
     /// Play only this animation, by index or name (default: all of them; with no
