@@ -56,8 +56,8 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let mut root = document.into_json();
     if !root.animations.is_empty() && options.pose.is_none() {
         parse_warnings.push(format!(
-            "has {} animation(s); without --animation-time lanterna renders the nodes' own transforms \
-             and morph weights (the static pose)",
+            "has {} animation(s); without --animation-time lanterna renders the file's own \
+             values (its static pose)",
             root.animations.len()
         ));
     }
