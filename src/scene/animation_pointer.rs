@@ -640,6 +640,216 @@ mod tests {
         assert_eq!(rebuild(json).unwrap().animations().count(), 1);
     }
 
+    /// A file where every animatable property's object exists: a textured material with
+    /// every extension lanterna reads, a morphing quad, both kinds of camera, a spot light
+    /// with a range, an IES light and a node with visibility.
+    fn every_object() -> Value {
+        let profile =
+            "IESNA:LM-63-2002\nTILT=NONE\n1 -1 1 2 1 1 2 0 0 0\n1 1 10\n0 90\n0\n100 50\n";
+        let png = {
+            let mut png = Vec::new();
+            image::RgbaImage::from_pixel(2, 2, image::Rgba([200, 150, 100, 255]))
+                .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+                .unwrap();
+            png
+        };
+        use base64::Engine as _;
+        let b64 = |b: &[u8]| base64::engine::general_purpose::STANDARD.encode(b);
+        let floats: Vec<f32> = vec![
+            0., 0., 0., 1., 0., 0., 1., 1., 0., 0., 1., 0., // positions
+            0., 0., 1., 0., 1., 1., 0., 1., // uvs
+            0., 0., 0., 0., 0., 0., 0., 0., 1., 0., 0., 0., // a morph target
+        ];
+        let mut bin: Vec<u8> = floats.iter().flat_map(|x| x.to_le_bytes()).collect();
+        bin.extend([0u16, 1, 2, 0, 2, 3].iter().flat_map(|i| i.to_le_bytes()));
+        let texture =
+            || serde_json::json!({"index": 0, "extensions": {"KHR_texture_transform": {}}});
+        serde_json::json!({
+            "asset": {"version": "2.0"},
+            "extensionsUsed": ["KHR_lights_punctual", "EXT_lights_ies", "KHR_node_visibility",
+                "KHR_texture_transform", "KHR_materials_anisotropy", "KHR_materials_clearcoat",
+                "KHR_materials_diffuse_transmission", "KHR_materials_dispersion",
+                "KHR_materials_emissive_strength", "KHR_materials_ior", "KHR_materials_iridescence",
+                "KHR_materials_sheen", "KHR_materials_specular", "KHR_materials_transmission",
+                "KHR_materials_volume"],
+            "extensions": {
+                "KHR_lights_punctual": {"lights": [{"type": "spot", "range": 20, "spot": {}}]},
+                "EXT_lights_ies": {"lights": [{"uri": format!("data:application/x-ies-lm-63;base64,{}", b64(profile.as_bytes()))}]}
+            },
+            "buffers": [{"uri": format!("data:application/octet-stream;base64,{}", b64(&bin)), "byteLength": bin.len()}],
+            "bufferViews": [
+                {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+                {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+                {"buffer": 0, "byteOffset": 80, "byteLength": 48},
+                {"buffer": 0, "byteOffset": 128, "byteLength": 12}
+            ],
+            "accessors": [
+                {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+                {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+                {"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC3"},
+                {"bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR"}
+            ],
+            "images": [{"uri": format!("data:image/png;base64,{}", b64(&png))}],
+            "textures": [{"source": 0}],
+            "materials": [{
+                "emissiveFactor": [0.5, 0.5, 0.5],
+                "pbrMetallicRoughness": {"baseColorTexture": texture(), "metallicRoughnessTexture": texture()},
+                "normalTexture": texture(), "occlusionTexture": texture(), "emissiveTexture": texture(),
+                // Each lobe on, so that the defaults of its other properties count.
+                "extensions": {
+                    "KHR_materials_anisotropy": {"anisotropyStrength": 0.5, "anisotropyTexture": texture()},
+                    "KHR_materials_clearcoat": {"clearcoatFactor": 0.5, "clearcoatTexture": texture(),
+                        "clearcoatNormalTexture": texture()},
+                    "KHR_materials_diffuse_transmission": {"diffuseTransmissionFactor": 0.3},
+                    "KHR_materials_dispersion": {"dispersion": 0.5},
+                    "KHR_materials_emissive_strength": {},
+                    "KHR_materials_ior": {},
+                    "KHR_materials_iridescence": {"iridescenceFactor": 0.5},
+                    "KHR_materials_sheen": {"sheenColorFactor": [0.5, 0.5, 0.5], "sheenColorTexture": texture()},
+                    "KHR_materials_specular": {"specularTexture": texture()},
+                    "KHR_materials_transmission": {"transmissionFactor": 0.5, "transmissionTexture": texture()},
+                    "KHR_materials_volume": {"thicknessFactor": 0.1, "attenuationDistance": 2.0}
+                }
+            }],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 3,
+                "material": 0, "targets": [{"POSITION": 2}]}]}],
+            "cameras": [
+                {"type": "perspective", "perspective": {"yfov": 0.7, "znear": 0.1, "zfar": 50, "aspectRatio": 1.5}},
+                {"type": "orthographic", "orthographic": {"xmag": 2, "ymag": 1.5, "znear": 0.1, "zfar": 50}}
+            ],
+            "nodes": [
+                {"mesh": 0, "extensions": {"KHR_node_visibility": {}}},
+                {"camera": 0, "translation": [0.5, 0.5, 3]},
+                {"camera": 1, "translation": [0.5, 0.5, 3]},
+                {"translation": [0.5, 0.5, 1], "extensions": {"KHR_lights_punctual": {"light": 0}}},
+                {"translation": [0.5, 0.5, 2], "extensions": {"EXT_lights_ies": {"light": 0}}}
+            ],
+            "scenes": [{"nodes": [0, 1, 2, 3, 4]}]
+        })
+    }
+
+    /// Every property the table lists, animated to the value the file gives it (stated,
+    /// or its default), poses the very scene the file is without animations (its hash and
+    /// its cameras): the kinds agree with the types the gltf crate reads back, and the
+    /// defaults with the ones the loader uses (every lobe is on, so that the hash covers
+    /// its properties). Seen to fail with the default of `iridescenceIor` written 1.33 or
+    /// `sheenRoughnessFactor` 0.5, and with `specularColorFactor` typed as one float.
+    #[test]
+    fn every_template_animated_to_its_own_value_changes_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = every_object();
+        let path = dir.path().join("still.gltf");
+        std::fs::write(&path, serde_json::to_vec(&file).unwrap()).unwrap();
+        let still = crate::scene::Scene::load(&path, &Default::default()).unwrap();
+        // Index 0 but for the orthographic camera (the file's second) and the IES light
+        // (on node 4).
+        let index_zero = |t: &str| {
+            if let Some(rest) = t.strip_prefix("cameras/{}/orthographic") {
+                format!("cameras/1/orthographic{rest}")
+            } else if let Some(rest) = t.strip_prefix("nodes/{}/extensions/EXT_lights_ies") {
+                format!("nodes/4/extensions/EXT_lights_ies{rest}")
+            } else {
+                t.replace("{}", "0")
+            }
+        };
+        let mut pointers: Vec<String> = TEMPLATES
+            .iter()
+            .map(|(t, ..)| format!("/{}", index_zero(t)))
+            .collect();
+        for texture in [
+            "pbrMetallicRoughness/baseColorTexture",
+            "normalTexture",
+            "extensions/KHR_materials_clearcoat/clearcoatNormalTexture",
+        ] {
+            for property in ["offset", "rotation", "scale"] {
+                pointers.push(format!(
+                    "/materials/0/{texture}/extensions/KHR_texture_transform/{property}"
+                ));
+            }
+        }
+        let root = serde_json::to_value(
+            gltf::Gltf::from_slice(&std::fs::read(&path).unwrap())
+                .unwrap()
+                .document
+                .as_json(),
+        )
+        .unwrap();
+        let mut checked = 0;
+        for pointer in &pointers {
+            let segments = segments(pointer).unwrap();
+            let Some(Target::Json { kind, default, .. }) = resolve(&segments) else {
+                panic!("{pointer} does not resolve to a JSON property");
+            };
+            let value: Vec<f32> = match root.pointer(pointer) {
+                Some(Value::Number(n)) => vec![n.as_f64().unwrap() as f32],
+                Some(Value::Bool(b)) => vec![if *b { 1.0 } else { 0.0 }],
+                Some(Value::Array(a)) => a.iter().map(|x| x.as_f64().unwrap() as f32).collect(),
+                // A mesh's morph weights start from zeros.
+                _ if pointer.starts_with("/meshes/0/weights") => vec![0.0],
+                _ => default
+                    .clone()
+                    .unwrap_or_else(|| panic!("{pointer}: no value in the file and no default")),
+            };
+            // Keys at 0 and 1 s, both the value: floats (unsigned bytes for a boolean)
+            // after the times.
+            let mut animated = file.clone();
+            let mut extra: Vec<u8> = [0f32, 1.0].iter().flat_map(|x| x.to_le_bytes()).collect();
+            if kind == Kind::Bool {
+                extra.extend([value[0] as u8; 2]);
+            } else {
+                extra.extend(value.iter().chain(&value).flat_map(|x| x.to_le_bytes()));
+            }
+            use base64::Engine as _;
+            animated["buffers"].as_array_mut().unwrap().push(serde_json::json!({
+                "uri": format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&extra)),
+                "byteLength": extra.len()}));
+            let ty = match (kind, value.len()) {
+                (Kind::Vector(2), _) => "VEC2",
+                (Kind::Vector(3), _) => "VEC3",
+                (Kind::Vector(_), _) => "VEC4",
+                _ => "SCALAR",
+            };
+            let count = if ty == "SCALAR" { 2 * value.len() } else { 2 };
+            let (component, bytes) = if kind == Kind::Bool {
+                (5121, 2)
+            } else {
+                (5126, extra.len() - 8)
+            };
+            animated["bufferViews"].as_array_mut().unwrap().extend([
+                serde_json::json!({"buffer": 1, "byteOffset": 0, "byteLength": 8}),
+                serde_json::json!({"buffer": 1, "byteOffset": 8, "byteLength": bytes}),
+            ]);
+            animated["accessors"].as_array_mut().unwrap().extend([
+                serde_json::json!({"bufferView": 4, "componentType": 5126, "count": 2, "type": "SCALAR", "min": [0], "max": [1]}),
+                serde_json::json!({"bufferView": 5, "componentType": component, "count": count, "type": ty}),
+            ]);
+            animated["animations"] = serde_json::json!([{
+                "samplers": [{"input": 4, "output": 5, "interpolation": "STEP"}],
+                "channels": [{"sampler": 0, "target": {"path": "pointer",
+                    "extensions": {"KHR_animation_pointer": {"pointer": pointer}}}}]
+            }]);
+            let path = dir.path().join("animated.gltf");
+            std::fs::write(&path, serde_json::to_vec(&animated).unwrap()).unwrap();
+            let options = crate::scene::LoadOptions {
+                pose: Some(crate::scene::Pose {
+                    time: 0.5,
+                    animation: None,
+                }),
+                ..Default::default()
+            };
+            let posed = crate::scene::Scene::load(&path, &options)
+                .unwrap_or_else(|e| panic!("{pointer}: {e}"));
+            assert_eq!(posed.hash, still.hash, "{pointer} animated to {value:?}");
+            assert_eq!(
+                format!("{:?}", posed.cameras),
+                format!("{:?}", still.cameras),
+                "{pointer}"
+            );
+            checked += 1;
+        }
+        assert_eq!(checked, TEMPLATES.len() + 9);
+    }
+
     #[test]
     fn pointer_channels_are_taken_and_nodeless_ones_ignored() {
         let mut root = serde_json::json!({"animations": [{"channels": [
