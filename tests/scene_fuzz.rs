@@ -96,8 +96,9 @@ fn seeds(scratch: &Path) -> Vec<Seed> {
 
 /// `cornell-lights` with an animation of its blockers and camera (translation LINEAR,
 /// rotation CUBICSPLINE, scale STEP) in a second, data-URI buffer, for the cases that
-/// pose the scene (`--animation-time`), with a `KHR_animation_pointer` channel that
-/// animates a material's emission, two material variants (`--variant`) and an IES light
+/// pose the scene (`--animation-time`), with `KHR_animation_pointer` channels that
+/// animate a material's emission, the camera's field of view, the IES light's multiplier
+/// and a lamp's rotation, two material variants (`--variant`) and an IES light
 /// (`EXT_lights_ies`) on the animated node.
 fn animated(cornell: &Seed) -> Seed {
     use base64::Engine as _;
@@ -108,6 +109,7 @@ fn animated(cornell: &Seed) -> Seed {
         &[0., 0., 0., 0., 0., 0.38, 0., 0.92, 0., 0., 0., 0.][..],
         &[0., 0., 0., 0., 0., 0., 0., 1., 0., 0.1, 0., 0.][..],
         &[1., 1., 1., 1.2, 0.8, 1., 1., 1., 1.][..],
+        &[0.6, 0.8, 0.7][..],
     ]
     .concat();
     let bytes: Vec<u8> = floats.iter().flat_map(|x| x.to_le_bytes()).collect();
@@ -127,6 +129,7 @@ fn animated(cornell: &Seed) -> Seed {
         (12, 36, 3, "VEC3"),
         (48, 144, 9, "VEC4"),
         (192, 36, 3, "VEC3"),
+        (228, 12, 3, "SCALAR"),
     ] {
         let view = json["bufferViews"].as_array().unwrap().len();
         json["bufferViews"]
@@ -139,8 +142,8 @@ fn animated(cornell: &Seed) -> Seed {
             .unwrap()
             .push(serde_json::json!(
             {"bufferView": view, "componentType": 5126, "count": count, "type": ty,
-             "min": if ty == "SCALAR" { serde_json::json!([0.0]) } else { Value::Null },
-             "max": if ty == "SCALAR" { serde_json::json!([1.0]) } else { Value::Null }}));
+             "min": if offset == 0 { serde_json::json!([0.0]) } else { Value::Null },
+             "max": if offset == 0 { serde_json::json!([1.0]) } else { Value::Null }}));
     }
     for a in json["accessors"].as_array_mut().unwrap() {
         if let Some(o) = a.as_object_mut() {
@@ -159,7 +162,8 @@ fn animated(cornell: &Seed) -> Seed {
         "samplers": [
             {"input": input, "output": input + 1},
             {"input": input, "output": input + 2, "interpolation": "CUBICSPLINE"},
-            {"input": input, "output": input + 3, "interpolation": "STEP"}
+            {"input": input, "output": input + 3, "interpolation": "STEP"},
+            {"input": input, "output": input + 4}
         ],
         "channels": [
             {"sampler": 0, "target": {"node": 1, "path": "translation"}},
@@ -167,7 +171,13 @@ fn animated(cornell: &Seed) -> Seed {
             {"sampler": 2, "target": {"node": 1, "path": "scale"}},
             {"sampler": 0, "target": {"node": camera, "path": "translation"}},
             {"sampler": 0, "target": {"path": "pointer", "extensions": {"KHR_animation_pointer":
-                {"pointer": "/materials/0/emissiveFactor"}}}}
+                {"pointer": "/materials/0/emissiveFactor"}}}},
+            {"sampler": 3, "target": {"path": "pointer", "extensions": {"KHR_animation_pointer":
+                {"pointer": "/cameras/0/perspective/yfov"}}}},
+            {"sampler": 3, "target": {"path": "pointer", "extensions": {"KHR_animation_pointer":
+                {"pointer": "/nodes/1/extensions/EXT_lights_ies/multiplier"}}}},
+            {"sampler": 1, "target": {"path": "pointer", "extensions": {"KHR_animation_pointer":
+                {"pointer": "/nodes/2/rotation"}}}}
         ]
     }]);
     // Two material variants: the blockers red in the second. And an IES downlight on the
@@ -475,7 +485,7 @@ fn mutated_scenes_load_or_fail_without_panicking() {
         }
     }
 
-    // Every seed loads as written: a broken seed would only test refusals.
+    // Every seed loads as written, and posed: a broken seed would only test refusals.
     for seed in &seeds {
         std::fs::write(work.join(&seed.bin_name), &seed.bin).unwrap();
         let p = work.join("case.gltf");
@@ -483,6 +493,16 @@ fn mutated_scenes_load_or_fail_without_panicking() {
         assert!(
             matches!(load_case(&p, false, None, None), Outcome::Loaded),
             "seed {} does not load",
+            seed.name
+        );
+        // Posed, too: the cases posed by the animated seed start from a file that loads.
+        let pose = Pose {
+            time: 0.25,
+            animation: None,
+        };
+        assert!(
+            matches!(load_case(&p, false, Some(pose), None), Outcome::Loaded),
+            "seed {} does not load posed at 0.25 s",
             seed.name
         );
     }
