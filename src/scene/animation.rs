@@ -182,10 +182,6 @@ pub(super) fn pose(
     let mut json: Option<serde_json::Value> = None;
     let root = document.as_json();
     let get = |b: gltf::Buffer<'_>| buffers.get(b.index()).map(|d| &d.0[..]);
-    let targets_of = |mesh: Option<gltf::Mesh<'_>>| {
-        mesh.and_then(|m| m.primitives().next())
-            .map_or(0, |p| p.morph_targets().count())
-    };
     for animation in &animations {
         let a = animation.index();
         let mut channels: Vec<(usize, Channel<'_>)> = animation
@@ -298,52 +294,7 @@ pub(super) fn pose(
                         .nodes()
                         .nth(*n)
                         .ok_or_else(|| format!("{what}: the file has no node {n}"))?;
-                    let rotation = *property == NodeProperty::Rotation;
-                    if matches!(
-                        property,
-                        NodeProperty::Translation | NodeProperty::Rotation | NodeProperty::Scale
-                    ) && matches!(node.transform(), gltf::scene::Transform::Matrix { .. })
-                        && node.transform().matrix() != Mat4::IDENTITY.to_cols_array_2d()
-                    {
-                        // glTF: an animated node has translation, rotation and scale.
-                        return Err(format!(
-                            "{what} animates node {}, which has a matrix; an animated node \
-                             must give translation, rotation and scale instead",
-                            gltf_check::node_name(&node)
-                        ));
-                    }
-                    let targets = targets_of(node.mesh());
-                    if matches!(property, NodeProperty::Weights | NodeProperty::Weight(_))
-                        && targets == 0
-                    {
-                        return Err(format!(
-                            "{what} animates the morph weights of node {}, whose mesh has no \
-                             morph targets",
-                            gltf_check::node_name(&node)
-                        ));
-                    }
-                    if let NodeProperty::Weight(k) = property {
-                        if *k >= targets {
-                            return Err(format!(
-                                "{what} animates morph weight {k} of node {}, whose mesh has \
-                                 {targets} morph target(s)",
-                                gltf_check::node_name(&node)
-                            ));
-                        }
-                    }
-                    match (property, pointer_channel) {
-                        (NodeProperty::Translation | NodeProperty::Scale, false) => {
-                            (Role::AnimationVec3, 3, false)
-                        }
-                        (NodeProperty::Rotation, false) => (Role::AnimationRotation, 4, true),
-                        (NodeProperty::Weights, false) => (Role::AnimationWeights, targets, false),
-                        (NodeProperty::Translation | NodeProperty::Scale, true) => {
-                            (Role::PointerVec3, 3, false)
-                        }
-                        (NodeProperty::Rotation, true) => (Role::PointerVec4, 4, rotation),
-                        (NodeProperty::Weights, true) => (Role::PointerScalar, targets, false),
-                        (NodeProperty::Weight(_), _) => (Role::PointerScalar, 1, false),
-                    }
+                    node_keys(&node, *property, pointer_channel, &what)?
                 }
                 Target::Json {
                     segments,
@@ -356,46 +307,8 @@ pub(super) fn pose(
                             serde_json::to_value(root).map_err(|e| format!("{what}: {e}"))?,
                         ),
                     };
-                    // A mesh's morph weights: as many as its targets, zeros where the
-                    // file leaves them out.
-                    let mesh_targets = match &segments[..] {
-                        [m, i, w, ..] if m == "meshes" && w == "weights" => {
-                            let Some(mesh) = i.parse().ok().and_then(|i| document.meshes().nth(i))
-                            else {
-                                return Err(format!(
-                                    "{what} animates `{key}`, but the file has no mesh {i}"
-                                ));
-                            };
-                            let targets = targets_of(Some(mesh.clone()));
-                            if targets == 0 {
-                                return Err(format!(
-                                    "{what} animates `{key}`, but that mesh has no morph \
-                                     targets"
-                                ));
-                            }
-                            let mesh = &mut working["meshes"][mesh.index()];
-                            if mesh.get("weights").is_none_or(serde_json::Value::is_null) {
-                                mesh["weights"] = serde_json::json!(vec![0.0; targets]);
-                            }
-                            Some(targets)
-                        }
-                        _ => None,
-                    };
-                    if !animation_pointer::defined(working, segments, default.is_some()) {
-                        return Err(format!(
-                            "{what} animates `{key}`, which the file does not define (the \
-                             property must be in the file, or have a default and its \
-                             object be in the file)"
-                        ));
-                    }
-                    match kind {
-                        Kind::Float => (Role::PointerScalar, 1, false),
-                        Kind::Vector(2) => (Role::PointerVec2, 2, false),
-                        Kind::Vector(3) => (Role::PointerVec3, 3, false),
-                        Kind::Vector(_) => (Role::PointerVec4, 4, false),
-                        Kind::Weights => (Role::PointerScalar, mesh_targets.unwrap_or(1), false),
-                        Kind::Bool => (Role::PointerBool, 1, false),
-                    }
+                    let json_target = (segments.as_slice(), *kind, default.is_some());
+                    json_keys(document, working, json_target, &what, &key)?
                 }
             };
             if role == Role::PointerBool && sampler.interpolation() != Interpolation::Step {
@@ -434,7 +347,7 @@ pub(super) fn pose(
                                 .map(<[f32]>::to_vec)
                         });
                         let mut all = own.unwrap_or_default();
-                        all.resize(targets_of(node.mesh()), 0.0);
+                        all.resize(morph_targets(node.mesh()), 0.0);
                         all[k] = value[0];
                         weights[n] = Some(all);
                     }
@@ -469,6 +382,112 @@ pub(super) fn pose(
         locals,
         weights,
         json,
+    })
+}
+
+/// How many morph targets a mesh has (0 without a mesh).
+fn morph_targets(mesh: Option<gltf::Mesh<'_>>) -> usize {
+    mesh.and_then(|m| m.primitives().next())
+        .map_or(0, |p| p.morph_targets().count())
+}
+
+/// The keys of a channel that moves `property` of `node`: the values' accessor role, the
+/// floats per key and whether they are slerped (a pointer channel's keys may be of any
+/// numeric type, a core channel's only of those the glTF specification allows). Errors
+/// name `what`.
+fn node_keys(
+    node: &gltf::Node<'_>,
+    property: NodeProperty,
+    pointer: bool,
+    what: &str,
+) -> Result<(Role, usize, bool), String> {
+    let transform = matches!(
+        property,
+        NodeProperty::Translation | NodeProperty::Rotation | NodeProperty::Scale
+    );
+    if transform
+        && matches!(node.transform(), gltf::scene::Transform::Matrix { .. })
+        && node.transform().matrix() != Mat4::IDENTITY.to_cols_array_2d()
+    {
+        // glTF: an animated node has translation, rotation and scale.
+        return Err(format!(
+            "{what} animates node {}, which has a matrix; an animated node must give \
+             translation, rotation and scale instead",
+            gltf_check::node_name(node)
+        ));
+    }
+    let targets = morph_targets(node.mesh());
+    if !transform && targets == 0 {
+        return Err(format!(
+            "{what} animates the morph weights of node {}, whose mesh has no morph targets",
+            gltf_check::node_name(node)
+        ));
+    }
+    if let NodeProperty::Weight(k) = property {
+        if k >= targets {
+            return Err(format!(
+                "{what} animates morph weight {k} of node {}, whose mesh has {targets} morph \
+                 target(s)",
+                gltf_check::node_name(node)
+            ));
+        }
+    }
+    Ok(match (property, pointer) {
+        (NodeProperty::Translation | NodeProperty::Scale, false) => (Role::AnimationVec3, 3, false),
+        (NodeProperty::Rotation, false) => (Role::AnimationRotation, 4, true),
+        (NodeProperty::Weights, false) => (Role::AnimationWeights, targets, false),
+        (NodeProperty::Translation | NodeProperty::Scale, true) => (Role::PointerVec3, 3, false),
+        (NodeProperty::Rotation, true) => (Role::PointerVec4, 4, true),
+        (NodeProperty::Weights, true) => (Role::PointerScalar, targets, false),
+        (NodeProperty::Weight(_), _) => (Role::PointerScalar, 1, false),
+    })
+}
+
+/// The keys of a pointer channel into the JSON property at `segments` (of `kind`, with a
+/// default or not), as [`node_keys`] gives them, once the property is found defined in
+/// `working` (the file's JSON as posed so far; a mesh's morph weights the file leaves out
+/// are made zeros there first). Errors name `what` and the pointer, `key`.
+fn json_keys(
+    document: &gltf::Document,
+    working: &mut serde_json::Value,
+    (segments, kind, has_default): (&[String], Kind, bool),
+    what: &str,
+    key: &str,
+) -> Result<(Role, usize, bool), String> {
+    let mesh_targets = match segments {
+        [m, i, w, ..] if m == "meshes" && w == "weights" => {
+            let Some(mesh) = i.parse().ok().and_then(|i| document.meshes().nth(i)) else {
+                return Err(format!(
+                    "{what} animates `{key}`, but the file has no mesh {i}"
+                ));
+            };
+            let targets = morph_targets(Some(mesh.clone()));
+            if targets == 0 {
+                return Err(format!(
+                    "{what} animates `{key}`, but that mesh has no morph targets"
+                ));
+            }
+            let mesh = &mut working["meshes"][mesh.index()];
+            if mesh.get("weights").is_none_or(serde_json::Value::is_null) {
+                mesh["weights"] = serde_json::json!(vec![0.0; targets]);
+            }
+            Some(targets)
+        }
+        _ => None,
+    };
+    if !animation_pointer::defined(working, segments, has_default) {
+        return Err(format!(
+            "{what} animates `{key}`, which the file does not define (the property must be \
+             in the file, or have a default and its object be in the file)"
+        ));
+    }
+    Ok(match kind {
+        Kind::Float => (Role::PointerScalar, 1, false),
+        Kind::Vector(2) => (Role::PointerVec2, 2, false),
+        Kind::Vector(3) => (Role::PointerVec3, 3, false),
+        Kind::Vector(_) => (Role::PointerVec4, 4, false),
+        Kind::Weights => (Role::PointerScalar, mesh_targets.unwrap_or(1), false),
+        Kind::Bool => (Role::PointerBool, 1, false),
     })
 }
 

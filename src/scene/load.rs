@@ -1082,10 +1082,10 @@ const MAX_INSTANCES: usize = (1 << 24) - 1;
 /// lit.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "EXT_lights_ies",
-    "KHR_animation_pointer",
     "EXT_mesh_gpu_instancing",
     "EXT_meshopt_compression",
     "EXT_texture_webp",
+    "KHR_animation_pointer",
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",
