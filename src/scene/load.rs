@@ -6,6 +6,7 @@
 use super::animation::{self, Pose};
 use super::animation_pointer;
 use super::camera::{Camera, ClipPlanes, Projection};
+use super::draco;
 use super::gltf_check::{self, node_name};
 use super::ies;
 use super::load_instancing;
@@ -66,7 +67,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     // lanterna reads from the JSON (KHR_materials_volume, _specular, _ior, _clearcoat,
     // _sheen, KHR_mesh_quantization). So lanterna decides: a required extension it does
     // not read is refused here, by name, before the crate's validation would bury it
-    // among the errors it causes (Draco's accessors without data).
+    // among the errors it causes (an unknown compression's accessors without data).
     let unknown: Vec<&str> = root
         .extensions_required
         .iter()
@@ -81,6 +82,8 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         )));
     }
     root.extensions_required.clear();
+    // Draco primitives' accessors get views in a placeholder buffer, filled below.
+    let draco_plan = draco::plan(&mut root).map_err(&invalid)?;
     let document = gltf::Document::from_json(root).map_err(gltf_error)?;
     gltf_check::check_views(document.as_json()).map_err(&invalid)?;
     let mut uris = sources::UriReader::new(path, options.allow_outside_uris, limit);
@@ -93,6 +96,17 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let mut buffers = Vec::new();
     for b in document.buffers() {
         let (what, data) = match b.source() {
+            gltf::buffer::Source::Bin
+                if draco_plan.as_ref().is_some_and(|p| p.buffer == b.index()) =>
+            {
+                budget
+                    .take(b.length() as u64, "decoded Draco meshes")
+                    .map_err(&invalid)?;
+                (
+                    format!("buffer {} (for decoded Draco meshes)", b.index()),
+                    Some(vec![0u8; b.length()]),
+                )
+            }
             // EXT_meshopt_compression's placeholder for decompressed views: a buffer
             // without a URI that is not the GLB chunk (which only the first may be).
             gltf::buffer::Source::Bin if meshopt_used && (b.index() > 0 || blob.is_none()) => {
@@ -135,6 +149,15 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     if meshopt_used {
         decompress_views(&document, &mut buffers).map_err(&invalid)?;
     }
+    let document = match &draco_plan {
+        Some(plan) => match draco::decode(plan, document.as_json(), &mut buffers, &mut budget)
+            .map_err(&invalid)?
+        {
+            Some(json) => gltf::Document::from_json(json).map_err(gltf_error)?,
+            None => document,
+        },
+        None => document,
+    };
 
     // Every node's local transform and morph weights, posed by the animations when asked.
     // Their pointer channels' other properties are written into the JSON, and everything
@@ -1086,6 +1109,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "EXT_meshopt_compression",
     "EXT_texture_webp",
     "KHR_animation_pointer",
+    "KHR_draco_mesh_compression",
     "KHR_lights_punctual",
     "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",

@@ -8,6 +8,7 @@
 mod animation;
 mod animation_pointer;
 mod camera;
+mod draco;
 pub mod export_mitsuba;
 pub mod generate;
 mod gltf_check;
