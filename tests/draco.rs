@@ -333,7 +333,7 @@ fn damaged_draco_streams_are_errors_naming_the_primitive() {
         ),
         (
             box_error(|_, b| b[125] = 0xff),
-            "is damaged: the decoder panicked",
+            "is damaged: the decoder stopped on an internal error",
         ),
     ];
     for (error, needle) in &cases {

@@ -207,6 +207,21 @@ fn scene() -> Scene {
     scene_with(|_| {})
 }
 
+/// A copy of `tests/data/draco/<file>` (a GLB) with byte `at` of its binary chunk set to
+/// `value`.
+fn draco_with_byte(file: &str, at: usize, value: u8) -> Scene {
+    let dir = tempfile::tempdir().unwrap();
+    let src = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/draco")
+        .join(file);
+    let mut b = std::fs::read(src).unwrap();
+    let json_len = u32::from_le_bytes(b[12..16].try_into().unwrap()) as usize;
+    b[28 + json_len + at] = value;
+    let gltf = dir.path().join(file);
+    std::fs::write(&gltf, b).unwrap();
+    Scene { dir, gltf }
+}
+
 /// A tiny EXR written by the library (a reference for `compare`, inputs for `merge`).
 fn tiny_exr(path: &Path) {
     let image = lanterna::image_io::Image::new(8, 8, vec![[0.5; 3]; 64]).unwrap();
@@ -843,6 +858,17 @@ fn wrong_values_are_refused() {
                      "mode": "SPIRAL"}});
             }),
             "buffer view 0 (EXT_meshopt_compression): unknown mode \"SPIRAL\"",
+        ),
+        // KHR_draco_mesh_compression: one byte of a stream changed so that the decoder
+        // asks for 4 GB (its child process is refused it), or panics.
+        (
+            draco_with_byte("uvsets-level10.glb", 151, 0xff),
+            "mesh 0 primitive 0 (KHR_draco_mesh_compression): its Draco stream (buffer view 0) \
+             is damaged: the decoder aborted",
+        ),
+        (
+            draco_with_byte("Box_Draco.glb", 125, 0xff),
+            "its Draco stream (buffer view 0) is damaged: the decoder stopped on an internal error",
         ),
         // EXT_mesh_gpu_instancing: attributes of different counts, a rotation of
         // integers not normalised, a zero quaternion (normalised bytes over the zeros

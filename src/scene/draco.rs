@@ -536,7 +536,11 @@ fn decode_job(job: &Job, stream: &[u8]) -> Result<Decoded, String> {
         )));
     }
     let mesh = quiet_panics(|| draco_oxide_decoder::decode_mesh(stream))
-        .map_err(|p| fail(format!("is damaged: the decoder panicked ({p})")))?
+        .map_err(|p| {
+            fail(format!(
+                "is damaged: the decoder stopped on an internal error ({p})"
+            ))
+        })?
         .map_err(|e| fail(format!("cannot be decoded: {e}")))?;
     if mesh.faces.len() != job.faces {
         return Err(fail(format!(
@@ -911,7 +915,7 @@ mod isolated {
                 let message = String::from_utf8_lossy(&message).into_owned();
                 return Err(if status[0] == 2 {
                     format!(
-                        "{}: its Draco stream (buffer view {}) is damaged: the decoder panicked ({message})",
+                        "{}: its Draco stream (buffer view {}) is damaged: the decoder stopped on an internal error ({message})",
                         job.what, job.view
                     )
                 } else {
