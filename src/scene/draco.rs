@@ -679,16 +679,19 @@ fn quiet_panics<T>(f: impl FnOnce() -> T) -> Result<T, String> {
     result.map_err(|p| panic_message(p.as_ref()))
 }
 
+/// The decoder in this process, where it cannot run in a child: only the header check
+/// and the panic catch guard it.
+fn in_process(jobs: &[Job], streams: &[&[u8]]) -> Result<Vec<Decoded>, String> {
+    jobs.iter()
+        .zip(streams)
+        .map(|(j, s)| decode_job(j, s))
+        .collect()
+}
+
 #[cfg(not(unix))]
 mod isolated {
     //! Without `fork`, the decoder runs in this process.
-    use super::{decode_job, Decoded, Job};
-    pub(super) fn run(jobs: &[Job], streams: &[&[u8]]) -> Result<Vec<Decoded>, String> {
-        jobs.iter()
-            .zip(streams)
-            .map(|(j, s)| decode_job(j, s))
-            .collect()
-    }
+    pub(super) use super::in_process as run;
 }
 
 #[cfg(unix)]
@@ -747,12 +750,17 @@ mod isolated {
             .sum();
         super::install_panic_hook();
         let mut fds = [0; 2];
+        // Where no child can be made (no descriptors, strict overcommit refusing a copy
+        // of a large process), the decoder runs here rather than refuse the file.
+        let here = |why: std::io::Error| {
+            log::warn!(
+                "cannot start a process for the Draco decoder ({why}); decoding in this one"
+            );
+            super::in_process(jobs, streams)
+        };
         // SAFETY: pipe2 writes two descriptors into `fds`.
         if unsafe { libc::pipe2(fds.as_mut_ptr(), libc::O_CLOEXEC) } != 0 {
-            return Err(format!(
-                "cannot start the Draco decoder: {}",
-                std::io::Error::last_os_error()
-            ));
+            return here(std::io::Error::last_os_error());
         }
         // SAFETY: both descriptors are new and owned here alone.
         let (read_end, write_end) =
@@ -764,10 +772,7 @@ mod isolated {
         // returns to none of the parent's code.
         let pid = unsafe { libc::fork() };
         if pid < 0 {
-            return Err(format!(
-                "cannot start the Draco decoder: {}",
-                std::io::Error::last_os_error()
-            ));
+            return here(std::io::Error::last_os_error());
         }
         if pid == 0 {
             drop(read_end);
