@@ -1,10 +1,17 @@
 """Writes torus.gltf: a torus of 32 x 12 quads (768 triangles, genus 1) with smooth
 normals, tangents, texture coordinates, vertex colours and a seam in u and v, lit by an
-emissive quad. tests/data/draco/README.md says how the Draco fixtures are made from it."""
+emissive quad. With --animated, torus-animated.gltf: the same torus skinned to two joints
+(JOINTS_0, WEIGHTS_0), with a morph target that swells it, and an animation of 1 s that
+turns the second joint and the morph weight. tests/data/draco/README.md says how the
+Draco fixtures are made from them."""
 import base64, json, math, struct, sys
+
+animated = "--animated" in sys.argv
+args = [a for a in sys.argv[1:] if a != "--animated"]
 
 R, r, NU, NV = 1.0, 0.35, 32, 12
 pos, nrm, tan, uv, col, idx = [], [], [], [], [], []
+joints, weights, swell = [], [], []
 for i in range(NU + 1):
     u = 2 * math.pi * i / NU
     for j in range(NV + 1):
@@ -15,6 +22,12 @@ for i in range(NU + 1):
         tan += [-math.sin(u), 0.0, math.cos(u), 1.0]
         uv += [i / NU, j / NV]
         col += [0.5 + 0.5 * math.cos(u), 0.5 + 0.5 * math.sin(v), 0.3, 1.0]
+        # Skin: the half with x > 0 follows joint 1, blending over a band.
+        w1 = min(1.0, max(0.0, 0.5 + c * math.cos(u)))
+        joints += [0, 1, 0, 0]
+        weights += [1.0 - w1, w1, 0.0, 0.0]
+        # Morph target: a swelling of the tube along its normal.
+        swell += [0.15 * math.cos(v) * math.cos(u), 0.15 * math.sin(v), 0.15 * math.cos(v) * math.sin(u)]
 for i in range(NU):
     for j in range(NV):
         a, b = i * (NV + 1) + j, (i + 1) * (NV + 1) + j
@@ -70,4 +83,34 @@ gltf = {
     "bufferViews": views,
     "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}],
 }
-json.dump(gltf, open(sys.argv[1] if len(sys.argv) > 1 else "torus.gltf", "w"))
+if animated:
+    J = add(joints, "B", "VEC4", 5121, n)
+    W = add(weights, "f", "VEC4", 5126, n)
+    S = add(swell, "f", "VEC3", 5126, n, bounds(swell, 3))
+    IBM = add([1.0, 0, 0, 0, 0, 1.0, 0, 0, 0, 0, 1.0, 0, 0, 0, 0, 1.0] * 2, "f", "MAT4", 5126, 2)
+    times = [0.0, 0.5, 1.0]
+    T0 = add(times, "f", "SCALAR", 5126, 3, {"min": [0.0], "max": [1.0]})
+    half = math.sin(0.35)
+    R1 = add([0, 0, 0, 1, 0, 0, half, math.cos(0.35), 0, 0, 0, 1], "f", "VEC4", 5126, 3)
+    MW = add([0.0, 1.0, 0.25], "f", "SCALAR", 5126, 3)
+    prim = gltf["meshes"][0]["primitives"][0]
+    prim["attributes"].update({"JOINTS_0": J, "WEIGHTS_0": W})
+    prim["targets"] = [{"POSITION": S}]
+    gltf["meshes"][0]["weights"] = [0.0]
+    # The torus node becomes the skinned mesh's node; joints 3 and 4 (4 a child of 3).
+    gltf["nodes"][0] = {"mesh": 0, "skin": 0}
+    gltf["nodes"] += [
+        {"rotation": [0.2588, 0.0, 0.0, 0.9659], "children": [4]},
+        {"translation": [0.0, 0.0, 0.0]},
+    ]
+    gltf["scenes"][0]["nodes"] += [3]
+    gltf["skins"] = [{"joints": [3, 4], "inverseBindMatrices": IBM}]
+    gltf["animations"] = [{
+        "samplers": [{"input": T0, "output": R1}, {"input": T0, "output": MW}],
+        "channels": [
+            {"sampler": 0, "target": {"node": 4, "path": "rotation"}},
+            {"sampler": 1, "target": {"node": 0, "path": "weights"}},
+        ],
+    }]
+    gltf["buffers"][0] = {"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}
+json.dump(gltf, open(args[0] if args else "torus.gltf", "w"))
