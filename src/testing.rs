@@ -714,3 +714,42 @@ pub fn batch_mae(b: &Batches, reference: &[f64]) -> Vec<f64> {
         })
         .collect()
 }
+
+/// A GLB file: the JSON chunk and, when given, a binary chunk, each padded to 4 bytes.
+pub fn glb(json: &[u8], bin: Option<&[u8]>) -> Vec<u8> {
+    let padded = |v: &[u8], pad: u8| {
+        let mut v = v.to_vec();
+        v.resize(v.len().div_ceil(4) * 4, pad);
+        v
+    };
+    let json = padded(json, b' ');
+    let bin = bin.map(|b| padded(b, 0));
+    let total = 12 + 8 + json.len() + bin.as_ref().map_or(0, |b| 8 + b.len());
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    if let Some(bin) = bin {
+        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&bin);
+    }
+    out
+}
+
+/// A GLB file's JSON chunk and binary chunk (empty where it has none).
+pub fn glb_chunks(bytes: &[u8]) -> (Vec<u8>, Vec<u8>) {
+    let u32_at = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
+    assert_eq!(&bytes[..4], b"glTF", "not a GLB");
+    let json_len = u32_at(12);
+    let json = bytes[20..20 + json_len].to_vec();
+    let bin = if bytes.len() > 28 + json_len {
+        bytes[28 + json_len..28 + json_len + u32_at(20 + json_len)].to_vec()
+    } else {
+        Vec::new()
+    };
+    (json, bin)
+}

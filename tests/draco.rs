@@ -242,28 +242,13 @@ fn draco_skins_and_morph_targets_pose_like_their_originals() {
 
 /// A GLB's JSON and binary chunk.
 fn read_glb(path: &Path) -> (Value, Vec<u8>) {
-    let b = std::fs::read(path).unwrap();
-    let json_len = u32::from_le_bytes(b[12..16].try_into().unwrap()) as usize;
-    let json = serde_json::from_slice(&b[20..20 + json_len]).unwrap();
-    let bin_len = u32::from_le_bytes(b[20 + json_len..24 + json_len].try_into().unwrap()) as usize;
-    (json, b[28 + json_len..28 + json_len + bin_len].to_vec())
+    let (json, bin) = lanterna::testing::glb_chunks(&std::fs::read(path).unwrap());
+    (serde_json::from_slice(&json).unwrap(), bin)
 }
 
 fn write_glb(path: &Path, json: &Value, bin: &[u8]) {
-    let mut j = serde_json::to_vec(json).unwrap();
-    j.resize(j.len().div_ceil(4) * 4, b' ');
-    let mut bin = bin.to_vec();
-    bin.resize(bin.len().div_ceil(4) * 4, 0);
-    let mut out = b"glTF".to_vec();
-    for v in [2, (12 + 8 + j.len() + 8 + bin.len()) as u32, j.len() as u32] {
-        out.extend(v.to_le_bytes());
-    }
-    out.extend(b"JSON");
-    out.extend(&j);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(&bin);
-    std::fs::write(path, out).unwrap();
+    let bytes = lanterna::testing::glb(&serde_json::to_vec(json).unwrap(), Some(bin));
+    std::fs::write(path, bytes).unwrap();
 }
 
 /// The bytes of buffer view `v`.

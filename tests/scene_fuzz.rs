@@ -405,30 +405,6 @@ fn flip_bytes(data: &mut Vec<u8>, rng: &mut Rng) {
     }
 }
 
-/// JSON and binary chunk as one GLB file.
-fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
-    let pad = |mut v: Vec<u8>, b: u8| {
-        while v.len() % 4 != 0 {
-            v.push(b);
-        }
-        v
-    };
-    let json = pad(json.to_vec(), b' ');
-    let bin = pad(bin.to_vec(), 0);
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&json);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&bin);
-    out
-}
-
 thread_local! {
     /// Whether this thread is inside a load (whose panics the hook keeps quiet).
     static IN_LOAD: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
@@ -548,7 +524,7 @@ fn mutated_scenes_load_or_fail_without_panicking() {
             if let Some(o) = first.and_then(Value::as_object_mut) {
                 o.remove("uri");
             }
-            let mut data = glb(&serde_json::to_vec(&j).unwrap(), &bin);
+            let mut data = lanterna::testing::glb(&serde_json::to_vec(&j).unwrap(), Some(&bin));
             if rng.chance(0.3) {
                 flip_bytes(&mut data, &mut rng);
             }

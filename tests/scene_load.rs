@@ -99,24 +99,7 @@ fn repack(gltf: &Path, dir: &Path) -> (PathBuf, PathBuf) {
     std::fs::write(&data_path, serde_json::to_vec(&data_uri).unwrap()).unwrap();
 
     json["buffers"][0].as_object_mut().unwrap().remove("uri");
-    let mut text = serde_json::to_vec(&json).unwrap();
-    while text.len() % 4 != 0 {
-        text.push(b' ');
-    }
-    let mut body = bin.clone();
-    while body.len() % 4 != 0 {
-        body.push(0);
-    }
-    let mut glb = Vec::new();
-    glb.extend_from_slice(b"glTF");
-    glb.extend_from_slice(&2u32.to_le_bytes());
-    glb.extend_from_slice(&((12 + 8 + text.len() + 8 + body.len()) as u32).to_le_bytes());
-    glb.extend_from_slice(&(text.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"JSON");
-    glb.extend_from_slice(&text);
-    glb.extend_from_slice(&(body.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"BIN\0");
-    glb.extend_from_slice(&body);
+    let glb = testing::glb(&serde_json::to_vec(&json).unwrap(), Some(&bin));
     let glb_path = dir.join("packed.glb");
     std::fs::write(&glb_path, glb).unwrap();
     (glb_path, data_path)
@@ -1063,17 +1046,7 @@ fn webp_textures_load_the_texels_of_their_png_originals() {
     );
     assert!(texels("alone.gltf", &alone) == want, "WebP alone");
     // The same as a GLB (a JSON chunk alone, its buffers data URIs).
-    let mut text = serde_json::to_vec(&alone).unwrap();
-    while text.len() % 4 != 0 {
-        text.push(b' ');
-    }
-    let mut glb = Vec::new();
-    glb.extend_from_slice(b"glTF");
-    glb.extend_from_slice(&2u32.to_le_bytes());
-    glb.extend_from_slice(&((12 + 8 + text.len()) as u32).to_le_bytes());
-    glb.extend_from_slice(&(text.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"JSON");
-    glb.extend_from_slice(&text);
+    let glb = testing::glb(&serde_json::to_vec(&alone).unwrap(), None);
     let path = dir.path().join("alone.glb");
     std::fs::write(&path, glb).unwrap();
     let glb_texels: Vec<_> = load(&path)
