@@ -240,6 +240,53 @@ fn draco_skins_and_morph_targets_pose_like_their_originals() {
     assert!(still != posed("torus-animated.glb", 0.5));
 }
 
+/// Decoders write what a stream holds in its accessors' own component types (three.js
+/// and Babylon.js ask Draco for the accessor's type): `torus-speed0.glb` with its colours
+/// and texture coordinates retyped as normalised unsigned shorts must load Google's
+/// decoding within 1/65535, and with its colours as unsigned bytes not normalised (which
+/// cannot hold 0.3) is refused. Seen to fail with the float's bits copied as they are.
+#[test]
+fn draco_attributes_take_their_accessors_component_types() {
+    let path = data().join("torus-speed0.glb");
+    let (json, bin) = read_glb(&path);
+    let retyped = |edit: &dyn Fn(&mut Value, u64, u64)| -> Result<Scene, String> {
+        let mut json = json.clone();
+        let prim = json["meshes"][0]["primitives"][0].clone();
+        let (colour, uv) = (
+            prim["attributes"]["COLOR_0"].as_u64().unwrap(),
+            prim["attributes"]["TEXCOORD_0"].as_u64().unwrap(),
+        );
+        edit(&mut json, colour, uv);
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("retyped.glb");
+        write_glb(&p, &json, &bin);
+        Scene::load(&p, &Default::default()).map_err(|e| e.to_string())
+    };
+    let shorts = retyped(&|j, colour, uv| {
+        for a in [colour, uv] {
+            j["accessors"][a as usize]["componentType"] = json!(5123);
+            j["accessors"][a as usize]["normalized"] = json!(true);
+        }
+    })
+    .unwrap();
+    let google = world_corners(&load(&data().join("torus-speed0.google.glb")));
+    let tol = Tolerance {
+        position: 2e-5,
+        direction: 2e-5,
+        uv: 1.0 / 65535.0,
+        colour: 1.0 / 65535.0,
+    };
+    assert_same_triangles(&google, &world_corners(&shorts), tol, "as shorts");
+    let error =
+        retyped(&|j, colour, _| j["accessors"][colour as usize]["componentType"] = json!(5121))
+            .map(|_| ())
+            .unwrap_err();
+    assert!(
+        error.contains("which accessor") && error.contains("cannot hold"),
+        "{error}"
+    );
+}
+
 /// A GLB's JSON and binary chunk.
 fn read_glb(path: &Path) -> (Value, Vec<u8>) {
     let (json, bin) = lanterna::testing::glb_chunks(&std::fs::read(path).unwrap());
@@ -353,7 +400,7 @@ fn damaged_draco_streams_are_errors_naming_the_primitive() {
                 let accessor = j["meshes"][0]["primitives"][0]["attributes"]["POSITION"].as_u64().unwrap();
                 j["accessors"][accessor as usize]["componentType"] = json!(5123);
             }),
-            "decodes POSITION as 3 × F32, but accessor",
+            "decodes a POSITION value -0.5, which accessor 1's component type cannot hold",
         ),
         (
             box_error(|j, _| j["meshes"][0]["primitives"][0]["mode"] = json!(1)),

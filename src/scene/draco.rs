@@ -49,6 +49,7 @@ struct Fill {
     stride: usize,
     count: usize,
     ct: ComponentType,
+    normalized: bool,
     components: usize,
 }
 
@@ -251,6 +252,7 @@ pub(super) fn plan(root: &mut json::Root) -> Result<Option<Plan>, String> {
                     stride,
                     count,
                     ct,
+                    normalized: acc.normalized,
                     components: ty.multiplicity(),
                 });
             }
@@ -589,37 +591,63 @@ fn decode_job(job: &Job, stream: &[u8]) -> Result<Decoded, String> {
                             fill.semantic
                         ))
                     })?;
-                let expected = match fill.ct {
-                    ComponentType::I8 => D::I8,
-                    ComponentType::U8 => D::U8,
-                    ComponentType::I16 => D::I16,
-                    ComponentType::U16 => D::U16,
-                    ComponentType::U32 => D::U32,
-                    ComponentType::F32 => D::F32,
-                };
-                if att.get_component_type() != expected
-                    || att.get_num_components() != fill.components
-                {
+                if att.get_num_components() != fill.components {
                     return Err(fail(format!(
-                        "decodes {} as {} × {:?}, but accessor {} has {} × {expected:?}",
+                        "decodes {} with {} components, but accessor {} has {}",
                         fill.semantic,
                         att.get_num_components(),
-                        att.get_component_type(),
                         fill.accessor,
                         fill.components
                     )));
                 }
+                let from = att.get_component_type();
+                let size = match from {
+                    D::I8 | D::U8 => 1,
+                    D::I16 | D::U16 => 2,
+                    D::I32 | D::U32 | D::F32 => 4,
+                    _ => {
+                        return Err(fail(format!(
+                            "decodes {} as {from:?}, which glTF has no type for",
+                            fill.semantic
+                        )))
+                    }
+                };
+                let same = matches!(
+                    (from, fill.ct),
+                    (D::I8, ComponentType::I8)
+                        | (D::U8, ComponentType::U8)
+                        | (D::I16, ComponentType::I16)
+                        | (D::U16, ComponentType::U16)
+                        | (D::U32, ComponentType::U32)
+                        | (D::F32, ComponentType::F32)
+                );
                 let values = att.get_data_as_bytes();
-                let elem = fill.elem();
+                let (elem, src_elem) = (fill.elem(), size * fill.components);
                 for p in 0..decoded_points {
                     let v = usize::from(att.get_unique_val_idx(PointIdx::from(p)));
-                    let value = values.get(v * elem..(v + 1) * elem).ok_or_else(|| {
-                        fail(format!(
-                            "decodes {} with a value out of range",
-                            fill.semantic
-                        ))
-                    })?;
-                    bytes[p * fill.stride..p * fill.stride + elem].copy_from_slice(value);
+                    let value = values
+                        .get(v * src_elem..(v + 1) * src_elem)
+                        .ok_or_else(|| {
+                            fail(format!(
+                                "decodes {} with a value out of range",
+                                fill.semantic
+                            ))
+                        })?;
+                    let to = &mut bytes[p * fill.stride..p * fill.stride + elem];
+                    if same {
+                        to.copy_from_slice(value);
+                        continue;
+                    }
+                    for (k, x) in value.chunks_exact(size).enumerate() {
+                        let x = component_value(from, x);
+                        let out = &mut to[k * fill.ct.size()..(k + 1) * fill.ct.size()];
+                        store_component(fill.ct, fill.normalized, from == D::F32, x, out).ok_or_else(|| {
+                            fail(format!(
+                                "decodes a {} value {x}, which accessor {}'s component type cannot hold",
+                                fill.semantic, fill.accessor
+                            ))
+                        })?;
+                    }
                 }
             }
         }
@@ -629,6 +657,55 @@ fn decode_job(job: &Job, stream: &[u8]) -> Result<Decoded, String> {
         points: decoded_points,
         parts: out,
     })
+}
+
+/// One decoded component (little-endian bytes of type `ty`) as a number.
+fn component_value(ty: draco_oxide_core::attribute::ComponentDataType, b: &[u8]) -> f64 {
+    use draco_oxide_core::attribute::ComponentDataType as D;
+    match ty {
+        D::I8 => f64::from(b[0] as i8),
+        D::U8 => f64::from(b[0]),
+        D::I16 => f64::from(i16::from_le_bytes([b[0], b[1]])),
+        D::U16 => f64::from(u16::from_le_bytes([b[0], b[1]])),
+        D::I32 => f64::from(i32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+        D::U32 => f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+        _ => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+    }
+}
+
+/// Writes `x` as an accessor component of type `ct` into `out`, as the loaders that
+/// decode into the accessor's own type do: a float into a normalised integer scaled to
+/// its range (clamped), any other value only where the type holds it exactly. `None`
+/// where it does not.
+fn store_component(
+    ct: ComponentType,
+    normalized: bool,
+    from_float: bool,
+    x: f64,
+    out: &mut [u8],
+) -> Option<()> {
+    let (lo, hi) = match ct {
+        ComponentType::F32 => {
+            out.copy_from_slice(&(x as f32).to_le_bytes());
+            return Some(());
+        }
+        ComponentType::I8 => (f64::from(i8::MIN), f64::from(i8::MAX)),
+        ComponentType::U8 => (0.0, f64::from(u8::MAX)),
+        ComponentType::I16 => (f64::from(i16::MIN), f64::from(i16::MAX)),
+        ComponentType::U16 => (0.0, f64::from(u16::MAX)),
+        ComponentType::U32 => (0.0, f64::from(u32::MAX)),
+    };
+    let q = if from_float && normalized {
+        (x.clamp(if lo < 0.0 { -1.0 } else { 0.0 }, 1.0) * hi).round()
+    } else {
+        x
+    };
+    if !(lo..=hi).contains(&q) || q.fract() != 0.0 {
+        return None;
+    }
+    let q = q as i64;
+    out.copy_from_slice(&q.to_le_bytes()[..out.len()]);
+    Some(())
 }
 
 thread_local! {
