@@ -287,6 +287,50 @@ fn draco_attributes_take_their_accessors_component_types() {
     );
 }
 
+/// The extension allows strips: `Box_Draco.glb` as a TRIANGLE_STRIP (14 indices for its
+/// 12 triangles) must load the triangles of the list. Two primitives that share the
+/// stream and its accessors (under two materials) decode it once and load it twice.
+/// Seen to fail with the strip's mode left as it was (its 36 decoded indices read as a
+/// strip of 34 triangles).
+#[test]
+fn draco_strips_and_shared_streams_load() {
+    let path = data().join("Box_Draco.glb");
+    let list = world_corners(&load(&path));
+    let (json, bin) = read_glb(&path);
+    let dir = tempfile::tempdir().unwrap();
+    let edited = |edit: &dyn Fn(&mut Value)| -> Scene {
+        let mut j = json.clone();
+        edit(&mut j);
+        let p = dir.path().join("edited.glb");
+        write_glb(&p, &j, &bin);
+        load(&p)
+    };
+    let strip = edited(&|j| {
+        j["meshes"][0]["primitives"][0]["mode"] = json!(5);
+        j["accessors"][0]["count"] = json!(14);
+    });
+    let exact = Tolerance {
+        position: 0.0,
+        direction: 0.0,
+        uv: 0.0,
+        colour: 0.0,
+    };
+    assert_same_triangles(&list, &world_corners(&strip), exact, "strip");
+    let twice = edited(&|j| {
+        let prim = j["meshes"][0]["primitives"][0].clone();
+        let mut other = prim.clone();
+        other["material"] = json!(1);
+        j["materials"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({"name": "second"}));
+        j["meshes"][0]["primitives"] = json!([prim, other]);
+    });
+    let mut doubled: Vec<_> = list.iter().chain(&list).copied().collect();
+    doubled.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    assert_same_triangles(&doubled, &world_corners(&twice), exact, "shared");
+}
+
 /// A GLB's JSON and binary chunk.
 fn read_glb(path: &Path) -> (Value, Vec<u8>) {
     let (json, bin) = lanterna::testing::glb_chunks(&std::fs::read(path).unwrap());
