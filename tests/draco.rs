@@ -247,20 +247,15 @@ fn draco_skins_and_morph_targets_pose_like_their_originals() {
 /// cannot hold 0.3) is refused. Seen to fail with the float's bits copied as they are.
 #[test]
 fn draco_attributes_take_their_accessors_component_types() {
-    let path = data().join("torus-speed0.glb");
-    let (json, bin) = read_glb(&path);
     let retyped = |edit: &dyn Fn(&mut Value, u64, u64)| -> Result<Scene, String> {
-        let mut json = json.clone();
-        let prim = json["meshes"][0]["primitives"][0].clone();
-        let (colour, uv) = (
-            prim["attributes"]["COLOR_0"].as_u64().unwrap(),
-            prim["attributes"]["TEXCOORD_0"].as_u64().unwrap(),
-        );
-        edit(&mut json, colour, uv);
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("retyped.glb");
-        write_glb(&p, &json, &bin);
-        Scene::load(&p, &Default::default()).map_err(|e| e.to_string())
+        load_edited("torus-speed0.glb", |json, _| {
+            let prim = json["meshes"][0]["primitives"][0].clone();
+            let (colour, uv) = (
+                prim["attributes"]["COLOR_0"].as_u64().unwrap(),
+                prim["attributes"]["TEXCOORD_0"].as_u64().unwrap(),
+            );
+            edit(json, colour, uv);
+        })
     };
     let shorts = retyped(&|j, colour, uv| {
         for a in [colour, uv] {
@@ -294,16 +289,9 @@ fn draco_attributes_take_their_accessors_component_types() {
 /// strip of 34 triangles).
 #[test]
 fn draco_strips_and_shared_streams_load() {
-    let path = data().join("Box_Draco.glb");
-    let list = world_corners(&load(&path));
-    let (json, bin) = read_glb(&path);
-    let dir = tempfile::tempdir().unwrap();
+    let list = world_corners(&load(&data().join("Box_Draco.glb")));
     let edited = |edit: &dyn Fn(&mut Value)| -> Scene {
-        let mut j = json.clone();
-        edit(&mut j);
-        let p = dir.path().join("edited.glb");
-        write_glb(&p, &j, &bin);
-        load(&p)
+        load_edited("Box_Draco.glb", |j, _| edit(j)).unwrap_or_else(|e| panic!("{e}"))
     };
     let strip = edited(&|j| {
         j["meshes"][0]["primitives"][0]["mode"] = json!(5);
@@ -397,15 +385,20 @@ fn draco_streams_override_an_uncompressed_fallback() {
 /// `Box_Draco.glb` (one primitive: POSITION id 1, NORMAL id 0, 36 unsigned-short indices,
 /// its stream in buffer view 0), edited by `edit`; the load's error.
 fn box_error(edit: impl FnOnce(&mut Value, &mut Vec<u8>)) -> String {
-    let (mut json, mut bin) = read_glb(&data().join("Box_Draco.glb"));
+    match load_edited("Box_Draco.glb", edit) {
+        Ok(_) => panic!("the edited box loaded"),
+        Err(e) => e,
+    }
+}
+
+/// The fixture `file` (a GLB) with its JSON and binary chunk changed by `edit`, loaded.
+fn load_edited(file: &str, edit: impl FnOnce(&mut Value, &mut Vec<u8>)) -> Result<Scene, String> {
+    let (mut json, mut bin) = read_glb(&data().join(file));
     edit(&mut json, &mut bin);
     let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("box.glb");
+    let path = dir.path().join(file);
     write_glb(&path, &json, &bin);
-    match Scene::load(&path, &Default::default()) {
-        Ok(_) => panic!("the edited box loaded"),
-        Err(e) => e.to_string(),
-    }
+    Scene::load(&path, &Default::default()).map_err(|e| e.to_string())
 }
 
 /// Streams and extensions that cannot be what they claim are errors that name the
