@@ -753,3 +753,52 @@ pub fn glb_chunks(bytes: &[u8]) -> (Vec<u8>, Vec<u8>) {
     };
     (json, bin)
 }
+
+/// Every triangle's corners in world space: position, normal, tangent (xyz, then its
+/// handedness w), both texture coordinate sets and the vertex colour (white where the
+/// mesh has none), in [`canonical_triangles`]' order. Tests compare scenes that should
+/// hold the same geometry (a compressed file against its original) with it.
+pub fn world_corners(scene: &Scene) -> Vec<[[f32; 18]; 3]> {
+    let mut out = Vec::new();
+    for inst in &scene.instances {
+        let p = &scene.primitives[inst.primitive as usize];
+        let normals = glam::Mat3::from_mat4(inst.transform).inverse().transpose();
+        let linear = glam::Mat3::from_mat4(inst.transform);
+        for t in 0..p.triangle_count as usize {
+            let corner = |j: usize| -> [f32; 18] {
+                let index = scene.indices[p.index_offset as usize + 3 * t + j];
+                let v = &scene.vertices[(p.vertex_offset + index) as usize];
+                let x = inst
+                    .transform
+                    .transform_point3(glam::Vec3::from(v.position));
+                let n = (normals * glam::Vec3::from(v.normal)).normalize_or_zero();
+                let tangent = glam::Vec4::from(v.tangent);
+                let tn = (linear * tangent.truncate()).normalize_or_zero();
+                let c = if p.color_offset == gpu::INVALID_INDEX {
+                    [1.0; 4]
+                } else {
+                    scene.colors[(p.color_offset + index) as usize]
+                };
+                [
+                    x.x, x.y, x.z, n.x, n.y, n.z, tn.x, tn.y, tn.z, tangent.w, v.uv0[0], v.uv0[1],
+                    v.uv1[0], v.uv1[1], c[0], c[1], c[2], c[3],
+                ]
+            };
+            out.push([corner(0), corner(1), corner(2)]);
+        }
+    }
+    canonical_triangles(out)
+}
+
+/// Triangles rotated so that their smallest corner comes first, then sorted: two lists of
+/// the same triangles become equal.
+pub fn canonical_triangles<const N: usize>(mut tris: Vec<[[f32; N]; 3]>) -> Vec<[[f32; N]; 3]> {
+    for tri in &mut tris {
+        let first = (0..3)
+            .min_by(|&a, &b| tri[a].partial_cmp(&tri[b]).unwrap())
+            .unwrap();
+        tri.rotate_left(first);
+    }
+    tris.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    tris
+}

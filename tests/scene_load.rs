@@ -1061,30 +1061,19 @@ fn webp_textures_load_the_texels_of_their_png_originals() {
 /// each triangle turned to start at its smallest corner (compressors may rotate a
 /// triangle's corners, never its winding), sorted.
 fn world_triangles(scene: &Scene) -> Vec<[[f32; 6]; 3]> {
-    let mut out = Vec::new();
-    for inst in &scene.instances {
-        let p = &scene.primitives[inst.primitive as usize];
-        let normal_matrix = glam::Mat3::from_mat4(inst.transform).inverse().transpose();
-        for t in 0..p.triangle_count as usize {
-            let corner = |j: usize| -> [f32; 6] {
-                let index = scene.indices[p.index_offset as usize + 3 * t + j];
-                let v = &scene.vertices[(p.vertex_offset + index) as usize];
-                let x = inst
-                    .transform
-                    .transform_point3(glam::Vec3::from(v.position));
-                let n = (normal_matrix * glam::Vec3::from(v.normal)).normalize_or_zero();
-                [x.x, x.y, x.z, n.x, n.y, n.z]
-            };
-            let mut tri = [corner(0), corner(1), corner(2)];
-            let first = (0..3)
-                .min_by(|&a, &b| tri[a].partial_cmp(&tri[b]).unwrap())
-                .unwrap();
-            tri.rotate_left(first);
-            out.push(tri);
-        }
-    }
-    out.sort_by(|a, b| a.partial_cmp(b).unwrap());
-    out
+    let position_normal = |c: &[f32; 18]| -> [f32; 6] { c[..6].try_into().unwrap() };
+    testing::canonical_triangles(
+        testing::world_corners(scene)
+            .iter()
+            .map(|t| {
+                [
+                    position_normal(&t[0]),
+                    position_normal(&t[1]),
+                    position_normal(&t[2]),
+                ]
+            })
+            .collect(),
+    )
 }
 
 /// `EXT_meshopt_compression` against the uncompressed originals, in files written by
