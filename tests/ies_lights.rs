@@ -1,9 +1,11 @@
 //! `EXT_lights_ies`: point lights shaped by IES LM-63 profiles, against the closed form
 //! of direct light on a Lambertian floor seen by an orthographic camera from above.
 //! The expected image is computed here from the extension's text alone: the raw
-//! profile's table, its symmetry folded here, interpolated bilinearly in (θ, φ), in the
-//! frame of the node's own transform (the light looks down the node's −Z, φ from its +X
-//! toward its +Y), none of it shared with the loader's unfolding or the kernel's lookup.
+//! profile's table, its symmetry folded here, interpolated bilinearly in its two
+//! angles, in the frame of the node's own transform, none of it shared with the
+//! loader's unfolding or the kernel's lookup. The light looks down the node's −Z; Type C
+//! turns φ from its +X toward its +Y; Type B tilts V toward its +X and turns H
+//! clockwise seen from +X, toward its −Y (`src/scene/ies.rs` says why).
 
 use glam::{Mat3, Mat4, Quat, Vec3};
 use lanterna::render::{LightSource, Method};
@@ -19,6 +21,8 @@ const ALBEDO: f64 = 0.8;
 /// A profile as the file writes it: its angles in degrees, candela per horizontal angle
 /// (each a column over the vertical angles), and the header's factors.
 struct RawProfile {
+    /// LM-63's photometric type: 1 (C) or 2 (B).
+    kind: u32,
     vertical: Vec<f64>,
     horizontal: Vec<f64>,
     candela: Vec<Vec<f64>>,
@@ -35,10 +39,11 @@ impl RawProfile {
                 .join(" ")
         };
         let mut s = format!(
-            "IESNA:LM-63-2002\n[TEST] lanterna\n[LUMINAIRE] test\nTILT=NONE\n1 -1 {} {} {} 1 2 0.1 0.1 0\n{} 1 20\n{}\n{}\n",
+            "IESNA:LM-63-2002\n[TEST] lanterna\n[LUMINAIRE] test\nTILT=NONE\n1 -1 {} {} {} {} 2 0.1 0.1 0\n{} 1 20\n{}\n{}\n",
             self.multiplier,
             self.vertical.len(),
             self.horizontal.len(),
+            self.kind,
             self.ballast,
             list(&self.vertical),
             list(&self.horizontal)
@@ -50,13 +55,27 @@ impl RawProfile {
         s
     }
 
-    /// Candela toward (θ, φ) in degrees, φ in [0, 360): the horizontal angle folded into
-    /// the file's range by the symmetry its angles imply, then bilinear.
-    fn eval(&self, theta: f64, phi: f64) -> f64 {
-        let v = &self.vertical;
-        if theta < v[0] - 1e-9 || theta > v[v.len() - 1] + 1e-9 {
-            return 0.0;
+    /// Candela toward the unit direction `local` in the light's own frame.
+    fn intensity(&self, local: Vec3) -> f64 {
+        let (x, y, z) = (local.x as f64, local.y as f64, local.z as f64);
+        if self.kind == 2 {
+            // Type B: V from the aim toward +X, H from the aim toward −Y; a 0–90° file
+            // mirrored across the vertical plane.
+            let v = x.atan2(-z).to_degrees();
+            let h = (-y).clamp(-1.0, 1.0).asin().to_degrees();
+            let h = if self.horizontal[0] == 0.0 {
+                h.abs()
+            } else {
+                h
+            };
+            let last = self.horizontal[self.horizontal.len() - 1];
+            if h < self.horizontal[0] - 1e-9 || h > last + 1e-9 {
+                return 0.0;
+            }
+            return self.table(v, h);
         }
+        let theta = (-z).clamp(-1.0, 1.0).acos().to_degrees();
+        let phi = y.atan2(x).to_degrees().rem_euclid(360.0);
         let h = &self.horizontal;
         let (first, last) = (h[0], h[h.len() - 1]);
         let folded = if first == 90.0 && last == 270.0 {
@@ -70,6 +89,16 @@ impl RawProfile {
             assert!(first == 0.0 && last == 360.0);
             phi
         };
+        self.table(theta, folded)
+    }
+
+    /// The file's table at (vertical, horizontal) in degrees, bilinear; 0 outside its
+    /// vertical angles.
+    fn table(&self, vertical: f64, horizontal: f64) -> f64 {
+        let v = &self.vertical;
+        if vertical < v[0] - 1e-9 || vertical > v[v.len() - 1] + 1e-9 {
+            return 0.0;
+        }
         let along = |x: &[f64], a: f64| -> (usize, f64) {
             if x.len() == 1 {
                 return (0, 0.0);
@@ -77,8 +106,9 @@ impl RawProfile {
             let i = (0..x.len() - 1).rfind(|&i| x[i] <= a).unwrap_or(0);
             (i, ((a - x[i]) / (x[i + 1] - x[i])).clamp(0.0, 1.0))
         };
-        let (iv, tv) = along(v, theta);
-        let (ih, th) = along(h, folded);
+        let h = &self.horizontal;
+        let (iv, tv) = along(v, vertical);
+        let (ih, th) = along(h, horizontal);
         let column = |i: usize| {
             let c = &self.candela[i];
             c[iv] * (1.0 - tv) + c[(iv + 1).min(c.len() - 1)] * tv
@@ -91,10 +121,11 @@ impl RawProfile {
 /// Lamp A: every horizontal angle (0–360°), lighting only below its horizon (0–90°),
 /// through a URI. Lamp B: the 1995 standard's 90–270° half, over the whole sphere, in a
 /// buffer view. Neither is symmetric under the mirrors the test's nodes apply.
-fn profiles() -> (RawProfile, RawProfile) {
+fn type_c_profiles() -> (RawProfile, RawProfile) {
     let a_v: Vec<f64> = (0..=6).map(|i| 15.0 * i as f64).collect();
     let a_h: Vec<f64> = (0..=6).map(|i| 60.0 * i as f64).collect();
     let a = RawProfile {
+        kind: 1,
         candela: a_h
             .iter()
             .map(|&h| {
@@ -116,6 +147,7 @@ fn profiles() -> (RawProfile, RawProfile) {
     let b_v = vec![0.0, 45.0, 90.0, 135.0, 180.0];
     let b_h = vec![90.0, 135.0, 180.0, 225.0, 270.0];
     let b = RawProfile {
+        kind: 1,
         candela: b_h
             .iter()
             .enumerate()
@@ -123,6 +155,56 @@ fn profiles() -> (RawProfile, RawProfile) {
                 b_v.iter()
                     .enumerate()
                     .map(|(j, _)| 2.0 + 3.0 * i as f64 + 5.0 * (4 - j) as f64 * (1 + i % 2) as f64)
+                    .collect()
+            })
+            .collect(),
+        vertical: b_v,
+        horizontal: b_h,
+        multiplier: 1.0,
+        ballast: 1.0,
+    };
+    (a, b)
+}
+
+/// Type B floodlights. Lamp A: a 0–90° file (mirrored across its vertical plane) over
+/// V −90–90°, brighter above its aim than below and fading to 0 at the edge of the
+/// hemisphere it faces, through a URI. Lamp B: H −90–45° (dark beyond 45° on one side)
+/// and V −30–90°, cut off sharply at both, in a buffer view. Neither is symmetric in V,
+/// nor B in H, so a turned-over angle shows.
+fn type_b_profiles() -> (RawProfile, RawProfile) {
+    let a_v: Vec<f64> = (0..=6).map(|i| -90.0 + 30.0 * i as f64).collect();
+    let a_h: Vec<f64> = vec![0.0, 20.0, 50.0, 90.0];
+    let a = RawProfile {
+        kind: 2,
+        candela: a_h
+            .iter()
+            .map(|&h| {
+                a_v.iter()
+                    .map(|&v| {
+                        let edge = (v.to_radians().cos() * h.to_radians().cos()).max(0.0);
+                        let bump = if v == 30.0 && h == 20.0 { 10.0 } else { 0.0 };
+                        ((3.0 + 8.0 * (v + 90.0) / 180.0) * (1.5 + h.to_radians().cos()) + bump)
+                            * edge
+                    })
+                    .collect()
+            })
+            .collect(),
+        vertical: a_v,
+        horizontal: a_h,
+        multiplier: 1.5,
+        ballast: 0.9,
+    };
+    let b_v = vec![-30.0, 0.0, 20.0, 50.0, 90.0];
+    let b_h = vec![-90.0, -40.0, 0.0, 15.0, 45.0];
+    let b = RawProfile {
+        kind: 2,
+        candela: b_h
+            .iter()
+            .enumerate()
+            .map(|(i, _)| {
+                b_v.iter()
+                    .enumerate()
+                    .map(|(j, _)| 3.0 + 4.0 * i as f64 + 3.0 * j as f64 * (1 + i % 2) as f64)
                     .collect()
             })
             .collect(),
@@ -148,7 +230,52 @@ impl Lamp {
     }
 }
 
-fn lamps() -> [Lamp; 2] {
+/// Which pair of profiles and lamps a scene holds.
+#[derive(Clone, Copy, Debug)]
+enum Kind {
+    TypeC,
+    TypeB,
+}
+
+fn profiles(kind: Kind) -> (RawProfile, RawProfile) {
+    match kind {
+        Kind::TypeC => type_c_profiles(),
+        Kind::TypeB => type_b_profiles(),
+    }
+}
+
+fn lamps(kind: Kind) -> [Lamp; 2] {
+    match kind {
+        Kind::TypeC => type_c_lamps(),
+        Kind::TypeB => type_b_lamps(),
+    }
+}
+
+/// Two floodlights tilted down onto the floor, the second under a mirror.
+fn type_b_lamps() -> [Lamp; 2] {
+    [
+        Lamp {
+            translation: Vec3::new(-0.6, 0.8, 0.6),
+            // Steep enough that the edge of the hemisphere it faces misses the floor,
+            // where the light tree's cone bound would make heavy tails.
+            rotation: Quat::from_rotation_y(40f32.to_radians())
+                * Quat::from_rotation_x(-80f32.to_radians()),
+            scale: Vec3::ONE,
+            multiplier: 0.6,
+            color: [0.3, 0.6, 1.0],
+        },
+        Lamp {
+            translation: Vec3::new(0.7, 0.7, -0.4),
+            rotation: Quat::from_rotation_z(25f32.to_radians())
+                * Quat::from_rotation_x(-70f32.to_radians()),
+            scale: Vec3::new(1.0, -1.0, 1.0),
+            multiplier: 1.0,
+            color: [1.0, 1.0, 1.0],
+        },
+    ]
+}
+
+fn type_c_lamps() -> [Lamp; 2] {
     [
         Lamp {
             translation: Vec3::new(-0.7, 0.9, 0.4),
@@ -171,8 +298,8 @@ fn lamps() -> [Lamp; 2] {
 }
 
 /// The floor (4 × 4 m, Lambertian), both lamps and the camera, written to `dir`.
-fn write_scene(dir: &std::path::Path) -> std::path::PathBuf {
-    let (a, b) = profiles();
+fn write_scene(dir: &std::path::Path, kind: Kind) -> std::path::PathBuf {
+    let (a, b) = profiles(kind);
     std::fs::write(dir.join("a.ies"), a.text()).unwrap();
     let mut bin: Vec<u8> = Vec::new();
     let corners = [
@@ -194,7 +321,7 @@ fn write_scene(dir: &std::path::Path) -> std::path::PathBuf {
         bin.push(b' ');
     }
     std::fs::write(dir.join("floor.bin"), &bin).unwrap();
-    let lamp_nodes: Vec<_> = lamps()
+    let lamp_nodes: Vec<_> = lamps(kind)
         .iter()
         .enumerate()
         .map(|(i, l)| {
@@ -245,23 +372,18 @@ fn write_scene(dir: &std::path::Path) -> std::path::PathBuf {
 }
 
 /// Radiance the floor reflects at world point p: ρ/π · Σ I(ω) cosθ / r² over the lamps.
-fn radiance(p: Vec3) -> [f64; 3] {
-    let (a, b) = profiles();
+fn radiance(p: Vec3, kind: Kind) -> [f64; 3] {
+    let (a, b) = profiles(kind);
     let mut out = [0.0; 3];
-    for (lamp, profile) in lamps().iter().zip([&a, &b]) {
+    for (lamp, profile) in lamps(kind).iter().zip([&a, &b]) {
         let m = lamp.matrix();
         let to_floor = p - lamp.translation;
         let r2 = to_floor.length_squared() as f64;
         let w = to_floor.normalize();
         // The direction in the node's own frame (its transform's inverse, mirror and all).
         let local = (Mat3::from_mat4(m).inverse() * w).normalize();
-        let theta = (-local.z as f64).clamp(-1.0, 1.0).acos().to_degrees();
-        let phi = (local.y as f64)
-            .atan2(local.x as f64)
-            .to_degrees()
-            .rem_euclid(360.0);
         let cos_floor = (-w.y as f64).max(0.0);
-        let e = profile.eval(theta, phi) * lamp.multiplier * cos_floor / r2;
+        let e = profile.intensity(local) * lamp.multiplier * cos_floor / r2;
         for (o, colour) in out.iter_mut().zip(lamp.color) {
             *o += ALBEDO / std::f64::consts::PI * e * colour;
         }
@@ -271,14 +393,14 @@ fn radiance(p: Vec3) -> [f64; 3] {
 
 /// Pixel (x, y)'s mean radiance by the midpoint rule on n × n points; the camera sees
 /// x from −2 to 2 left to right and z from −2 to 2 top to bottom.
-fn pixel_mean(x: u32, y: u32, n: u32) -> [f64; 3] {
+fn pixel_mean(x: u32, y: u32, n: u32, kind: Kind) -> [f64; 3] {
     let pixel = 4.0 / SIZE as f64;
     let mut sum = [0.0; 3];
     for j in 0..n {
         for i in 0..n {
             let px = -2.0 + pixel * (x as f64 + (i as f64 + 0.5) / n as f64);
             let pz = -2.0 + pixel * (y as f64 + (j as f64 + 0.5) / n as f64);
-            let l = radiance(Vec3::new(px as f32, 0.0, pz as f32));
+            let l = radiance(Vec3::new(px as f32, 0.0, pz as f32), kind);
             for c in 0..3 {
                 sum[c] += l[c];
             }
@@ -294,16 +416,34 @@ fn pixel_mean(x: u32, y: u32, n: u32) -> [f64; 3] {
 /// from 24² to 48² points).
 #[test]
 fn ies_lights_match_the_closed_form_on_a_lambertian_floor() {
+    matches_the_closed_form(Kind::TypeC);
+}
+
+/// The same for Type B floodlights (seen to fail with H turning toward +Y, with V
+/// tilting toward −X, with a 0–90° file not mirrored, and with the kernel reading
+/// Type B's angles as Type C's).
+#[test]
+fn type_b_ies_lights_match_the_closed_form_on_a_lambertian_floor() {
+    matches_the_closed_form(Kind::TypeB);
+}
+
+fn matches_the_closed_form(kind: Kind) {
+    // Type B's scene has sharp cut-offs on the floor: more samples per pixel, and a
+    // finer quadrature to keep up with them.
+    let (spp, fine) = match kind {
+        Kind::TypeC => (16, 48),
+        Kind::TypeB => (64, 128),
+    };
     let dir = tempfile::tempdir().unwrap();
-    let path = write_scene(dir.path());
+    let path = write_scene(dir.path(), kind);
     let scene = Scene::load(&path, &LoadOptions::default()).unwrap();
     assert_eq!(scene.punctual.len(), 2);
     let camera = scene.cameras[0].clone();
     let expected: Vec<([f64; 3], [f64; 3])> = (0..SIZE * SIZE)
         .map(|i| {
             (
-                pixel_mean(i % SIZE, i / SIZE, 48),
-                pixel_mean(i % SIZE, i / SIZE, 24),
+                pixel_mean(i % SIZE, i / SIZE, fine, kind),
+                pixel_mean(i % SIZE, i / SIZE, fine / 2, kind),
             )
         })
         .collect();
@@ -322,7 +462,7 @@ fn ies_lights_match_the_closed_form_on_a_lambertian_floor() {
         let mut s = testing::settings(method, SIZE, SIZE);
         s.max_depth = 2;
         s.source = source;
-        let b = render_batches(&scene, &camera, s, 16, 16);
+        let b = render_batches(&scene, &camera, s, 16, spp);
         let mut worst = (1.0f64, String::new());
         for y in 0..SIZE {
             for x in 0..SIZE {
@@ -349,7 +489,7 @@ fn ies_lights_match_the_closed_form_on_a_lambertian_floor() {
         }
         assert!(
             worst.0 > stats::sidak(ALPHA, n),
-            "{method} ({source:?}): p = {:.2e} at {}",
+            "{kind:?} {method} ({source:?}): p = {:.2e} at {}",
             worst.0,
             worst.1
         );
@@ -361,7 +501,7 @@ fn ies_lights_match_the_closed_form_on_a_lambertian_floor() {
 #[test]
 fn ies_lights_that_cannot_be_read_are_refused_by_name() {
     let dir = tempfile::tempdir().unwrap();
-    let path = write_scene(dir.path());
+    let path = write_scene(dir.path(), Kind::TypeC);
     let original: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     type Edit = Box<dyn Fn(&mut serde_json::Value)>;
@@ -449,7 +589,7 @@ fn light_reuse_of_ies_lights_agrees_with_pt() {
 #[test]
 fn hidden_nodes_hide_their_ies_lights() {
     let dir = tempfile::tempdir().unwrap();
-    let path = write_scene(dir.path());
+    let path = write_scene(dir.path(), Kind::TypeC);
     let mut doc: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     doc["extensionsUsed"]

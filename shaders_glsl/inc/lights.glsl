@@ -171,32 +171,45 @@ uint profile_bracket(uint first, uint n, float x, out float t) {
 }
 
 // Candela of light l's IES profile toward the unit direction w it emits along
-// (EXT_lights_ies; src/scene/ies.rs packs the profile and says the frame: vertical angle
-// θ from l.direction, horizontal angle φ from l.tangent, counter-clockwise about −direction).
-// Bilinear in (θ, φ) between the file's angles; 0 outside its vertical angles.
+// (EXT_lights_ies; src/scene/ies.rs packs the profile and says both frames). Type C:
+// vertical angle θ from l.direction, horizontal angle φ from l.tangent, counter-clockwise
+// about −direction. Type B (the top bit of the horizontal count): V = atan2(w·tangent,
+// w·direction), H = asin(−w·y), so only the hemisphere the light faces is lit.
+// Bilinear in the profile's own two angles between the file's; 0 outside them.
 float punctual_profile(PunctualLight l, vec3 w) {
     uint o = l.profile & 0x7fffffffu;
     uint nv = floatBitsToUint(light_profiles(o));
-    uint nh = floatBitsToUint(light_profiles(o + 1u));
+    uint nh_bits = floatBitsToUint(light_profiles(o + 1u));
+    uint nh = nh_bits & 0x7fffffffu;
     uint vertical = o + 2u;
     uint horizontal = vertical + nv;
     uint table = horizontal + nh;
-    float theta = acos(clamp(dot(w, l.direction), -1.0, 1.0));
+    // The frame: x along the tangent, z against the light's direction, y = z × x
+    // (turned over for a mirrored node).
+    vec3 y = cross(-l.direction, l.tangent);
+    if ((l.profile & 0x80000000u) != 0u) y = -y;
+    bool type_b = (nh_bits & 0x80000000u) != 0u;
+    float theta;  // the profile's vertical angle
+    float phi = 0.0;  // its horizontal angle
+    if (type_b) {
+        float x = dot(w, l.tangent);
+        float z = dot(w, l.direction);
+        theta = (x == 0.0 && z == 0.0) ? 0.0 : atan(x, z);  // on the lateral axis V is moot
+        phi = asin(clamp(-dot(w, y), -1.0, 1.0));
+        if (phi < light_profiles(horizontal) - 1e-6 || phi > light_profiles(horizontal + nh - 1u) + 1e-6) return 0.0;
+    } else {
+        theta = acos(clamp(dot(w, l.direction), -1.0, 1.0));
+        if (nh > 1u) {
+            phi = atan(dot(w, y), dot(w, l.tangent));
+            if (phi < 0.0) phi += 2.0 * PI;
+        }
+    }
     if (theta < light_profiles(vertical) - 1e-6 || theta > light_profiles(vertical + nv - 1u) + 1e-6) return 0.0;
     float tv = 0.0;
     uint iv = nv > 1u ? profile_bracket(vertical, nv, theta, tv) : 0u;
     uint iv1 = min(iv + 1u, nv - 1u);
     float th = 0.0;
-    uint ih = 0u;
-    if (nh > 1u) {
-        // The frame: x along the tangent, z against the light's direction, y = z × x
-        // (turned over for a mirrored node).
-        vec3 y = cross(-l.direction, l.tangent);
-        if ((l.profile & 0x80000000u) != 0u) y = -y;
-        float phi = atan(dot(w, y), dot(w, l.tangent));
-        if (phi < 0.0) phi += 2.0 * PI;
-        ih = profile_bracket(horizontal, nh, phi, th);
-    }
+    uint ih = nh > 1u ? profile_bracket(horizontal, nh, phi, th) : 0u;
     uint ih1 = min(ih + 1u, nh - 1u);
     float c0 = mix(light_profiles(table + ih * nv + iv), light_profiles(table + ih * nv + iv1), tv);
     float c1 = mix(light_profiles(table + ih1 * nv + iv), light_profiles(table + ih1 * nv + iv1), tv);
@@ -209,7 +222,7 @@ float punctual_profile(PunctualLight l, vec3 w) {
 float punctual_profile_bound(PunctualLight l, vec3 w) {
     uint o = l.profile & 0x7fffffffu;
     uint nv = floatBitsToUint(light_profiles(o));
-    uint nh = floatBitsToUint(light_profiles(o + 1u));
+    uint nh = floatBitsToUint(light_profiles(o + 1u)) & 0x7fffffffu;  // the top bit: Type B
     uint grid = o + 2u + nv + nh + nv * nh;
     vec3 y = cross(-l.direction, l.tangent);
     if ((l.profile & 0x80000000u) != 0u) y = -y;

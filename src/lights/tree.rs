@@ -711,20 +711,23 @@ mod tests {
     /// none above it).
     #[test]
     fn ies_bounds_never_rule_out_their_light() {
-        use crate::scene::ies::IesProfile;
+        use crate::scene::ies::{IesProfile, Photometry};
         let deg = |a: f32| a.to_radians();
         let profiles = [
             IesProfile {
+                photometry: Photometry::TypeC,
                 vertical: [0.0, 30.0, 60.0, 90.0].map(deg).to_vec(),
                 horizontal: vec![0.0],
                 candela: vec![5.0, 3.0, 1.0, 0.0],
             },
             IesProfile {
+                photometry: Photometry::TypeC,
                 vertical: [90.0, 120.0, 180.0].map(deg).to_vec(),
                 horizontal: vec![0.0],
                 candela: vec![0.0, 2.0, 4.0],
             },
             IesProfile {
+                photometry: Photometry::TypeC,
                 vertical: [0.0, 40.0, 80.0, 120.0, 180.0].map(deg).to_vec(),
                 horizontal: vec![0.0, deg(180.0), deg(360.0)],
                 candela: [
