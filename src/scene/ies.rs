@@ -1006,32 +1006,40 @@ mod tests {
         assert_eq!(warnings.len(), 1);
     }
 
-    /// Every prefix of a profile, and the profile with any byte changed to any of the
-    /// characters its syntax uses, is read or
+    /// Every prefix of a profile (Type C and Type B), and the profile with any byte
+    /// changed to any of the characters its syntax uses, is read or
     /// refused: never a panic, never a non-finite or negative value.
     #[test]
     fn damaged_profiles_are_errors_never_panics() {
         let v = [0.0, 22.5, 45.0, 67.5, 90.0];
         let h = [0.0, 45.0, 90.0];
         let c: Vec<f64> = (0..15).map(|i| 1.0 + i as f64).collect();
-        let text = file("TILT=INCLUDE\n1\n2\n0 90\n1 1", &v, &h, &c).into_bytes();
         let check = |bytes: &[u8]| {
             if let Ok((p, _)) = parse(bytes) {
                 assert!(p.candela.iter().all(|c| c.is_finite() && *c >= 0.0));
                 assert_eq!(p.candela.len(), p.vertical.len() * p.horizontal.len());
                 let _ = p.eval(0.3, 1.0);
                 let _ = p.flux();
+                assert!(p.bounds().iter().all(|b| b.is_finite() && *b >= 0.0));
+                let _ = p.lit_vertical_range();
             }
         };
-        for n in 0..text.len() {
-            check(&text[..n]);
-        }
-        let alphabet = b"0123456789-.e ,\nTILT=NOE";
-        for i in 0..text.len() {
-            for &b in alphabet {
-                let mut bytes = text.clone();
-                bytes[i] = b;
-                check(&bytes);
+        let tilt = "TILT=INCLUDE\n1\n2\n0 90\n1 1";
+        let v_b = [-90.0, -30.0, 0.0, 45.0, 90.0];
+        for text in [
+            file(tilt, &v, &h, &c).into_bytes(),
+            typed_file(2, tilt, &v_b, &h, &c).into_bytes(),
+        ] {
+            for n in 0..text.len() {
+                check(&text[..n]);
+            }
+            let alphabet = b"0123456789-.e ,\nTILT=NOE";
+            for i in 0..text.len() {
+                for &b in alphabet {
+                    let mut bytes = text.clone();
+                    bytes[i] = b;
+                    check(&bytes);
+                }
             }
         }
     }
