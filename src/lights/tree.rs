@@ -706,9 +706,9 @@ mod tests {
     }
 
     /// An IES light's bound is its lit vertical angles' cone: wherever its profile
-    /// sends light toward p (a downlight, an uplight, a band between 40° and 120°), the
-    /// tree gives it a positive probability; and the cone does prune (a downlight has
-    /// none above it).
+    /// sends light toward p (a downlight, an uplight, a band between 40° and 120°, a
+    /// Type B floodlight), the tree gives it a positive probability; and the cone does
+    /// prune (a downlight has none above it).
     #[test]
     fn ies_bounds_never_rule_out_their_light() {
         use crate::scene::ies::{IesProfile, Photometry};
@@ -737,6 +737,14 @@ mod tests {
                 ]
                 .concat(),
             },
+            // A Type B floodlight lit over V −20–25° and H −30–30° only: its cone must
+            // reach the corner, cos θ = cos 25° cos 30°.
+            IesProfile {
+                photometry: Photometry::TypeB,
+                vertical: [-20.0, 0.0, 25.0].map(deg).to_vec(),
+                horizontal: [-30.0, -15.0, 0.0, 15.0, 30.0].map(deg).to_vec(),
+                candela: vec![1.0; 15],
+            },
         ];
         let mut packed = Vec::new();
         let mut offsets = Vec::new();
@@ -747,7 +755,7 @@ mod tests {
         let mut r = Rng(77);
         let mut punctual = Vec::new();
         let mut models = Vec::new();
-        for k in 0..12u32 {
+        for k in 0..16u32 {
             let d = r.vec(2.0).normalize();
             let t = d.any_orthonormal_vector();
             punctual.push(gpu::PunctualLight {
@@ -758,7 +766,7 @@ mod tests {
                 intensity: [1.0; 3],
                 cos_inner: 1.0,
                 cos_outer: 1.0,
-                profile: offsets[k as usize % 3],
+                profile: offsets[k as usize % profiles.len()],
                 tangent: t.into(),
             });
             models.push(model(0, 0, k, 1.0 + r.next()));
@@ -774,7 +782,7 @@ mod tests {
                 let y = (-d).cross(x);
                 let theta = w.dot(d).clamp(-1.0, 1.0).acos();
                 let phi = w.dot(y).atan2(w.dot(x)).rem_euclid(std::f32::consts::TAU);
-                let emits = profiles[m % 3].eval(theta, phi) > 0.0;
+                let emits = profiles[m % profiles.len()].eval(theta, phi) > 0.0;
                 let probability = pmf(&tree, m as u32, p, Vec3::ZERO);
                 if emits {
                     lit += 1;
