@@ -188,19 +188,18 @@ fn emissive_factor_above_one_loads_with_a_warning() {
 #[test]
 fn an_unsupported_extension_loads_with_a_warning_naming_it() {
     // Used, not required: the file stays loadable, and the user hears that the
-    // unlit shading it asks for is not rendered (the material renders lit).
+    // AVIF images it may offer are not read (a texture falls back to its own source).
     let dir = tempfile::tempdir().unwrap();
     let src = root().join("scenes/cornell-lights.gltf");
     let mut json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&src).unwrap()).unwrap();
     json["extensionsUsed"].as_array_mut().unwrap().extend([
-        serde_json::json!("KHR_materials_unlit"),
+        serde_json::json!("EXT_texture_avif"),
         serde_json::json!("KHR_materials_variants"),
     ]);
-    json["materials"][0]["extensions"]["KHR_materials_unlit"] = serde_json::json!({});
     let (_, stderr) = info_of_edited_cornell(dir.path(), &json);
     assert!(
-        stderr.contains("KHR_materials_unlit, which lanterna does not support"),
+        stderr.contains("EXT_texture_avif, which lanterna does not support"),
         "no warning:\n{stderr}"
     );
     // Extensions lanterna reads (the shipped file's emissive strength) and inert ones are
@@ -274,6 +273,7 @@ fn required_extensions_lanterna_reads_load_and_others_are_refused_by_name() {
         "KHR_materials_iridescence",
         "KHR_materials_sheen",
         "KHR_materials_specular",
+        "KHR_materials_unlit",
         "KHR_materials_volume",
         "KHR_texture_transform",
     ];
@@ -2758,4 +2758,168 @@ fn hidden_nodes_take_their_meshes_and_lights_with_them() {
         err.contains("node `hidden`: KHR_node_visibility `visible` is \"no\", not true or false"),
         "{err}"
     );
+}
+
+/// `KHR_materials_unlit`: a material shown in its base colour whatever the lighting
+/// loads as an emitter of that colour that reflects nothing. The file must load the
+/// very scene (its hash) of the same file with the material written that way (black
+/// base colour with the alpha kept, no specular layer, emission = base colour factor,
+/// emissive texture = base colour texture): on `cornell-lights` (a wall, required) and on
+/// the textured `tests/data/mitsuba/tex.gltf`. Seen directly, the unlit wall is its base
+/// colour in every pixel, exactly. A primitive with vertex colours is warned that they
+/// do not tint it. Seen to fail with the base colour's alpha dropped, with the specular
+/// layer kept (by the hash, and by the render alone: the lamps' reflections then leave
+/// no pixel of the wall its hue), and with the emissive texture left out.
+#[test]
+fn unlit_materials_emit_their_base_colour_and_reflect_nothing() {
+    use lanterna::render::Method;
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, json: &serde_json::Value| -> PathBuf {
+        let path = dir.path().join(name);
+        std::fs::write(&path, serde_json::to_vec(json).unwrap()).unwrap();
+        path
+    };
+    let hash = |path: &Path| -> String {
+        Scene::load(path, &Default::default())
+            .unwrap_or_else(|e| panic!("{e}"))
+            .hash
+    };
+    // The material written as the emitter lanterna makes of it.
+    let baked = |m: &serde_json::Value| -> serde_json::Value {
+        let pbr = &m["pbrMetallicRoughness"];
+        let base = pbr["baseColorFactor"]
+            .as_array()
+            .cloned()
+            .unwrap_or_else(|| vec![1.0.into(); 4]);
+        let mut out = serde_json::json!({
+            "pbrMetallicRoughness": {
+                "baseColorFactor": [0.0, 0.0, 0.0, base[3].clone()],
+                "metallicFactor": 0.0,
+                "roughnessFactor": 1.0
+            },
+            "emissiveFactor": [base[0].clone(), base[1].clone(), base[2].clone()],
+            "extensions": {"KHR_materials_specular": {"specularFactor": 0.0}}
+        });
+        if let Some(t) = pbr.get("baseColorTexture") {
+            out["pbrMetallicRoughness"]["baseColorTexture"] = t.clone();
+            out["emissiveTexture"] = t.clone();
+        }
+        for key in ["alphaMode", "alphaCutoff", "doubleSided", "name"] {
+            if let Some(v) = m.get(key) {
+                out[key] = v.clone();
+            }
+        }
+        out
+    };
+    let add_used = |json: &mut serde_json::Value, e: &str| {
+        let used = json
+            .as_object_mut()
+            .unwrap()
+            .entry("extensionsUsed")
+            .or_insert_with(|| serde_json::json!([]));
+        if !used.as_array().unwrap().iter().any(|x| x == e) {
+            used.as_array_mut().unwrap().push(e.into());
+        }
+    };
+
+    // cornell-lights: its red wall (material 1) unlit, the extension required.
+    for f in ["cornell-lights.bin"] {
+        std::fs::copy(root().join("scenes").join(f), dir.path().join(f)).unwrap();
+    }
+    let mut json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(root().join("scenes/cornell-lights.gltf")).unwrap())
+            .unwrap();
+    // An alpha the wall keeps (masked, above the cutoff: it stays opaque).
+    json["materials"][1]["pbrMetallicRoughness"]["baseColorFactor"][3] = 0.8.into();
+    json["materials"][1]["alphaMode"] = "MASK".into();
+    let mut unlit = json.clone();
+    unlit["materials"][1]["extensions"]["KHR_materials_unlit"] = serde_json::json!({});
+    add_used(&mut unlit, "KHR_materials_unlit");
+    unlit["extensionsRequired"] = serde_json::json!(["KHR_materials_unlit"]);
+    let mut explicit = json.clone();
+    explicit["materials"][1] = baked(&json["materials"][1]);
+    add_used(&mut explicit, "KHR_materials_specular");
+    let unlit_path = write("unlit.gltf", &unlit);
+    assert_eq!(hash(&unlit_path), hash(&write("explicit.gltf", &explicit)));
+    assert_ne!(
+        hash(&unlit_path),
+        hash(&root().join("scenes/cornell-lights.gltf"))
+    );
+
+    // Seen directly, every pixel wholly on the wall is its base colour.
+    let scene = Scene::load(&unlit_path, &Default::default()).unwrap();
+    let base = &json["materials"][1]["pbrMetallicRoughness"]["baseColorFactor"];
+    let colour: Vec<f64> = (0..3).map(|c| base[c].as_f64().unwrap()).collect();
+    let (w, h) = (32u32, 32u32);
+    let mut s = lanterna::testing::settings(Method::Pt, w, h);
+    s.max_depth = 4;
+    let image = lanterna::testing::render_batches(&scene, &scene.cameras[0], s, 1, 16);
+    let pixel = |x: u32, y: u32| -> Vec<f64> {
+        let p = image.region_estimates(x, y, 1, 1);
+        (0..3).map(|c| p[c][0]).collect()
+    };
+    // The wall's pixels are those of its hue and about its brightness; those inside
+    // it (their eight neighbours the wall's too) must be the colour exactly.
+    let walls: Vec<bool> = (0..w * h)
+        .map(|i| {
+            let m = pixel(i % w, i / w);
+            let hue =
+                (0..3).all(|c| (m[c] * colour[0] - colour[c] * m[0]).abs() < 1e-3 * m[0].max(1e-6));
+            hue && m[0] > 0.5 * colour[0] && m[0] < 2.0 * colour[0]
+        })
+        .collect();
+    let mut on_wall = 0;
+    for y in 1..h - 1 {
+        for x in 1..w - 1 {
+            let inside = (0..9).all(|k| walls[((y + k / 3 - 1) * w + x + k % 3 - 1) as usize]);
+            if inside {
+                on_wall += 1;
+                let m = pixel(x, y);
+                let close = (0..3).all(|c| (m[c] - colour[c]).abs() < 1e-5);
+                assert!(close, "pixel ({x}, {y}): {m:?} against {colour:?}");
+            }
+        }
+    }
+    assert!(on_wall > 20, "{on_wall} pixels inside the wall");
+
+    // A textured material (its base colour texture tints the emission).
+    let tex = root().join("tests/data/mitsuba");
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(tex.join("tex.gltf")).unwrap()).unwrap();
+    let mut textured = 0;
+    for (i, m) in json["materials"].as_array().unwrap().iter().enumerate() {
+        if m["pbrMetallicRoughness"].get("baseColorTexture").is_none() {
+            continue;
+        }
+        textured += 1;
+        let mut unlit = json.clone();
+        unlit["materials"][i]["extensions"] = serde_json::json!({"KHR_materials_unlit": {}});
+        add_used(&mut unlit, "KHR_materials_unlit");
+        let mut explicit = json.clone();
+        explicit["materials"][i] = baked(m);
+        add_used(&mut explicit, "KHR_materials_specular");
+        // Its images are data URIs: the copies load anywhere.
+        let a = write("unlit-tex.gltf", &unlit);
+        let b = write("explicit-tex.gltf", &explicit);
+        assert_eq!(hash(&a), hash(&b), "textured material {i}");
+        assert_ne!(
+            hash(&a),
+            hash(&tex.join("tex.gltf")),
+            "textured material {i}"
+        );
+    }
+    assert_eq!(textured, 2);
+
+    // Vertex colours do not tint it, and the user hears so.
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(tex.join("colors.gltf")).unwrap()).unwrap();
+    let mut unlit = json.clone();
+    for m in unlit["materials"].as_array_mut().unwrap() {
+        m["extensions"]["KHR_materials_unlit"] = serde_json::json!({});
+    }
+    add_used(&mut unlit, "KHR_materials_unlit");
+    let a = write("unlit-colors.gltf", &unlit);
+    let (ok, stderr) = lanterna(&["info", a.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    assert!(stderr.contains("do not tint"), "{stderr}");
 }

@@ -1101,8 +1101,8 @@ const MAX_INSTANCES: usize = (1 << 24) - 1;
 
 /// glTF extensions lanterna reads. A file may use others without requiring them (a
 /// required one it does not know is refused when the file is parsed); their data is then
-/// ignored, which a user should hear about: a `KHR_materials_unlit` material renders
-/// lit.
+/// ignored, which a user should hear about (an `EXT_texture_avif` image falls back to
+/// the texture's own source, or to none).
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "EXT_lights_ies",
     "EXT_mesh_gpu_instancing",
@@ -1122,6 +1122,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_sheen",
     "KHR_materials_specular",
     "KHR_materials_transmission",
+    "KHR_materials_unlit",
     "KHR_materials_variants",
     "KHR_materials_volume",
     "KHR_mesh_quantization",

@@ -146,6 +146,18 @@ pub(super) fn load_primitive(
             return Err(format!("{name} has non-finite vertex colours (COLOR_0)"));
         }
     }
+    if colors.is_some()
+        && prim
+            .material()
+            .extension_value(super::material::UNLIT)
+            .is_some()
+    {
+        warnings.push(format!(
+            "{name}: its vertex colours (COLOR_0) do not tint the colour its \
+             {} material emits",
+            super::material::UNLIT
+        ));
+    }
     if prim.get(&gltf::Semantic::Colors(1)).is_some() {
         warnings.push(format!("{name}: COLOR_1 and later colour sets are ignored"));
     }

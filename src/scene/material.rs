@@ -196,6 +196,30 @@ pub fn default_material() -> gpu::Material {
     }
 }
 
+/// The extension that asks for a surface shown in its base colour whatever the lighting.
+pub const UNLIT: &str = "KHR_materials_unlit";
+
+/// A `KHR_materials_unlit` material from the base colour (factor × texture) and alpha
+/// that `read` holds; everything else of the PBR model is dropped, as the extension
+/// says. A physically based renderer has no unlit shading, so the surface emits its
+/// base colour as radiance and reflects nothing (black, no specular layer): seen
+/// directly it is exactly that colour, it casts shadows, and, like any emitter, it
+/// lights what it faces. Alpha coverage and double-sidedness stay (the caller sets
+/// them); an emitter is one-sided unless double-sided, as every emitter here.
+fn unlit(read: &gpu::Material) -> gpu::Material {
+    let [r, g, b, a] = read.base_color;
+    gpu::Material {
+        base_color: [0.0, 0.0, 0.0, a],
+        base_color_tex: read.base_color_tex,
+        emission: [r, g, b],
+        emissive_tex: read.base_color_tex,
+        metallic: 0.0,
+        roughness: 1.0,
+        specular: 0.0,
+        ..default_material()
+    }
+}
+
 /// Convert one glTF material of `doc`.
 pub fn convert(
     m: &gltf::Material<'_>,
@@ -344,6 +368,10 @@ pub fn convert(
             "material `{name}`: its emission is not darkened by its clearcoat's Fresnel term \
              (the glTF spec's 1 − clearcoat·F: 4 % at normal incidence, more at grazing angles)"
         ));
+    }
+
+    if m.extension_value(UNLIT).is_some() {
+        out = unlit(&out);
     }
 
     out.alpha_cutoff = m.alpha_cutoff().unwrap_or(0.5);
