@@ -132,6 +132,18 @@ fn lanterna(args: &[&str]) -> (bool, String) {
     (out.status.success(), stderr)
 }
 
+/// `cornell-lights.gltf` as JSON, its buffer copied into `dir` so that an edited copy
+/// written there loads.
+fn cornell_json_beside_its_buffer(dir: &Path) -> serde_json::Value {
+    std::fs::copy(
+        root().join("scenes/cornell-lights.bin"),
+        dir.join("cornell-lights.bin"),
+    )
+    .unwrap();
+    serde_json::from_slice(&std::fs::read(root().join("scenes/cornell-lights.gltf")).unwrap())
+        .unwrap()
+}
+
 /// Writes `json` (an edited `cornell-lights.gltf`) with the shipped buffer into `dir`,
 /// runs `lanterna info` on it, which must succeed, and returns the file and its stderr.
 fn info_of_edited_cornell(dir: &Path, json: &serde_json::Value) -> (PathBuf, String) {
@@ -2535,14 +2547,7 @@ fn animations_pose_nodes_cameras_lights_and_weights_at_a_time() {
 #[test]
 fn material_variants_swap_materials_by_name_or_index() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::copy(
-        root().join("scenes/cornell-lights.bin"),
-        dir.path().join("cornell-lights.bin"),
-    )
-    .unwrap();
-    let mut json: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(root().join("scenes/cornell-lights.gltf")).unwrap())
-            .unwrap();
+    let mut json = cornell_json_beside_its_buffer(dir.path());
     let materials = json["materials"].as_array().unwrap().len();
     let (gold, blue) = (materials, materials + 1);
     json["materials"].as_array_mut().unwrap().extend([
@@ -2673,14 +2678,7 @@ fn material_variants_swap_materials_by_name_or_index() {
 #[test]
 fn hidden_nodes_take_their_meshes_and_lights_with_them() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::copy(
-        root().join("scenes/cornell-lights.bin"),
-        dir.path().join("cornell-lights.bin"),
-    )
-    .unwrap();
-    let json: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(root().join("scenes/cornell-lights.gltf")).unwrap())
-            .unwrap();
+    let json = cornell_json_beside_its_buffer(dir.path());
     let node = |name: &str| {
         json["nodes"]
             .as_array()
@@ -2823,14 +2821,7 @@ fn unlit_materials_emit_their_base_colour_and_reflect_nothing() {
     };
 
     // cornell-lights: its red wall (material 1) unlit, the extension required.
-    std::fs::copy(
-        root().join("scenes/cornell-lights.bin"),
-        dir.path().join("cornell-lights.bin"),
-    )
-    .unwrap();
-    let mut json: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(root().join("scenes/cornell-lights.gltf")).unwrap())
-            .unwrap();
+    let mut json = cornell_json_beside_its_buffer(dir.path());
     // An alpha the wall keeps (masked, above the cutoff: it stays opaque).
     json["materials"][1]["pbrMetallicRoughness"]["baseColorFactor"][3] = 0.8.into();
     json["materials"][1]["alphaMode"] = "MASK".into();

@@ -296,8 +296,15 @@ fn unfold(vertical: &[f64], horizontal: &[f64], candela: &[f64], s: Symmetry) ->
             }
         }
     }
+    let columns: Vec<(f64, &[f64])> = columns.iter().map(|(a, c)| (*a, c.as_slice())).collect();
+    from_columns(Photometry::TypeC, vertical, &columns)
+}
+
+/// The profile of `vertical` angles and (horizontal angle, candela column) pairs, all
+/// in degrees, in the kernel's units (radians, single precision).
+fn from_columns(photometry: Photometry, vertical: &[f64], columns: &[(f64, &[f64])]) -> IesProfile {
     IesProfile {
-        photometry: Photometry::TypeC,
+        photometry,
         vertical: vertical.iter().map(|a| a.to_radians() as f32).collect(),
         horizontal: columns.iter().map(|c| c.0.to_radians() as f32).collect(),
         candela: columns
@@ -343,15 +350,7 @@ fn unfold_b(vertical: &[f64], horizontal: &[f64], candela: &[f64], mirrored: boo
         columns.extend(mirrored);
         columns.sort_by(|a, b| a.0.total_cmp(&b.0));
     }
-    IesProfile {
-        photometry: Photometry::TypeB,
-        vertical: vertical.iter().map(|a| a.to_radians() as f32).collect(),
-        horizontal: columns.iter().map(|c| c.0.to_radians() as f32).collect(),
-        candela: columns
-            .iter()
-            .flat_map(|c| c.1.iter().map(|&x| x as f32))
-            .collect(),
-    }
+    from_columns(Photometry::TypeB, vertical, &columns)
 }
 
 /// Type B's angles (V, H) of the direction whose Type C angles are (θ, φ), in the frame
