@@ -48,10 +48,9 @@ const MAX_VALUES: usize = 1 << 20;
 
 /// How a profile's two angles lie on the sphere: LM-63's photometric type (the module's
 /// text gives both frames).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Photometry {
     /// Vertical angle from the aim, horizontal angle about it.
-    #[default]
     TypeC,
     /// Vertical angle tilting a plane about the lateral axis, horizontal angle within it.
     TypeB,
@@ -355,7 +354,7 @@ fn unfold_b(vertical: &[f64], horizontal: &[f64], candela: &[f64], mirrored: boo
 
 /// Type B's angles (V, H) of the direction whose Type C angles are (θ, φ), in the frame
 /// of the module's text; V is 0 on the lateral axis, where it means nothing.
-pub fn type_b_angles(theta: f32, phi: f32) -> (f32, f32) {
+fn type_b_angles(theta: f32, phi: f32) -> (f32, f32) {
     let (x, y, z) = (
         theta.sin() * phi.cos(),
         theta.sin() * phi.sin(),
