@@ -100,71 +100,143 @@ fn cone_union(a: Vec3, theta_a: f32, b: Vec3, theta_b: f32) -> (Vec3, f32) {
     (axis, (theta_o * 1.0001 + 1e-5).min(PI))
 }
 
-/// The bounds of one light model, or None for a directional light. `lit` gives the lit
-/// vertical angles of each IES profile by its offset ([`IesProfile::lit_vertical_range`]).
-///
-/// [`IesProfile::lit_vertical_range`]: crate::scene::ies::IesProfile::lit_vertical_range
+/// An emission cone about an axis for the light tree, (θo, θe) in radians: the
+/// importance weighs cos θ′ with θ′ the angle beyond θo, and nothing beyond θo + θe.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct EmissionCone {
+    theta_o: f32,
+    theta_e: f32,
+    /// The emission's largest value toward any direction (per unit of the light's
+    /// intensity: 1 but for IES profiles, whose candela it is).
+    peak: f32,
+}
+
+impl EmissionCone {
+    /// Every direction: an omnidirectional light's cone.
+    const OMNI: EmissionCone = EmissionCone {
+        theta_o: std::f32::consts::PI,
+        theta_e: std::f32::consts::FRAC_PI_2,
+        peak: 1.0,
+    };
+}
+
+/// Bands across a cone in which [`dominating_cone`] takes the emission's maximum.
+const CONE_BANDS: usize = 64;
+
+/// The least θe the tree's cones keep: within θe of θo, cos θ′ is so close to 1 that
+/// the kernels' f32 arithmetic cannot tell θ′ from cos θe any closer.
+const MIN_THETA_E: f32 = 0.01;
+
+/// The cone over [0, `cone`] (radians from the axis; the emission is 0 beyond it) whose
+/// importance shape cos(max(θ − θo, 0)) is nowhere below the emission relative to its
+/// peak: `band_max(a0, a1)` bounds the emission between a0 and a1 from the axis. The
+/// least such θo keeps the importance low where the lamp is dim; with the lamp's power
+/// at least π × its peak (`model_bounds`), its importance is at least π × what it sends,
+/// as an emitting triangle's is toward its normal, with no heavy tail toward the cone's
+/// edge (where a cosine from the axis alone would fall to 0 under a lamp still lit
+/// there). θo is at least cone − 90°, so that cos θ′ stays
+/// positive over the cone; the cone is widened a little, as the bound must hold it.
+fn dominating_cone(cone: f32, band_max: impl Fn(f32, f32) -> f32) -> EmissionCone {
+    use std::f32::consts::{FRAC_PI_2, PI};
+    let maxima: Vec<(f32, f32)> = (0..CONE_BANDS)
+        .map(|k| {
+            let a0 = cone * k as f32 / CONE_BANDS as f32;
+            let a1 = cone * (k + 1) as f32 / CONE_BANDS as f32;
+            (a1, band_max(a0, a1))
+        })
+        .collect();
+    let peak = maxima.iter().fold(0.0f32, |m, &(_, b)| m.max(b));
+    let widened = (cone * 1.0001 + 1e-5).min(PI);
+    let mut theta_o = (widened - FRAC_PI_2).max(0.0);
+    if peak > 0.0 {
+        for &(a1, b) in &maxima {
+            theta_o = theta_o.max(a1 - (b / peak).clamp(0.0, 1.0).acos());
+        }
+    }
+    if widened >= PI {
+        return EmissionCone {
+            peak,
+            ..EmissionCone::OMNI
+        };
+    }
+    let theta_o = theta_o.min(widened - MIN_THETA_E).max(0.0);
+    EmissionCone {
+        theta_o,
+        theta_e: widened - theta_o,
+        peak,
+    }
+}
+
+/// The axis and cone of an IES light's profile, the axis being its aim (a downlight)
+/// or the opposite (an uplight), whichever cone of lit vertical angles is narrower, or
+/// None when the profile is dark everywhere.
+fn profile_cone(profile: &ies::IesProfile) -> Option<(bool, EmissionCone)> {
+    use std::f32::consts::PI;
+    let (lo, hi) = profile.lit_vertical_range()?;
+    let up = hi > PI - lo;
+    let cone = if up { PI - lo } else { hi };
+    Some((
+        up,
+        dominating_cone(cone, |a0, a1| {
+            if up {
+                profile.band_max(PI - a1, PI - a0)
+            } else {
+                profile.band_max(a0, a1)
+            }
+        }),
+    ))
+}
+
+/// The cone of a glTF spot light, whose falloff (clamp((cos θ − cos θouter) / (cos
+/// θinner − cos θouter)))² falls with θ.
+fn spot_cone(l: &gpu::PunctualLight) -> EmissionCone {
+    let outer = l.cos_outer.clamp(-1.0, 1.0).acos();
+    let ramp = (l.cos_inner - l.cos_outer).max(1e-4);
+    dominating_cone(outer, |a0, _| {
+        let t = ((a0.cos() - l.cos_outer) / ramp).clamp(0.0, 1.0);
+        t * t
+    })
+}
+
+/// The bounds of one light model, or None for a directional light. `cones` gives the
+/// cone of each IES profile by its offset ([`profile_cone`]).
 fn model_bounds(
     m: &gpu::LightModel,
     triangles: &[gpu::LightTriangle],
     punctual: &[gpu::PunctualLight],
-    lit: &HashMap<usize, Option<(f32, f32)>>,
+    cones: &HashMap<usize, Option<(bool, EmissionCone)>>,
 ) -> Option<Bounds> {
     use std::f32::consts::{FRAC_PI_2, PI};
     if m.punctual != gpu::INVALID_INDEX {
         let l = &punctual[m.punctual as usize];
         let p = Vec3::from(l.position);
+        // The larger of the lamp's flux and π × its peak intensity. An emitting triangle's
+        // importance (its flux, π·L·A, × cos θ′ / d²) promises about π × its intensity
+        // toward its normal; a narrow lamp's flux is far below π × its peak, so without
+        // the floor the tree would undervalue it where it shines (heavy tails).
+        let lum = super::luminance(l.intensity) as f64;
+        let aimed = |axis: Vec3, c: EmissionCone| Bounds {
+            min: p,
+            max: p,
+            power: (m.power as f64).max(PI as f64 * lum * c.peak as f64),
+            axis,
+            theta_o: c.theta_o,
+            theta_e: c.theta_e,
+        };
         return match l.kind {
             gpu::PUNCTUAL_DIRECTIONAL => None,
-            gpu::PUNCTUAL_SPOT => Some(Bounds {
-                min: p,
-                max: p,
-                power: m.power as f64,
-                axis: Vec3::from(l.direction).normalize_or(Vec3::Z),
-                theta_o: 0.0,
-                // A little wider than the outer cone: the bound must hold it.
-                theta_e: (l.cos_outer.clamp(-1.0, 1.0).acos() * 1.0001 + 1e-5).min(PI),
-            }),
+            gpu::PUNCTUAL_SPOT => Some(aimed(
+                Vec3::from(l.direction).normalize_or(Vec3::Z),
+                spot_cone(l),
+            )),
             gpu::PUNCTUAL_POINT if ies::profile_offset(l).is_some() => {
-                // An IES light emits only within its lit vertical angles: a cone about
-                // its direction (a downlight) or about the opposite one (an uplight),
-                // whichever is narrower; a little wider, as the bound must hold it.
-                let range = ies::profile_offset(l).and_then(|o| lit.get(&o).copied().flatten());
-                let (lo, hi) = range.unwrap_or((0.0, PI));
                 let d = Vec3::from(l.direction).normalize_or(Vec3::NEG_Z);
-                let (axis, cone) = if hi <= PI - lo {
-                    (d, hi)
-                } else {
-                    (-d, PI - lo)
-                };
-                let cone = cone * 1.0001 + 1e-5;
-                // The importance weighs cos θ′ (θ′ the angle beyond θo), clamped at 0: a
-                // cone wider than a hemisphere is normals within cone − 90° of the axis,
-                // each emitting over a hemisphere, as an omnidirectional light is.
-                let (theta_o, theta_e) = if cone >= PI {
-                    (PI, FRAC_PI_2)
-                } else if cone > FRAC_PI_2 {
-                    (cone - FRAC_PI_2, FRAC_PI_2)
-                } else {
-                    (0.0, cone)
-                };
-                Some(Bounds {
-                    min: p,
-                    max: p,
-                    power: m.power as f64,
-                    axis,
-                    theta_o,
-                    theta_e,
-                })
+                let cone = ies::profile_offset(l).and_then(|o| cones.get(&o).copied().flatten());
+                // A profile dark everywhere: its model has no power, any cone will do.
+                let (up, c) = cone.unwrap_or((false, EmissionCone::OMNI));
+                Some(aimed(if up { -d } else { d }, c))
             }
-            _ => Some(Bounds {
-                min: p,
-                max: p,
-                power: m.power as f64,
-                axis: Vec3::Z,
-                theta_o: PI,
-                theta_e: FRAC_PI_2,
-            }),
+            _ => Some(aimed(Vec3::Z, EmissionCone::OMNI)),
         };
     }
     let range = m.first_triangle as usize..(m.first_triangle + m.triangle_count) as usize;
@@ -202,16 +274,17 @@ pub fn build(
     punctual: &[gpu::PunctualLight],
     profiles: &[f32],
 ) -> LightTree {
-    // Each IES profile's lit vertical angles, once per profile.
-    let mut lit = HashMap::new();
+    // Each IES profile's cone, once per profile.
+    let mut cones = HashMap::new();
     for offset in punctual.iter().filter_map(ies::profile_offset) {
-        lit.entry(offset)
-            .or_insert_with(|| ies::unpack(profiles, offset).lit_vertical_range());
+        cones
+            .entry(offset)
+            .or_insert_with(|| profile_cone(&ies::unpack(profiles, offset)));
     }
     let mut finite = Vec::new();
     let mut directional = Vec::new();
     for (i, m) in models.iter().enumerate() {
-        match model_bounds(m, triangles, punctual, &lit) {
+        match model_bounds(m, triangles, punctual, &cones) {
             Some(b) => finite.push((i as u32, b)),
             None => directional.push(i as u32),
         }
@@ -231,7 +304,10 @@ pub fn build(
                 .iter()
                 .map(|&m| models[m as usize].power as f64)
                 .sum();
-            let p_fin: f64 = finite.iter().map(|(_, b)| b.power).sum();
+            let p_fin: f64 = finite
+                .iter()
+                .map(|&(m, _)| models[m as usize].power as f64)
+                .sum();
             let children = push_pair(&mut tree);
             tree.nodes[0] = fixed_split(children, (p_dir / (p_dir + p_fin)) as f32);
             build_fixed(&mut tree, children, &directional, 0, 1);
@@ -797,6 +873,127 @@ mod tests {
             }
         }
         assert!(lit > 1000 && pruned > 1000, "lit {lit}, pruned {pruned}");
+    }
+
+    /// A lamp's importance is nowhere below π × what it sends (I / d²), as an emitting
+    /// triangle's is toward its normal: a lamp still lit toward the edge of its cone (a
+    /// bare hemisphere, a hard-edged wide spot, a Type B floodlight cut off at 60°) gets
+    /// no vanishing probability there, which made heavy tails when the importance fell
+    /// as the cosine from the axis alone, nor does a lamp whose flux is small beside its
+    /// peak (here every lamp's: its model's power is 1). Lamps peaked on their axis keep
+    /// the cosine (θo 0, or within a band of it).
+    #[test]
+    fn lamp_importance_never_falls_below_its_emission() {
+        use crate::scene::ies::{IesProfile, Photometry};
+        let deg = |a: f32| a.to_radians();
+        let profiles = [
+            // A bare lamp under a shade: flat over the lower hemisphere.
+            IesProfile {
+                photometry: Photometry::TypeC,
+                vertical: [0.0, 45.0, 90.0].map(deg).to_vec(),
+                horizontal: vec![0.0],
+                candela: vec![1.0; 3],
+            },
+            // Brightest toward the edge of its cone, lopsided in φ.
+            IesProfile {
+                photometry: Photometry::TypeC,
+                vertical: [0.0, 30.0, 60.0, 70.0].map(deg).to_vec(),
+                horizontal: [0.0, 90.0, 180.0].map(deg).to_vec(),
+                candela: [
+                    [1.0, 2.0, 4.0, 0.0],
+                    [1.0, 1.0, 1.0, 0.0],
+                    [1.0, 3.0, 5.0, 0.0],
+                ]
+                .concat(),
+            },
+            // An uplight lit from 100° to 180°, brightest at 110°.
+            IesProfile {
+                photometry: Photometry::TypeC,
+                vertical: [90.0, 110.0, 180.0].map(deg).to_vec(),
+                horizontal: vec![0.0],
+                candela: vec![0.0, 6.0, 1.0],
+            },
+            // A Type B floodlight, flat over V −60–60° and H −45–45°.
+            IesProfile {
+                photometry: Photometry::TypeB,
+                vertical: [-60.0, 0.0, 60.0].map(deg).to_vec(),
+                horizontal: [-45.0, 0.0, 45.0].map(deg).to_vec(),
+                candela: vec![2.0; 9],
+            },
+            // A downlight peaked on its axis: the cosine from the axis holds it.
+            IesProfile {
+                photometry: Photometry::TypeC,
+                vertical: [0.0, 30.0, 60.0, 90.0].map(deg).to_vec(),
+                horizontal: vec![0.0],
+                candela: vec![8.0, 5.0, 1.0, 0.0],
+            },
+        ];
+        let d = Vec3::new(0.3, -1.0, 0.2).normalize();
+        let x = d.any_orthonormal_vector();
+        let lamp = |profile: u32, cos_inner: f32, cos_outer: f32| gpu::PunctualLight {
+            position: [0.0; 3],
+            kind: if profile == gpu::INVALID_INDEX {
+                gpu::PUNCTUAL_SPOT
+            } else {
+                gpu::PUNCTUAL_POINT
+            },
+            direction: d.into(),
+            range: 0.0,
+            intensity: [2.0, 1.0, 0.5],
+            cos_inner,
+            cos_outer,
+            profile,
+            tangent: x.into(),
+        };
+        let mut packed = Vec::new();
+        let mut lamps = Vec::new();
+        for p in &profiles {
+            lamps.push(lamp(packed.len() as u32, 1.0, 1.0));
+            p.pack(&mut packed);
+        }
+        // Spots: hard-edged at 80°, a soft 60° one, and glTF's default (0°–45°).
+        for (inner, outer) in [(79.9f32, 80.0f32), (20.0, 60.0), (0.0, 45.0)] {
+            lamps.push(lamp(gpu::INVALID_INDEX, deg(inner).cos(), deg(outer).cos()));
+        }
+        let mut r = Rng(5);
+        let mut theta_o = Vec::new();
+        for (k, l) in lamps.iter().enumerate() {
+            let tree = build(&[model(0, 0, 0, 1.0)], &[], &[*l], &packed);
+            let node = &tree.nodes[0];
+            theta_o.push(node.cos_normals.clamp(-1.0, 1.0).acos().to_degrees());
+            let lum = crate::lights::luminance(l.intensity);
+            // Candela toward w.
+            let emission = |w: Vec3| -> f32 {
+                let cos = w.dot(d).clamp(-1.0, 1.0);
+                lum * match profiles.get(k) {
+                    Some(p) => {
+                        let y = (-d).cross(x);
+                        let phi = w.dot(y).atan2(w.dot(x)).rem_euclid(std::f32::consts::TAU);
+                        p.eval(cos.acos(), phi)
+                    }
+                    None => {
+                        let t = ((cos - l.cos_outer) / (l.cos_inner - l.cos_outer)).clamp(0.0, 1.0);
+                        t * t
+                    }
+                }
+            };
+            for _ in 0..20_000 {
+                let w = r.vec(1.0).normalize();
+                let p = 2.0 * w;
+                // At distance 2: the importance against π I / 2².
+                let promised = importance(node, p, Vec3::ZERO);
+                let sent = std::f32::consts::PI * emission(w) / 4.0;
+                assert!(
+                    promised >= sent * 0.999,
+                    "lamp {k}: importance {promised} below emission {sent} at θ {}°",
+                    w.dot(d).clamp(-1.0, 1.0).acos().to_degrees()
+                );
+            }
+        }
+        // The peaked downlight and glTF's default spot keep a cosine from (about) the
+        // axis; the flat hemisphere takes its whole cone.
+        assert!(theta_o[4] < 2.0 && theta_o[7] < 2.0, "θo {theta_o:?}");
+        assert!(theta_o[0] > 89.0, "θo {theta_o:?}");
     }
 
     /// Wherever a model's light can reach p from above its receiver's tangent plane, the

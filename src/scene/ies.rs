@@ -363,6 +363,14 @@ fn type_b_angles(theta: f32, phi: f32) -> (f32, f32) {
     (x.atan2(z), (-y).clamp(-1.0, 1.0).asin())
 }
 
+/// The φ range (radians) of column `column` of the stand-in grid.
+fn bound_column(column: usize) -> (f32, f32) {
+    (
+        column as f32 / BOUND_COLUMNS as f32 * TAU,
+        ((column + 1) as f32 / BOUND_COLUMNS as f32 * TAU).min(TAU - 1e-6),
+    )
+}
+
 /// The box of Type B angles (V, H) that holds every direction of a cell of Type C
 /// angles θ in [t0, t1], φ in [p0, p1] (p1 ≤ 2π), or None when the cell lies behind
 /// the lamp, where Type B is dark. With x = sin θ cos φ, y = sin θ sin φ, z = cos θ:
@@ -541,20 +549,33 @@ impl IesProfile {
                     .acos(),
             );
             for column in 0..BOUND_COLUMNS {
-                let (p0, p1) = (
-                    column as f32 / BOUND_COLUMNS as f32 * TAU,
-                    ((column + 1) as f32 / BOUND_COLUMNS as f32 * TAU).min(TAU - 1e-6),
-                );
-                out.push(match self.photometry {
-                    Photometry::TypeC => self.box_max((t0, t1), (p0, p1)),
-                    Photometry::TypeB => match type_b_box((t0, t1), (p0, p1)) {
-                        Some((v, h)) => self.box_max(v, h),
-                        None => 0.0,
-                    },
-                });
+                out.push(self.cell_max((t0, t1), bound_column(column)));
             }
         }
         out
+    }
+
+    /// The largest candela over the directions whose Type C angles lie in the cell
+    /// `theta` × `phi` (radians, from the aim): exact for Type C, whose cell is a box of
+    /// the table's angles; for Type B the maximum over a box of (V, H) that holds the
+    /// cell (`type_b_box`), so never below the profile there.
+    fn cell_max(&self, theta: (f32, f32), phi: (f32, f32)) -> f32 {
+        match self.photometry {
+            Photometry::TypeC => self.box_max(theta, phi),
+            Photometry::TypeB => match type_b_box(theta, phi) {
+                Some((v, h)) => self.box_max(v, h),
+                None => 0.0,
+            },
+        }
+    }
+
+    /// The largest candela toward any direction between `t0` and `t1` (radians) from
+    /// the aim, never below the profile there: the largest of the cells of
+    /// [`BOUND_COLUMNS`] columns of φ across the band.
+    pub fn band_max(&self, t0: f32, t1: f32) -> f32 {
+        (0..BOUND_COLUMNS)
+            .map(|column| self.cell_max((t0, t1), bound_column(column)))
+            .fold(0.0, f32::max)
     }
 
     /// The largest value of the table over a box of its own angles: the bilinear table
