@@ -2888,6 +2888,12 @@ fn unlit_materials_emit_their_base_colour_and_reflect_nothing() {
         let mut unlit = json.clone();
         unlit["materials"][i]["extensions"] = serde_json::json!({"KHR_materials_unlit": {}});
         add_used(&mut unlit, "KHR_materials_unlit");
+        // The rest of the PBR model is ignored, its textures not even loaded (the
+        // base colour's image read as linear data would be another texture).
+        let t = m["pbrMetallicRoughness"]["baseColorTexture"].clone();
+        unlit["materials"][i]["pbrMetallicRoughness"]["metallicRoughnessTexture"] = t.clone();
+        unlit["materials"][i]["normalTexture"] = t.clone();
+        unlit["materials"][i]["occlusionTexture"] = t.clone();
         let mut explicit = json.clone();
         explicit["materials"][i] = baked(m);
         add_used(&mut explicit, "KHR_materials_specular");

@@ -236,7 +236,12 @@ pub fn convert(
     out.metallic = pbr.metallic_factor();
     out.roughness = pbr.roughness_factor();
     out.base_color_tex = reg.info(pbr.base_color_texture(), TextureFormat::Srgb);
-    out.metallic_roughness_tex = reg.info(pbr.metallic_roughness_texture(), TextureFormat::Linear);
+    // An unlit material ignores the rest of the PBR model: its textures are not loaded.
+    let is_unlit = m.extension_value(UNLIT).is_some();
+    if !is_unlit {
+        out.metallic_roughness_tex =
+            reg.info(pbr.metallic_roughness_texture(), TextureFormat::Linear);
+    }
 
     if let Some(sg) = m.pbr_specular_glossiness() {
         let (base, metallic) =
@@ -255,123 +260,10 @@ pub fn convert(
         reg.warnings.push(note);
     }
 
-    if let Some(spec) = m.specular() {
-        out.specular = spec.specular_factor();
-        out.specular_color = spec.specular_color_factor();
-        if spec.specular_texture().is_some() || spec.specular_color_texture().is_some() {
-            reg.warnings.push(format!(
-                "material `{name}`: KHR_materials_specular textures are ignored (factors used)"
-            ));
-        }
-    }
-    // Transmission: a thin wall, or with KHR_materials_volume and a thickness the boundary
-    // of a refracting solid.
-    if let Some(t) = m.transmission() {
-        out.transmission = t.transmission_factor();
-        out.transmission_tex = reg.info(t.transmission_texture(), TextureFormat::Linear);
-    }
-    if let Some(v) = m.extension_value("KHR_materials_volume") {
-        read_volume(v, &name, &mut out)?;
-    }
-    if let Some(coat) = Clearcoat::read(m, doc)? {
-        out.clearcoat = coat.factor;
-        out.clearcoat_roughness = coat.roughness;
-        let mut slot = |t: &Option<RawTexture<'_>>| match t {
-            Some(t) => t.reference(reg, TextureFormat::Linear),
-            None => no_texture(),
-        };
-        out.clearcoat_tex = slot(&coat.texture);
-        out.clearcoat_roughness_tex = slot(&coat.roughness_texture);
-        out.clearcoat_normal_tex = slot(&coat.normal_texture);
-        if let Some(n) = &coat.normal_texture {
-            out.clearcoat_normal_scale = n.scale;
-        }
-    }
-    if let Some(sheen) = Sheen::read(m, doc)? {
-        out.sheen_color = sheen.colour;
-        out.sheen_roughness = sheen.roughness;
-        if let Some(t) = &sheen.colour_texture {
-            out.sheen_color_tex = t.reference(reg, TextureFormat::Srgb);
-        }
-        if let Some(t) = &sheen.roughness_texture {
-            out.sheen_roughness_tex = t.reference(reg, TextureFormat::Linear);
-        }
-    }
-    if let Some(a) = Anisotropy::read(m, doc)? {
-        out.anisotropy_strength = a.strength;
-        out.anisotropy_rotation = [a.rotation.cos(), a.rotation.sin()];
-        if let Some(t) = &a.texture {
-            out.anisotropy_tex = t.reference(reg, TextureFormat::Linear);
-        }
-    }
-    if let Some(dt) = DiffuseTransmission::read(m, doc)? {
-        out.diffuse_transmission = dt.factor;
-        out.diffuse_transmission_color = dt.colour;
-        if let Some(t) = &dt.texture {
-            out.diffuse_transmission_tex = t.reference(reg, TextureFormat::Linear);
-        }
-        if let Some(t) = &dt.colour_texture {
-            out.diffuse_transmission_color_tex = t.reference(reg, TextureFormat::Srgb);
-        }
-    }
-    if let Some(i) = Iridescence::read(m, doc)? {
-        out.iridescence = i.factor;
-        out.iridescence_ior = i.ior;
-        out.iridescence_thickness_min = i.thickness_min;
-        out.iridescence_thickness_max = i.thickness_max;
-        if let Some(t) = &i.texture {
-            out.iridescence_tex = t.reference(reg, TextureFormat::Linear);
-        }
-        if let Some(t) = &i.thickness_texture {
-            out.iridescence_thickness_tex = t.reference(reg, TextureFormat::Linear);
-        }
-    }
-    out.dispersion = read_dispersion(m, doc)?;
-    if out.dispersion > 0.0 && !bounds_solid(&out) {
-        reg.warnings.push(format!(
-            "material `{name}`: KHR_materials_dispersion has no effect, the material bounds no \
-             solid (KHR_materials_volume with a thickness, and transmission)"
-        ));
-    }
-    if let Some(ior) = m
-        .extension_value("KHR_materials_ior")
-        .and_then(|v| v.get("ior"))
-        .and_then(|v| v.as_f64())
-    {
-        out.ior = ior as f32;
-    }
-
-    if let Some(n) = m.normal_texture() {
-        let transform = n.extension_value("KHR_texture_transform").cloned();
-        out.normal_tex = reg.reference(
-            n.texture(),
-            n.tex_coord(),
-            transform.as_ref(),
-            TextureFormat::Linear,
-        );
-        out.normal_scale = n.scale();
-    }
-
-    let strength = m.emissive_strength();
-    let factor = m.emissive_factor();
-    if strength.is_none() && factor.iter().any(|&c| c > 1.0) {
-        reg.warnings.push(format!(
-            "material `{name}`: emissiveFactor {factor:?} exceeds 1 without KHR_materials_emissive_strength \
-             (not glTF-conformant); accepted as given"
-        ));
-    }
-    let strength = strength.unwrap_or(1.0);
-    out.emission = factor.map(|c| c * strength);
-    out.emissive_tex = reg.info(m.emissive_texture(), TextureFormat::Srgb);
-    if out.clearcoat > 0.0 && out.emission.iter().any(|&e| e > 0.0) {
-        reg.warnings.push(format!(
-            "material `{name}`: its emission is not darkened by its clearcoat's Fresnel term \
-             (the glTF spec's 1 − clearcoat·F: 4 % at normal incidence, more at grazing angles)"
-        ));
-    }
-
-    if m.extension_value(UNLIT).is_some() {
+    if is_unlit {
         out = unlit(&out);
+    } else {
+        read_shading(m, doc, reg, &name, &mut out)?;
     }
 
     out.alpha_cutoff = m.alpha_cutoff().unwrap_or(0.5);
@@ -435,6 +327,133 @@ pub fn convert(
     out.diffuse_transmission_color = out.diffuse_transmission_color.map(|c| c.clamp(0.0, 1.0));
     out.iridescence = out.iridescence.clamp(0.0, 1.0);
     Ok(out)
+}
+
+/// The shading a lit material adds to its base colour and metallic-roughness: the
+/// KHR_materials_* layers, the normal map and the emission.
+fn read_shading(
+    m: &gltf::Material<'_>,
+    doc: &gltf::Document,
+    reg: &mut TextureRegistry<'_>,
+    name: &str,
+    out: &mut gpu::Material,
+) -> Result<(), String> {
+    if let Some(spec) = m.specular() {
+        out.specular = spec.specular_factor();
+        out.specular_color = spec.specular_color_factor();
+        if spec.specular_texture().is_some() || spec.specular_color_texture().is_some() {
+            reg.warnings.push(format!(
+                "material `{name}`: KHR_materials_specular textures are ignored (factors used)"
+            ));
+        }
+    }
+    // Transmission: a thin wall, or with KHR_materials_volume and a thickness the boundary
+    // of a refracting solid.
+    if let Some(t) = m.transmission() {
+        out.transmission = t.transmission_factor();
+        out.transmission_tex = reg.info(t.transmission_texture(), TextureFormat::Linear);
+    }
+    if let Some(v) = m.extension_value("KHR_materials_volume") {
+        read_volume(v, name, out)?;
+    }
+    if let Some(coat) = Clearcoat::read(m, doc)? {
+        out.clearcoat = coat.factor;
+        out.clearcoat_roughness = coat.roughness;
+        let mut slot = |t: &Option<RawTexture<'_>>| match t {
+            Some(t) => t.reference(reg, TextureFormat::Linear),
+            None => no_texture(),
+        };
+        out.clearcoat_tex = slot(&coat.texture);
+        out.clearcoat_roughness_tex = slot(&coat.roughness_texture);
+        out.clearcoat_normal_tex = slot(&coat.normal_texture);
+        if let Some(n) = &coat.normal_texture {
+            out.clearcoat_normal_scale = n.scale;
+        }
+    }
+    if let Some(sheen) = Sheen::read(m, doc)? {
+        out.sheen_color = sheen.colour;
+        out.sheen_roughness = sheen.roughness;
+        if let Some(t) = &sheen.colour_texture {
+            out.sheen_color_tex = t.reference(reg, TextureFormat::Srgb);
+        }
+        if let Some(t) = &sheen.roughness_texture {
+            out.sheen_roughness_tex = t.reference(reg, TextureFormat::Linear);
+        }
+    }
+    if let Some(a) = Anisotropy::read(m, doc)? {
+        out.anisotropy_strength = a.strength;
+        out.anisotropy_rotation = [a.rotation.cos(), a.rotation.sin()];
+        if let Some(t) = &a.texture {
+            out.anisotropy_tex = t.reference(reg, TextureFormat::Linear);
+        }
+    }
+    if let Some(dt) = DiffuseTransmission::read(m, doc)? {
+        out.diffuse_transmission = dt.factor;
+        out.diffuse_transmission_color = dt.colour;
+        if let Some(t) = &dt.texture {
+            out.diffuse_transmission_tex = t.reference(reg, TextureFormat::Linear);
+        }
+        if let Some(t) = &dt.colour_texture {
+            out.diffuse_transmission_color_tex = t.reference(reg, TextureFormat::Srgb);
+        }
+    }
+    if let Some(i) = Iridescence::read(m, doc)? {
+        out.iridescence = i.factor;
+        out.iridescence_ior = i.ior;
+        out.iridescence_thickness_min = i.thickness_min;
+        out.iridescence_thickness_max = i.thickness_max;
+        if let Some(t) = &i.texture {
+            out.iridescence_tex = t.reference(reg, TextureFormat::Linear);
+        }
+        if let Some(t) = &i.thickness_texture {
+            out.iridescence_thickness_tex = t.reference(reg, TextureFormat::Linear);
+        }
+    }
+    out.dispersion = read_dispersion(m, doc)?;
+    if out.dispersion > 0.0 && !bounds_solid(out) {
+        reg.warnings.push(format!(
+            "material `{name}`: KHR_materials_dispersion has no effect, the material bounds no \
+             solid (KHR_materials_volume with a thickness, and transmission)"
+        ));
+    }
+    if let Some(ior) = m
+        .extension_value("KHR_materials_ior")
+        .and_then(|v| v.get("ior"))
+        .and_then(|v| v.as_f64())
+    {
+        out.ior = ior as f32;
+    }
+
+    if let Some(n) = m.normal_texture() {
+        let transform = n.extension_value("KHR_texture_transform").cloned();
+        out.normal_tex = reg.reference(
+            n.texture(),
+            n.tex_coord(),
+            transform.as_ref(),
+            TextureFormat::Linear,
+        );
+        out.normal_scale = n.scale();
+    }
+
+    let strength = m.emissive_strength();
+    let factor = m.emissive_factor();
+    if strength.is_none() && factor.iter().any(|&c| c > 1.0) {
+        reg.warnings.push(format!(
+            "material `{name}`: emissiveFactor {factor:?} exceeds 1 without KHR_materials_emissive_strength \
+             (not glTF-conformant); accepted as given"
+        ));
+    }
+    let strength = strength.unwrap_or(1.0);
+    out.emission = factor.map(|c| c * strength);
+    out.emissive_tex = reg.info(m.emissive_texture(), TextureFormat::Srgb);
+    if out.clearcoat > 0.0 && out.emission.iter().any(|&e| e > 0.0) {
+        reg.warnings.push(format!(
+            "material `{name}`: its emission is not darkened by its clearcoat's Fresnel term \
+             (the glTF spec's 1 − clearcoat·F: 4 % at normal incidence, more at grazing angles)"
+        ));
+    }
+
+    Ok(())
 }
 
 /// A texture slot of an extension the gltf crate has no typed access to
