@@ -232,8 +232,13 @@ fn model_bounds(
             gpu::PUNCTUAL_POINT if ies::profile_offset(l).is_some() => {
                 let d = Vec3::from(l.direction).normalize_or(Vec3::NEG_Z);
                 let cone = ies::profile_offset(l).and_then(|o| cones.get(&o).copied().flatten());
-                // A profile dark everywhere: its model has no power, any cone will do.
-                let (up, c) = cone.unwrap_or((false, EmissionCone::OMNI));
+                // A profile dark everywhere (LightTable drops such a light, whose flux is
+                // 0): any cone, with no peak to raise its power.
+                let dark = EmissionCone {
+                    peak: 0.0,
+                    ..EmissionCone::OMNI
+                };
+                let (up, c) = cone.unwrap_or((false, dark));
                 Some(aimed(if up { -d } else { d }, c))
             }
             _ => Some(aimed(Vec3::Z, EmissionCone::OMNI)),
