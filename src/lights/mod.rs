@@ -43,6 +43,14 @@ pub struct LightTable {
     pub total_power: f64,
 }
 
+/// A glTF spot's falloff toward a direction at cos θ from its axis, as the kernels
+/// weigh it (`inc/lights.glsl`): t², t = clamp((cos θ − cos_outer) / R) with R =
+/// max(cos_inner − cos_outer, 10⁻⁴).
+pub fn spot_falloff(l: &gpu::PunctualLight, cos: f32) -> f32 {
+    let t = ((cos - l.cos_outer) / (l.cos_inner - l.cos_outer).max(1e-4)).clamp(0.0, 1.0);
+    t * t
+}
+
 /// ∫ falloff dω of a unit-intensity glTF spot: the kernels' falloff t², t = clamp((cos θ −
 /// cos_outer) / R) with R = max(cos_inner − cos_outer, 10⁻⁴), is 1 above cos_outer + R
 /// and (x / R)² over the ramp below it, so the integral over cos θ is 1 − cos_outer − R

@@ -191,11 +191,7 @@ fn profile_cone(profile: &ies::IesProfile) -> Option<(bool, EmissionCone)> {
 /// θinner − cos θouter)))² falls with θ.
 fn spot_cone(l: &gpu::PunctualLight) -> EmissionCone {
     let outer = l.cos_outer.clamp(-1.0, 1.0).acos();
-    let ramp = (l.cos_inner - l.cos_outer).max(1e-4);
-    dominating_cone(outer, |a0, _| {
-        let t = ((a0.cos() - l.cos_outer) / ramp).clamp(0.0, 1.0);
-        t * t
-    })
+    dominating_cone(outer, |a0, _| super::spot_falloff(l, a0.cos()))
 }
 
 /// The bounds of one light model, or None for a directional light. `cones` gives the
@@ -745,6 +741,22 @@ mod tests {
         (models, tris, punctual)
     }
 
+    /// A profile from its angles in degrees and its candela, a column per horizontal
+    /// angle.
+    fn table(
+        photometry: crate::scene::ies::Photometry,
+        vertical: &[f32],
+        horizontal: &[f32],
+        columns: &[&[f32]],
+    ) -> crate::scene::ies::IesProfile {
+        crate::scene::ies::IesProfile {
+            photometry,
+            vertical: vertical.iter().map(|a| a.to_radians()).collect(),
+            horizontal: horizontal.iter().map(|a| a.to_radians()).collect(),
+            candela: columns.concat(),
+        }
+    }
+
     #[test]
     fn probabilities_sum_to_one_and_sampling_follows_them() {
         let (models, tris, punctual) = scene(7);
@@ -792,40 +804,33 @@ mod tests {
     /// prune (a downlight has none above it).
     #[test]
     fn ies_bounds_never_rule_out_their_light() {
-        use crate::scene::ies::{IesProfile, Photometry};
-        let deg = |a: f32| a.to_radians();
+        use crate::scene::ies::Photometry::{TypeB, TypeC};
         let profiles = [
-            IesProfile {
-                photometry: Photometry::TypeC,
-                vertical: [0.0, 30.0, 60.0, 90.0].map(deg).to_vec(),
-                horizontal: vec![0.0],
-                candela: vec![5.0, 3.0, 1.0, 0.0],
-            },
-            IesProfile {
-                photometry: Photometry::TypeC,
-                vertical: [90.0, 120.0, 180.0].map(deg).to_vec(),
-                horizontal: vec![0.0],
-                candela: vec![0.0, 2.0, 4.0],
-            },
-            IesProfile {
-                photometry: Photometry::TypeC,
-                vertical: [0.0, 40.0, 80.0, 120.0, 180.0].map(deg).to_vec(),
-                horizontal: vec![0.0, deg(180.0), deg(360.0)],
-                candela: [
-                    [0.0, 0.0, 3.0, 0.0, 0.0],
-                    [0.0, 0.0, 1.0, 0.0, 0.0],
-                    [0.0, 0.0, 3.0, 0.0, 0.0],
-                ]
-                .concat(),
-            },
+            table(
+                TypeC,
+                &[0.0, 30.0, 60.0, 90.0],
+                &[0.0],
+                &[&[5.0, 3.0, 1.0, 0.0]],
+            ),
+            table(TypeC, &[90.0, 120.0, 180.0], &[0.0], &[&[0.0, 2.0, 4.0]]),
+            table(
+                TypeC,
+                &[0.0, 40.0, 80.0, 120.0, 180.0],
+                &[0.0, 180.0, 360.0],
+                &[
+                    &[0.0, 0.0, 3.0, 0.0, 0.0],
+                    &[0.0, 0.0, 1.0, 0.0, 0.0],
+                    &[0.0, 0.0, 3.0, 0.0, 0.0],
+                ],
+            ),
             // A Type B floodlight lit over V −20–25° and H −30–30° only: its cone must
             // reach the corner, cos θ = cos 25° cos 30°.
-            IesProfile {
-                photometry: Photometry::TypeB,
-                vertical: [-20.0, 0.0, 25.0].map(deg).to_vec(),
-                horizontal: [-30.0, -15.0, 0.0, 15.0, 30.0].map(deg).to_vec(),
-                candela: vec![1.0; 15],
-            },
+            table(
+                TypeB,
+                &[-20.0, 0.0, 25.0],
+                &[-30.0, -15.0, 0.0, 15.0, 30.0],
+                &[&[1.0f32; 3][..]; 5],
+            ),
         ];
         let mut packed = Vec::new();
         let mut offsets = Vec::new();
@@ -889,49 +894,38 @@ mod tests {
     /// the cosine (θo 0, or within a band of it).
     #[test]
     fn lamp_importance_never_falls_below_its_emission() {
-        use crate::scene::ies::{IesProfile, Photometry};
+        use crate::scene::ies::Photometry::{TypeB, TypeC};
         let deg = |a: f32| a.to_radians();
         let profiles = [
             // A bare lamp under a shade: flat over the lower hemisphere.
-            IesProfile {
-                photometry: Photometry::TypeC,
-                vertical: [0.0, 45.0, 90.0].map(deg).to_vec(),
-                horizontal: vec![0.0],
-                candela: vec![1.0; 3],
-            },
+            table(TypeC, &[0.0, 45.0, 90.0], &[0.0], &[&[1.0; 3]]),
             // Brightest toward the edge of its cone, lopsided in φ.
-            IesProfile {
-                photometry: Photometry::TypeC,
-                vertical: [0.0, 30.0, 60.0, 70.0].map(deg).to_vec(),
-                horizontal: [0.0, 90.0, 180.0].map(deg).to_vec(),
-                candela: [
-                    [1.0, 2.0, 4.0, 0.0],
-                    [1.0, 1.0, 1.0, 0.0],
-                    [1.0, 3.0, 5.0, 0.0],
-                ]
-                .concat(),
-            },
+            table(
+                TypeC,
+                &[0.0, 30.0, 60.0, 70.0],
+                &[0.0, 90.0, 180.0],
+                &[
+                    &[1.0, 2.0, 4.0, 0.0],
+                    &[1.0, 1.0, 1.0, 0.0],
+                    &[1.0, 3.0, 5.0, 0.0],
+                ],
+            ),
             // An uplight lit from 100° to 180°, brightest at 110°.
-            IesProfile {
-                photometry: Photometry::TypeC,
-                vertical: [90.0, 110.0, 180.0].map(deg).to_vec(),
-                horizontal: vec![0.0],
-                candela: vec![0.0, 6.0, 1.0],
-            },
+            table(TypeC, &[90.0, 110.0, 180.0], &[0.0], &[&[0.0, 6.0, 1.0]]),
             // A Type B floodlight, flat over V −60–60° and H −45–45°.
-            IesProfile {
-                photometry: Photometry::TypeB,
-                vertical: [-60.0, 0.0, 60.0].map(deg).to_vec(),
-                horizontal: [-45.0, 0.0, 45.0].map(deg).to_vec(),
-                candela: vec![2.0; 9],
-            },
+            table(
+                TypeB,
+                &[-60.0, 0.0, 60.0],
+                &[-45.0, 0.0, 45.0],
+                &[&[2.0f32; 3][..]; 3],
+            ),
             // A downlight peaked on its axis: the cosine from the axis holds it.
-            IesProfile {
-                photometry: Photometry::TypeC,
-                vertical: [0.0, 30.0, 60.0, 90.0].map(deg).to_vec(),
-                horizontal: vec![0.0],
-                candela: vec![8.0, 5.0, 1.0, 0.0],
-            },
+            table(
+                TypeC,
+                &[0.0, 30.0, 60.0, 90.0],
+                &[0.0],
+                &[&[8.0, 5.0, 1.0, 0.0]],
+            ),
         ];
         let d = Vec3::new(0.3, -1.0, 0.2).normalize();
         let x = d.any_orthonormal_vector();
@@ -976,10 +970,7 @@ mod tests {
                         let phi = w.dot(y).atan2(w.dot(x)).rem_euclid(std::f32::consts::TAU);
                         p.eval(cos.acos(), phi)
                     }
-                    None => {
-                        let t = ((cos - l.cos_outer) / (l.cos_inner - l.cos_outer)).clamp(0.0, 1.0);
-                        t * t
-                    }
+                    None => crate::lights::spot_falloff(l, cos),
                 }
             };
             for _ in 0..20_000 {

@@ -34,15 +34,13 @@ pub(super) fn average_colour(tex: &TextureData) -> [f32; 3] {
 /// Mitsuba's spot texture parameterisation.
 pub(super) fn spot_falloff_pfm(l: &gpu::PunctualLight, outer: f32, res: u32) -> Vec<u8> {
     let tan_c = outer.tan();
-    let ramp = (l.cos_inner - l.cos_outer).max(1e-4);
     let mut rgb = Vec::with_capacity((res * res) as usize);
     for y in 0..res {
         for x in 0..res {
             let a = (2.0 * (x as f32 + 0.5) / res as f32 - 1.0) * tan_c;
             let b = (2.0 * (y as f32 + 0.5) / res as f32 - 1.0) * tan_c;
             let cos = 1.0 / (1.0 + a * a + b * b).sqrt();
-            let t = ((cos - l.cos_outer) / ramp).clamp(0.0, 1.0);
-            rgb.push([t * t; 3]);
+            rgb.push([crate::lights::spot_falloff(l, cos); 3]);
         }
     }
     files::pfm_bytes(res, res, &rgb)
