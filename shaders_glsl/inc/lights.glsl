@@ -140,8 +140,9 @@ float light_source_pdf(LightContext ctx, uint tri) {
 }
 
 // Radiance leaving light triangle `lt` at barycentrics (b1, b2) in direction `dir`: the
-// emission (textured or not) times the surface's coverage there where its material is
-// not opaque.
+// emission (textured or not, tinted by the vertex colour where the material says so, as
+// material_emission) times the surface's coverage there where its material is not
+// opaque. The light table gives such triangles their instance.
 vec3 light_triangle_radiance(LightTriangle lt, vec2 b, vec3 dir) {
     if (lt.two_sided == 0u && dot(lt.normal, dir) <= 0.0) return vec3(0.0);
     Material m = materials(lt.material);
@@ -150,7 +151,14 @@ vec3 light_triangle_radiance(LightTriangle lt, vec2 b, vec3 dir) {
         vec2 uv = (1.0 - b.x - b.y) * lt.uv0 + b.x * lt.uv1 + b.y * lt.uv2;
         e *= sample_texture(m.emissive_tex, uv).rgb;
     }
-    if (lt.instance != INVALID_INDEX) e *= geometry_coverage(lt.instance, lt.primitive, b);
+    if (lt.instance != INVALID_INDEX) {
+        if ((m.flags & MATERIAL_FLAG_VERTEX_COLOR_EMISSION) != 0u) {
+            Instance inst = instances(lt.instance);
+            vec3 w = vec3(1.0 - b.x - b.y, b.x, b.y);
+            e *= max(interpolate_color(inst, triangle_vertices(inst, lt.primitive), w).rgb, vec3(0.0));
+        }
+        e *= geometry_coverage(lt.instance, lt.primitive, b);
+    }
     return e;
 }
 

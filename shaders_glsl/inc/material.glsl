@@ -31,10 +31,13 @@ struct Surface {
     uint light_tri;    // light triangle index, INVALID_INDEX if not a sampled light
 };
 
-vec3 material_emission(Material m, vec2 uv0, vec2 uv1) {
+// The material's emission at a point with texture coordinates uv0, uv1 and interpolated
+// vertex colour `color` (which tints only unlit materials' emission).
+vec3 material_emission(Material m, vec2 uv0, vec2 uv1, vec4 color) {
     vec3 e = m.emission;
     if (m.emissive_tex.index >= 0 && max3(e) > 0.0)
         e *= sample_texture(m.emissive_tex, m.emissive_tex.uv_set == 1u ? uv1 : uv0).rgb;
+    if ((m.flags & MATERIAL_FLAG_VERTEX_COLOR_EMISSION) != 0u) e *= max(color.rgb, vec3(0.0));
     return e;
 }
 
@@ -181,7 +184,8 @@ Surface make_surface(Hit h, vec3 ray_dir) {
     }
 
     // Material.
-    vec4 base = m.base_color * interpolate_color(inst, vi, w);
+    vec4 vertex_color = interpolate_color(inst, vi, w);
+    vec4 base = m.base_color * vertex_color;
     if (m.base_color_tex.index >= 0)
         base *= sample_texture(m.base_color_tex, m.base_color_tex.uv_set == 1u ? s.uv1 : s.uv0);
     float metallic = m.metallic;
@@ -284,7 +288,7 @@ Surface make_surface(Hit h, vec3 ray_dir) {
 
     // Emission: front face only unless the material is double-sided.
     bool emits = s.front || (m.flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;
-    s.emission = emits ? material_emission(m, s.uv0, s.uv1) : vec3(0.0);
+    s.emission = emits ? material_emission(m, s.uv0, s.uv1, vertex_color) : vec3(0.0);
     s.light_tri = inst.light_index_offset == INVALID_INDEX ? INVALID_INDEX
                                                            : triangle_light_index(inst.light_index_offset + h.primitive);
     return s;

@@ -18,9 +18,13 @@
 // KHR_materials_volume with a thickness: the surface bounds a refracting solid (the
 // transmitted share is a rough dielectric interface, Walter et al. 2007), not a thin wall.
 #define MATERIAL_FLAG_VOLUME 2u
+// KHR_materials_unlit: the vertex colour (COLOR_0) multiplies the emission, which is the
+// base colour (src/scene/material.rs).
+#define MATERIAL_FLAG_VERTEX_COLOR_EMISSION 4u
 
 // LightCandidateTriangle flags.
 #define LIGHT_CANDIDATE_TWO_SIDED 1u
+// Textured or tinted by vertex colours: the candidate's emission is a stand-in (its mean).
 #define LIGHT_CANDIDATE_TEXTURED 2u
 #define LIGHT_CANDIDATE_FLIPPED 4u
 // Alpha-masked or blended (alphaMode MASK or BLEND): the emission at a point is scaled by

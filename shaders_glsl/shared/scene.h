@@ -131,7 +131,8 @@ struct LightTriangle {
     vec2 uv1;
     vec2 uv2;
     float power;       // emitted flux (luminance), for the power source
-    uint instance;     // its instance (kernel order) where its material is not opaque, else INVALID_INDEX
+    uint instance;     // its instance (kernel order) where its material is not opaque or its
+                       // vertex colours tint its emission, else INVALID_INDEX
     uint primitive;    // its triangle in that instance
 };
 

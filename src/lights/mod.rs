@@ -106,6 +106,9 @@ impl LightTable {
             let two_sided = material.flags & gpu::MATERIAL_FLAG_DOUBLE_SIDED != 0;
             // Not opaque: the kernels scale the emission by the coverage at the point.
             let masked = material.alpha_mode != gpu::ALPHA_MODE_OPAQUE;
+            // An unlit material's vertex colours tint its emission at the point.
+            let tinted = material.flags & gpu::MATERIAL_FLAG_VERTEX_COLOR_EMISSION != 0
+                && prim.color_offset != gpu::INVALID_INDEX;
             let flipped = inst.transform.determinant() < 0.0;
             let model_index = models.len() as u32;
             let first = triangles.len() as u32;
@@ -126,6 +129,20 @@ impl LightTable {
                     }
                 };
                 let uvs = [uv_of(0), uv_of(1), uv_of(2)];
+                // The tint's mean over the triangle, the mean of its corners' colours
+                // (clamped at 0, as the kernels clamp the interpolated colour): 0 in a
+                // channel only where the tint is 0 all over the triangle.
+                let tint: [f32; 3] = if tinted {
+                    let colour = |k: usize| {
+                        scene.colors[(prim.color_offset + scene.indices[base + k]) as usize]
+                    };
+                    std::array::from_fn(|c| {
+                        (0..3).map(|k| colour(k)[c].max(0.0)).sum::<f32>() / 3.0
+                    })
+                } else {
+                    [1.0; 3]
+                };
+                let emission: [f32; 3] = std::array::from_fn(|c| factor[c] * tint[c]);
                 let mean_texture = texture.zip(texture_max).map_or(1.0, |(tex, max)| {
                     let avg = mean_texture_luminance(tex, &material.emissive_tex, uvs);
                     // Never let an estimate make a triangle unsamplable: the power
@@ -142,7 +159,7 @@ impl LightTable {
                 let power = area as f64
                     * coverage as f64
                     * std::f64::consts::PI
-                    * luminance(factor) as f64
+                    * luminance(emission) as f64
                     * mean_texture as f64
                     * if two_sided { 2.0 } else { 1.0 };
                 let samplable =
@@ -161,7 +178,7 @@ impl LightTable {
                     gpu::LIGHT_CANDIDATE_TWO_SIDED
                 } else {
                     0
-                } | if texture.is_some() {
+                } | if texture.is_some() || tinted {
                     gpu::LIGHT_CANDIDATE_TEXTURED
                 } else {
                     0
@@ -180,7 +197,7 @@ impl LightTable {
                     e1: (p1 - p0).into(),
                     flags,
                     e2: (p2 - p0).into(),
-                    emission: factor.map(|c| c * mean_texture * coverage),
+                    emission: emission.map(|c| c * mean_texture * coverage),
                 });
                 triangles.push(gpu::LightTriangle {
                     p0: p0.into(),
@@ -196,7 +213,7 @@ impl LightTable {
                     uv2: uvs[2],
                     power: power as f32,
                     // The scene's instance here; `GpuScene` renumbers it in kernel order.
-                    instance: if masked {
+                    instance: if masked || tinted {
                         instance_index as u32
                     } else {
                         gpu::INVALID_INDEX

@@ -128,7 +128,8 @@ impl GpuScene {
             .collect();
         let instances = Buffer::from_slice(device, &gpu_instances, STORAGE, "instances")?;
         let materials = Buffer::from_slice(device, &scene.materials, STORAGE, "materials")?;
-        // Light triangles of alpha-masked emitters name their instance, in kernel order.
+        // Light triangles of alpha-masked or vertex-tinted emitters name their instance, in
+        // kernel order.
         let mut kernel_index = vec![gpu::INVALID_INDEX; scene.instances.len()];
         for (k, &i) in plan.order.iter().enumerate() {
             kernel_index[i] = k as u32;

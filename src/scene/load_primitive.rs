@@ -136,7 +136,8 @@ pub(super) fn load_primitive(
         return Err(format!("{name} has attributes of different lengths"));
     }
     // COLOR_0 multiplies the base colour (RGB, or RGBA whose alpha multiplies the base
-    // alpha); normalised integers are read as [0, 1]. Further colour sets have no role.
+    // alpha), which an unlit material emits; normalised integers are read as [0, 1].
+    // Further colour sets have no role.
     let colors: Option<Vec<[f32; 4]>> = reader.read_colors(0).map(|r| r.into_rgba_f32().collect());
     if let Some(c) = &colors {
         if c.len() != n {
@@ -145,18 +146,6 @@ pub(super) fn load_primitive(
         if c.iter().flatten().any(|v| !v.is_finite()) {
             return Err(format!("{name} has non-finite vertex colours (COLOR_0)"));
         }
-    }
-    if colors.is_some()
-        && prim
-            .material()
-            .extension_value(super::material::UNLIT)
-            .is_some()
-    {
-        warnings.push(format!(
-            "{name}: its vertex colours (COLOR_0) do not tint the colour its \
-             {} material emits",
-            super::material::UNLIT
-        ));
     }
     if prim.get(&gltf::Semantic::Colors(1)).is_some() {
         warnings.push(format!("{name}: COLOR_1 and later colour sets are ignored"));

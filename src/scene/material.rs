@@ -199,13 +199,16 @@ pub fn default_material() -> gpu::Material {
 /// The extension that asks for a surface shown in its base colour whatever the lighting.
 pub const UNLIT: &str = "KHR_materials_unlit";
 
-/// A `KHR_materials_unlit` material from the base colour (factor × texture) and alpha
-/// that `read` holds; everything else of the PBR model is dropped, as the extension
-/// says. A physically based renderer has no unlit shading, so the surface emits its
-/// base colour as radiance and reflects nothing (black, no specular layer): seen
-/// directly it is exactly that colour, it casts shadows, and, like any emitter, it
-/// lights what it faces. Alpha coverage and double-sidedness stay (the caller sets
-/// them); an emitter is one-sided unless double-sided, as every emitter here.
+/// A `KHR_materials_unlit` material from the base colour (factor × texture × vertex
+/// colour) and alpha that `read` holds; everything else of the PBR model is dropped, as
+/// the extension says. A physically based renderer has no unlit shading, so the surface
+/// emits its base colour as radiance and reflects nothing (black, no specular layer):
+/// seen directly it is exactly that colour, it casts shadows, and, like any emitter, it
+/// lights what it faces. The vertex colour (COLOR_0), which multiplies the base colour,
+/// multiplies the emission here (`MATERIAL_FLAG_VERTEX_COLOR_EMISSION`; the kernels
+/// interpolate it, the light table weighs each triangle by its corners' mean). Alpha
+/// coverage and double-sidedness stay (the caller sets them); an emitter is one-sided
+/// unless double-sided, as every emitter here.
 fn unlit(read: &gpu::Material) -> gpu::Material {
     let [r, g, b, a] = read.base_color;
     gpu::Material {
@@ -216,6 +219,7 @@ fn unlit(read: &gpu::Material) -> gpu::Material {
         metallic: 0.0,
         roughness: 1.0,
         specular: 0.0,
+        flags: gpu::MATERIAL_FLAG_VERTEX_COLOR_EMISSION,
         ..default_material()
     }
 }

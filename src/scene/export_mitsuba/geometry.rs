@@ -70,7 +70,8 @@ pub(super) struct GroupKey {
     pub(super) emitter: bool,
     pub(super) smooth: bool,
     /// The base colour is the material's factor × the vertex colours, written into the
-    /// PLY (Mitsuba's `vertex_color` attribute).
+    /// PLY (Mitsuba's `vertex_color` attribute); for an unlit material, whose vertex
+    /// colours tint its emission, the emission factor × them.
     pub(super) colored: bool,
     /// Triangles with a tangent frame (normal-mapped or anisotropic) on whose front the texture's image appears mirrored
     /// (det(Δuv) > 0 in the PLY's winding, glTF's v pointing down the image): there
@@ -120,13 +121,25 @@ pub(super) fn append_instance(
     let smooth = key.smooth;
     let p = &scene.primitives[inst.primitive as usize];
     if key.colored {
-        let factor = Vec3::from_slice(&scene.materials[p.material as usize].base_color[..3]);
+        let material = &scene.materials[p.material as usize];
         let colours = &scene.colors[p.color_offset as usize..][..p.vertex_count as usize];
-        mesh.colors.extend(colours.iter().map(|c| {
-            (factor * Vec3::from_slice(&c[..3]))
-                .clamp(Vec3::ZERO, Vec3::ONE)
-                .to_array()
-        }));
+        if material.flags & gpu::MATERIAL_FLAG_VERTEX_COLOR_EMISSION != 0 {
+            // An unlit material: the colours tint its emission (radiance, unbounded),
+            // and its BSDF is black.
+            let factor = Vec3::from(material.emission);
+            mesh.colors.extend(colours.iter().map(|c| {
+                (factor * Vec3::from_slice(&c[..3]))
+                    .max(Vec3::ZERO)
+                    .to_array()
+            }));
+        } else {
+            let factor = Vec3::from_slice(&material.base_color[..3]);
+            mesh.colors.extend(colours.iter().map(|c| {
+                (factor * Vec3::from_slice(&c[..3]))
+                    .clamp(Vec3::ZERO, Vec3::ONE)
+                    .to_array()
+            }));
+        }
     }
     let base = mesh.positions.len() as u32;
     let normal_matrix = Mat3::from_mat4(inst.transform).inverse().transpose();

@@ -175,7 +175,9 @@ impl Writer<'_> {
         let id = bsdf_id(m, vertex_colors, mirrored_uvs);
         let mat = *mat;
         let name = self.material_name(m).to_string();
-        let colour = if vertex_colors {
+        // An unlit material's vertex colours tint its emission (see `radiance_xml`); its
+        // base colour is black.
+        let colour = if vertex_colors && mat.flags & gpu::MATERIAL_FLAG_VERTEX_COLOR_EMISSION == 0 {
             "      <texture type=\"mesh_attribute\" name=\"reflectance\">\n        <string name=\"name\" value=\"vertex_color\"/>\n      </texture>\n".to_string()
         } else {
             self.base_colour_xml(m, &mat, plan, "reflectance")?
@@ -659,6 +661,25 @@ impl Writer<'_> {
         let coverage = self.emitter_coverage.get(&m).copied().unwrap_or(1.0);
         let radiance = mat.emission.map(|c| c * coverage);
         let tref = mat.emissive_tex;
+        if tref.index < 0
+            && mat.flags & gpu::MATERIAL_FLAG_VERTEX_COLOR_EMISSION != 0
+            && !mesh.colors.is_empty()
+        {
+            // An unlit material's emission tinted by its vertex colours: the PLY's
+            // `vertex_color` holds emission × colour (`append_instance`). Mitsuba 3's area
+            // emitter evaluates a `mesh_attribute` only where a ray hits the shape: its
+            // light samples find no attribute and carry nothing (measured with Mitsuba
+            // 3.9.1: with emitter sampling on, the floor such a panel lights came out
+            // 1,000× too dark, what MIS left of BSDF sampling), so Mitsuba finds this
+            // light by BSDF sampling alone (sampling weight 0), exact for any mesh.
+            self.warnings.push(format!(
+                "material `{}`: its emission is tinted by vertex colours, which Mitsuba's emitter sampling does not read: Mitsuba finds its light by BSDF sampling alone (sampling weight 0)",
+                self.material_name(m)
+            ));
+            return Ok(format!(
+                "      <float name=\"sampling_weight\" value=\"0\"/>\n      <texture type=\"mesh_attribute\" name=\"radiance\">\n        <string name=\"name\" value=\"vertex_color\"/>\n        <float name=\"scale\" value=\"{coverage}\"/>\n      </texture>\n"
+            ));
+        }
         if tref.index < 0 {
             self.sampled_emitters += 1;
             return Ok(format!("      {}\n", rgb_xml("radiance", radiance)));

@@ -118,17 +118,31 @@ impl Writer<'_> {
                     self.material_name(prim.material)
                 ));
             } else if colored {
-                // Exact while factor × colour stays in [0, 1] at every vertex: lanterna
-                // clamps the interpolated product, Mitsuba interpolates the clamped one.
+                // Exact while factor × colour stays in [0, 1] at every vertex (for an
+                // unlit material's emission, at or above 0): lanterna clamps the
+                // interpolated product, Mitsuba interpolates the clamped one.
                 let colours =
                     &scene.colors[prim.color_offset as usize..][..prim.vertex_count as usize];
-                let outside = colours
-                    .iter()
-                    .any(|c| (0..3).any(|k| !(0.0..=1.0).contains(&(m.base_color[k] * c[k]))));
+                let tints = m.flags & gpu::MATERIAL_FLAG_VERTEX_COLOR_EMISSION != 0;
+                let outside = colours.iter().any(|c| {
+                    (0..3).any(|k| {
+                        if tints {
+                            c[k] < 0.0
+                        } else {
+                            !(0.0..=1.0).contains(&(m.base_color[k] * c[k]))
+                        }
+                    })
+                });
                 if outside {
                     self.approximations.push(format!(
-                        "mesh {}: base colour × vertex colour leaves [0, 1]; clamped per vertex",
-                        prim.name
+                        "mesh {}: {} leaves [0, {}]; clamped per vertex",
+                        prim.name,
+                        if tints {
+                            "the vertex colour tinting its emission"
+                        } else {
+                            "base colour × vertex colour"
+                        },
+                        if tints { "∞)" } else { "1]" }
                     ));
                 }
             }

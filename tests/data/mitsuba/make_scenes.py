@@ -49,6 +49,10 @@ agree up to noise.
   colors.gltf     COLOR_0 vertex colours (float RGB on the floor, normalised 16-bit RGBA
                   times a base colour factor on the wall, a box of the wall's material
                   without colours, colours on an emitter, which they must not tint)
+  unlit_colors.gltf  KHR_materials_unlit with vertex colours, which tint what it emits:
+                  a ceiling panel (float RGB corners) lighting a floor and a wall, and a
+                  box on the floor (normalised 16-bit RGBA, a colour per corner of each
+                  face) seen directly, beside a small ordinary lamp
   quantized.gltf  smooth.gltf with KHR_mesh_quantization (required): the sphere's
                   positions and normals as normalised shorts, the floor and wall as
                   unnormalised unsigned bytes scaled by their nodes, their texture
@@ -810,6 +814,41 @@ def colors_scene():
     b.write("colors.gltf")
 
 
+def unlit_colors_scene():
+    b = Builder()
+    b.uses("KHR_materials_unlit")
+    floor = b.lambert((0.8, 0.8, 0.8))
+    wall = b.lambert((0.7, 0.75, 0.8))
+    b.node(mesh=b.quad((-1.5, 0, 1.5), (1.5, 0, 1.5), (1.5, 0, -1.5), (-1.5, 0, -1.5), floor))
+    b.node(mesh=b.quad((-1.5, 0, -1.5), (1.5, 0, -1.5), (1.5, 2.5, -1.5), (-1.5, 2.5, -1.5), wall))
+
+    def unlit(rgb):
+        b.materials.append({"pbrMetallicRoughness": {"baseColorFactor": list(rgb) + [1]},
+                            "extensions": {"KHR_materials_unlit": {}}})
+        return len(b.materials) - 1
+
+    # The panel faces down: its corners counter-clockwise seen from below.
+    b.node(mesh=b.mesh([(-0.6, 2.2, -0.9), (0.6, 2.2, -0.9), (0.6, 2.2, 0.3), (-0.6, 2.2, 0.3)],
+                       [0, 1, 2, 0, 2, 3], unlit((1.0, 0.9, 0.8)),
+                       colors=[(1.0, 0.15, 0.1), (0.1, 0.9, 0.2), (0.2, 0.3, 1.0), (1.0, 1.0, 1.0)]))
+    box = b.box(unlit((0.9, 0.9, 0.9)))
+    # A colour per corner of each face (24 corners), alpha 1: normalised 16-bit RGBA.
+    colours = [((0.37 * k) % 1.0, (0.61 * k + 0.2) % 1.0, (0.83 * k + 0.5) % 1.0, 1.0)
+               for k in range(24)]
+    attrs = b.meshes[box]["primitives"][0]["attributes"]
+    attrs["COLOR_0"] = b._acc(b"".join(struct.pack("<4H", *(round(65535 * v) for v in c))
+                                       for c in colours), 5123, 24, "VEC4", normalized=True)
+    b.node(mesh=box, translation=[0.5, 0.3, -0.6], scale=[0.6, 0.6, 0.6],
+           rotation=[0, math.sin(0.3), 0, math.cos(0.3)])
+    lamp = b.lambert((0.3, 0.3, 0.3), emission=(1, 0.9, 0.7), strength=6)
+    b.node(mesh=b.quad((-1.2, 1.6, -1.3), (-0.9, 1.6, -1.3), (-0.9, 1.6, -1.0), (-1.2, 1.6, -1.0),
+                       lamp))
+    eye = (0.3, 1.4, 3.2)
+    b.node(camera=b.camera(yfov=0.8), translation=list(eye),
+           rotation=look_at_rotation(eye, (0, 0.8, -0.5)))
+    b.write("unlit_colors.gltf")
+
+
 def sphere_geometry(rings=6, segs=12):
     pos, idx = [], []
     for i in range(rings + 1):
@@ -1254,6 +1293,7 @@ if __name__ == "__main__":
     lit_emitters_scene()
     closed_emitters_scene()
     colors_scene()
+    unlit_colors_scene()
     quantized_scene()
     glass_scene()
     solid_scene()
