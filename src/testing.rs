@@ -365,6 +365,41 @@ impl Batches {
         }
         out
     }
+
+    /// The pixel least likely under a closed form: `expected` holds, per pixel
+    /// (row-major), the closed form by a fine quadrature and by a coarser one. Each pixel
+    /// and channel is a t-test of the batch estimates against the fine value; a pixel
+    /// also passes within the film's arithmetic precision and four times the
+    /// quadrature's own error (its change from the coarse to the fine). Returns the
+    /// smallest p of the pixels that do not pass that way (1 if none) and where it is.
+    pub fn worst_pixel_against(&self, expected: &[([f64; 3], [f64; 3])]) -> (f64, String) {
+        assert_eq!(expected.len(), (self.width * self.height) as usize);
+        let mut worst = (1.0f64, String::new());
+        for y in 0..self.height {
+            for x in 0..self.width {
+                let (fine, coarse) = expected[(y * self.width + x) as usize];
+                let est = self.region_estimates(x, y, 1, 1);
+                for c in 0..3 {
+                    let (m, v) = crate::stats::mean_var(&est[c]);
+                    let p = crate::stats::t_test_against(&est[c], fine[c]);
+                    let slack = 1.0 / gpu::FILM_FIXED_SCALE as f64
+                        + 1e-5 * fine[c]
+                        + 4.0 * (fine[c] - coarse[c]).abs();
+                    if (m - fine[c]).abs() > slack && p < worst.0 {
+                        let se = (v / est[c].len() as f64).sqrt();
+                        worst = (
+                            p,
+                            format!(
+                                "pixel ({x}, {y}) channel {c}: {m:.5} ± {se:.5} vs {:.5}",
+                                fine[c]
+                            ),
+                        );
+                    }
+                }
+            }
+        }
+        worst
+    }
 }
 
 /// Welch tests of the whole image's mean, per channel, between two sets of batches of the

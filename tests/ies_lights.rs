@@ -463,30 +463,7 @@ fn matches_the_closed_form(kind: Kind) {
         s.max_depth = 2;
         s.source = source;
         let b = render_batches(&scene, &camera, s, 16, spp);
-        let mut worst = (1.0f64, String::new());
-        for y in 0..SIZE {
-            for x in 0..SIZE {
-                let (fine, coarse) = expected[(y * SIZE + x) as usize];
-                let est = b.region_estimates(x, y, 1, 1);
-                for c in 0..3 {
-                    let (m, v) = stats::mean_var(&est[c]);
-                    let p = stats::t_test_against(&est[c], fine[c]);
-                    let slack = 1.0 / lanterna::gpu::FILM_FIXED_SCALE as f64
-                        + 1e-5 * fine[c]
-                        + 4.0 * (fine[c] - coarse[c]).abs();
-                    if (m - fine[c]).abs() > slack && p < worst.0 {
-                        worst = (
-                            p,
-                            format!(
-                                "pixel ({x}, {y}) channel {c}: {m:.5} ± {:.5} vs {:.5}",
-                                (v / est[c].len() as f64).sqrt(),
-                                fine[c]
-                            ),
-                        );
-                    }
-                }
-            }
-        }
+        let worst = b.worst_pixel_against(&expected);
         assert!(
             worst.0 > stats::sidak(ALPHA, n),
             "{kind:?} {method} ({source:?}): p = {:.2e} at {}",

@@ -3190,30 +3190,7 @@ fn unlit_vertex_colours_tint_the_emission_seen_and_sampled() {
         s.source = source;
         s.strategy = strategy;
         let batches = render_batches(&scene, &scene.cameras[0], s, 16, spp);
-        let mut worst = (1.0f64, String::new());
-        for y in 0..SIZE {
-            for x in 0..SIZE {
-                let (fine, coarse) = expected[(y * SIZE + x) as usize];
-                let est = batches.region_estimates(x, y, 1, 1);
-                for c in 0..3 {
-                    let (m, v) = stats::mean_var(&est[c]);
-                    let p = stats::t_test_against(&est[c], fine[c]);
-                    let slack = 1.0 / lanterna::gpu::FILM_FIXED_SCALE as f64
-                        + 1e-5 * fine[c]
-                        + 4.0 * (fine[c] - coarse[c]).abs();
-                    if (m - fine[c]).abs() > slack && p < worst.0 {
-                        let se = (v / est[c].len() as f64).sqrt();
-                        worst = (
-                            p,
-                            format!(
-                                "pixel ({x}, {y}) channel {c}: {m:.5} ± {se:.5} vs {:.5}",
-                                fine[c]
-                            ),
-                        );
-                    }
-                }
-            }
-        }
+        let worst = batches.worst_pixel_against(&expected);
         assert!(
             worst.0 > stats::sidak(1e-3, n),
             "{method} {source:?} {strategy:?}: p = {:.2e} at {}",
