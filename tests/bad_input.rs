@@ -315,6 +315,59 @@ fn non_finite_emission() {
     render_fails_with(&scene, dir.path(), &["scene.gltf", "non-finite"]);
 }
 
+/// Finite emission far beyond any physical radiance (near f32's limit it overflowed in
+/// the kernels to NaN samples, reported as a bug) is refused, naming the material; so
+/// are vertex colours that take an unlit material's emission there. Seen to fail with
+/// either check removed: without the first the file was refused only as "light powers
+/// are not finite", naming nothing; without the second it rendered.
+#[test]
+fn emission_beyond_any_physical_radiance_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), &scene_json("[3e38,1,1]", true, "quad.bin"));
+    render_fails_with(
+        &scene,
+        dir.path(),
+        &["scene.gltf", "material `#0` emits 3e38", "1e20"],
+    );
+
+    // An unlit material whose COLOR_0 reaches 1e30 in red.
+    let mut json: serde_json::Value =
+        serde_json::from_str(&scene_json("[0,0,0]", true, "quad.bin")).unwrap();
+    let colours: Vec<u8> = [[1e30f32, 1.0, 1.0], [1.0; 3], [1.0; 3], [1.0; 3]]
+        .iter()
+        .flatten()
+        .flat_map(|c| c.to_le_bytes())
+        .collect();
+    std::fs::write(dir.path().join("colours.bin"), &colours).unwrap();
+    json["buffers"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({"uri": "colours.bin", "byteLength": 48}));
+    json["bufferViews"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({"buffer": 1, "byteLength": 48}));
+    json["accessors"].as_array_mut().unwrap().push(
+        serde_json::json!({"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC3"}),
+    );
+    json["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = 2.into();
+    json["materials"][0] = serde_json::json!({
+        "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1.0]},
+        "extensions": {"KHR_materials_unlit": {}}
+    });
+    json["extensionsUsed"] = serde_json::json!(["KHR_materials_unlit"]);
+    let scene = write_scene(dir.path(), &json.to_string());
+    render_fails_with(
+        &scene,
+        dir.path(),
+        &[
+            "scene.gltf",
+            "primitive 0: its vertex colours (COLOR_0) make its unlit material emit 5e29",
+            "1e20",
+        ],
+    );
+}
+
 #[test]
 fn unknown_camera() {
     let dir = tempfile::tempdir().unwrap();

@@ -146,6 +146,22 @@ pub(super) fn load_primitive(
         if c.iter().flatten().any(|v| !v.is_finite()) {
             return Err(format!("{name} has non-finite vertex colours (COLOR_0)"));
         }
+        // They tint an unlit material's emission, which stays within MAX_EMISSION.
+        let m = &materials[material as usize];
+        if m.flags & gpu::MATERIAL_FLAG_VERTEX_COLOR_EMISSION != 0 {
+            let peak = c
+                .iter()
+                .flat_map(|c| (0..3).map(move |k| m.emission[k] * c[k]))
+                .fold(0.0f32, f32::max);
+            if peak > super::material::MAX_EMISSION {
+                return Err(format!(
+                    "{name}: its vertex colours (COLOR_0) make its unlit material emit {peak:e}, \
+                     above {:e}: far beyond any physical radiance, where the renderer's \
+                     32-bit arithmetic overflows",
+                    super::material::MAX_EMISSION
+                ));
+            }
+        }
     }
     if prim.get(&gltf::Semantic::Colors(1)).is_some() {
         warnings.push(format!("{name}: COLOR_1 and later colour sets are ignored"));

@@ -196,6 +196,12 @@ pub fn default_material() -> gpu::Material {
     }
 }
 
+/// The most radiance a material may emit (per channel, vertex colours included), eleven
+/// orders of magnitude above the sun's disk (about 2·10⁹ cd/m²). A finite emission near
+/// f32's limit (3.4·10³⁸) overflowed in the kernels to NaN samples; a file that asks for
+/// more than this is broken, and is refused with its material named.
+pub const MAX_EMISSION: f32 = 1e20;
+
 /// The extension that asks for a surface shown in its base colour whatever the lighting.
 pub const UNLIT: &str = "KHR_materials_unlit";
 
@@ -311,6 +317,13 @@ pub fn convert(
     if !finite {
         return Err(format!(
             "material `{name}` has a non-finite (NaN or infinite) factor"
+        ));
+    }
+    if let Some(e) = out.emission.iter().find(|&&c| c > MAX_EMISSION) {
+        return Err(format!(
+            "material `{name}` emits {e:e} (emissive factor × strength, or an unlit base \
+             colour), above {MAX_EMISSION:e}: far beyond any physical radiance, where the \
+             renderer's 32-bit arithmetic overflows"
         ));
     }
     if out.emission.iter().any(|&c| c < 0.0) || out.base_color.iter().any(|&c| c < 0.0) {
