@@ -317,9 +317,10 @@ fn non_finite_emission() {
 
 /// Finite emission far beyond any physical radiance (near f32's limit it overflowed in
 /// the kernels to NaN samples, reported as a bug) is refused, naming the material; so
-/// are vertex colours that take an unlit material's emission there. Seen to fail with
-/// either check removed: without the first the file was refused only as "light powers
-/// are not finite", naming nothing; without the second it rendered.
+/// are vertex colours that take an unlit material's emission there, and a punctual light
+/// with the same bound on intensity × colour. Seen to fail with each check removed:
+/// without the first the file was refused only as "light powers are not finite",
+/// naming nothing; without the second it rendered; without the third it rendered.
 #[test]
 fn emission_beyond_any_physical_radiance_is_refused() {
     let dir = tempfile::tempdir().unwrap();
@@ -363,6 +364,35 @@ fn emission_beyond_any_physical_radiance_is_refused() {
         &[
             "scene.gltf",
             "primitive 0: its vertex colours (COLOR_0) make its unlit material emit 5e29",
+            "1e20",
+        ],
+    );
+
+    // A point light of 2 × 10³⁰ cd in red (and the quad dark).
+    let mut json: serde_json::Value =
+        serde_json::from_str(&scene_json("[0,0,0]", true, "quad.bin")).unwrap();
+    json["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual"]);
+    json["extensions"] = serde_json::json!({"KHR_lights_punctual": {"lights": [
+        {"type": "point", "intensity": 1e30, "color": [2.0, 1.0, 1.0]}
+    ]}});
+    json["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({
+            "name": "lamp", "translation": [0.0, 0.0, 1.0],
+            "extensions": {"KHR_lights_punctual": {"light": 0}}
+        }));
+    json["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(2.into());
+    let scene = write_scene(dir.path(), &json.to_string());
+    render_fails_with(
+        &scene,
+        dir.path(),
+        &[
+            "scene.gltf",
+            "light on node `lamp` has intensity × colour 2e30",
             "1e20",
         ],
     );

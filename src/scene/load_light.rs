@@ -18,6 +18,15 @@ pub(super) fn convert_light(
             "light on node {node} has a non-finite or negative intensity/colour"
         ));
     }
+    // The bound emission has (material::MAX_EMISSION), for the same reason.
+    let peak = color.iter().fold(0.0f32, |m, &c| m.max(c * intensity));
+    if peak > super::material::MAX_EMISSION {
+        return Err(format!(
+            "light on node {node} has intensity × colour {peak:e}, above {:e}: far beyond \
+             any physical light, where the renderer's 32-bit arithmetic overflows",
+            super::material::MAX_EMISSION
+        ));
+    }
     let position = world.transform_point3(Vec3::ZERO);
     let direction = world
         .transform_vector3(Vec3::NEG_Z)

@@ -199,7 +199,8 @@ pub fn default_material() -> gpu::Material {
 /// The most radiance a material may emit (per channel, vertex colours included), eleven
 /// orders of magnitude above the sun's disk (about 2·10⁹ cd/m²). A finite emission near
 /// f32's limit (3.4·10³⁸) overflowed in the kernels to NaN samples; a file that asks for
-/// more than this is broken, and is refused with its material named.
+/// more than this is broken, and is refused with its material named. Punctual lights'
+/// intensity × colour has the same bound.
 pub const MAX_EMISSION: f32 = 1e20;
 
 /// The extension that asks for a surface shown in its base colour whatever the lighting.
