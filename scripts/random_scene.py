@@ -73,6 +73,12 @@ exactly as three `roughdielectric`s, one per colour channel.
 either side of the cutoff), which the export writes exactly as Mitsuba's `mask` under
 `volpath`.
 
+`--unlit` makes about half of the untextured emitters KHR_materials_unlit (base colour
+0.3-1) with random vertex colours (float RGB or normalised 16-bit RGBA with alpha 1),
+which tint what they emit. The export writes them exactly, their radiance a
+`mesh_attribute` that Mitsuba finds by BSDF sampling alone (its emitter sampling reads
+no attribute): give Mitsuba more samples (`--mitsuba-spp`).
+
 Emissive boxes are closed and one-sided unless `--two-sided-boxes`: Mitsuba 3 stops
 shadow rays 8.9e-4 of their length short of the light, which lets light emitted inside
 a small two-sided box out near its edges (a 2 cm box 2-3 m away: +9 %), so its
@@ -342,9 +348,42 @@ def add_dispersion(s, seed):
     return listed_if_used(s, "KHR_materials_dispersion", count)
 
 
+def add_unlit(s, seed):
+    """KHR_materials_unlit with random vertex colours on about half of the untextured
+    emitters' primitives, drawn from a generator of their own, so that the scene is
+    otherwise the seed's. Each takes a material of its own (base colour 0.3-1, the
+    emitter's sidedness kept) and COLOR_0 per vertex: float RGB or normalised 16-bit
+    RGBA with alpha 1."""
+    import struct
+    r = random.Random(seed + 8_000_003)
+    count = 0
+    for mesh in s.meshes:
+        for prim in mesh["primitives"]:
+            m = s.materials[prim["material"]]
+            if "emissiveFactor" not in m or "emissiveTexture" in m or r.random() >= 0.5:
+                continue
+            unlit = {"pbrMetallicRoughness": {"baseColorFactor": [r.uniform(0.3, 1.0) for _ in range(3)] + [1]},
+                     "extensions": {"KHR_materials_unlit": {}}}
+            if m.get("doubleSided"):
+                unlit["doubleSided"] = True
+            s.materials.append(unlit)
+            prim["material"] = len(s.materials) - 1
+            n = s.accessors[prim["attributes"]["POSITION"]]["count"]
+            if r.random() < 0.5:
+                colours = [[r.random() for _ in range(3)] for _ in range(n)]
+                data = b"".join(struct.pack("<3f", *c) for c in colours)
+                prim["attributes"]["COLOR_0"] = s._acc(data, 5126, n, "VEC3")
+            else:
+                colours = [[r.random() for _ in range(3)] + [1.0] for _ in range(n)]
+                data = b"".join(struct.pack("<4H", *(round(65535 * v) for v in c)) for c in colours)
+                prim["attributes"]["COLOR_0"] = s._acc(data, 5123, n, "VEC4", normalized=True)
+            count += 1
+    return listed_if_used(s, "KHR_materials_unlit", count)
+
+
 def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=False,
              anisotropy=False, diffuse_transmission=False, iridescence=False,
-             layers=False, dispersion=False):
+             layers=False, dispersion=False, unlit=False):
     r = random.Random(seed)
     s = Builder()
     rgb = lambda lo, hi: [r.uniform(lo, hi) for _ in range(3)]  # noqa: E731
@@ -451,6 +490,8 @@ def generate(seed, two_sided_boxes, materials=False, normal_maps=False, alpha=Fa
         kinds.append(f"{add_layers(s, seed)} glossy layered materials")
     if dispersion:
         kinds.append(f"{add_dispersion(s, seed)} dispersive glass materials")
+    if unlit:
+        kinds.append(f"{add_unlit(s, seed)} unlit vertex-coloured emitters")
     return s, kinds
 
 
@@ -484,12 +525,14 @@ def main():
     ap.add_argument("--dispersion", action="store_true",
                     help="dispersion on about two thirds of the solid glass boxes "
                     "(with --materials)")
+    ap.add_argument("--unlit", action="store_true",
+                    help="unlit vertex-coloured materials on about half of the untextured emitters")
     ap.add_argument("--two-sided-boxes", action="store_true",
                     help="let emissive boxes be two-sided too (Mitsuba's references leak there)")
     a = ap.parse_args()
     scene, kinds = generate(a.seed, a.two_sided_boxes, a.materials, a.normal_maps, a.alpha,
                             a.anisotropy, a.diffuse_transmission, a.iridescence, a.layers,
-                            a.dispersion)
+                            a.dispersion, a.unlit)
     scene.write(os.path.abspath(a.output))  # an absolute name: not next to make_scenes.py
     print(f"{a.output}: {', '.join(kinds)}")
     return 0
