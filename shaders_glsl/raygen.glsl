@@ -224,6 +224,10 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
     bool stay = false;
     float camera_tmax = FLT_MAX;  // the camera ray's extent and start (camera_ray)
     float camera_near = 0.0;
+    // How far along its direction a bounce ray's origin lies from the vertex it leaves
+    // (offset_ray_along): its hit's t is made the distance from the vertex, which RIS's
+    // extra candidate, MIS and absorption take.
+    float origin_t = 0.0;
     for (uint step = 0u;; step += stay ? 0u : 1u) {
         stay = false;
         if (step == 0u) {
@@ -251,6 +255,7 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
         }
         if (!shadow_step) {
             next = hit;
+            if (step > 0u) next.t += origin_t;
             if (hit.valid) ns = make_surface(hit, dir);
         }
         if (step == 0u && emitter_ray) {
@@ -371,8 +376,9 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
         else sample_vertex(s, d, medium, rng, ds, nee);
         info.directions += 1.0;
         if (ds.guided) info.guided += 1.0;
-        origin = offset_ray(s.p, surface_side_normal(s, ds.wi));
+        origin = offset_ray_along(s.p, surface_side_normal(s, ds.wi), ds.wi);
         dir = ds.wi;
+        origin_t = dot(origin - s.p, dir) / dot(dir, dir);
         ray_medium = medium_toward(s, ds.wi, medium);
     }
     if (TRAINING) record_path(rec, recorded, rng);

@@ -108,6 +108,30 @@ vec3 offset_ray(vec3 p, vec3 n) {
                 abs(p.z) < origin ? p.z + float_scale * n.z : p_i.z);
 }
 
+// The origin of a ray leaving surface point p in direction d (`n`: the unit geometric
+// normal on d's side): on the ray's own line, as far along it as puts it offset_ray's
+// distance off the surface. offset_ray's origin moves the whole line sideways by that
+// distance times tan θ, so a ray that grazes toward a nearby surface lands that much
+// further on: with a lamp 1 mm in front of a wall 2 m from the world's origin (where
+// offset_ray moves 0.06 mm), the wall beside the lamp, lit by its back face at grazing
+// angles and by what bounces out of the gap, came out 2.7 % dark; 4 m out, 5 %
+// (tests/core_render.rs). Along the line the ray skips only what lies closer to the
+// surface than that distance, as before, and only over the first stretch of its length:
+// at most GRAZING_STRETCH times the distance, beyond which (within 1/64 of grazing) the
+// rest of the height comes from offset_ray's move. The path loop adds the stretch to
+// the hit's t, which is then the distance from p.
+const float GRAZING_STRETCH = 64.0;
+
+vec3 offset_ray_along(vec3 p, vec3 n, vec3 d) {
+    vec3 o = offset_ray(p, n);
+    float clearance = dot(o - p, n);
+    vec3 w = normalize(d);
+    float cos_w = dot(w, n);
+    if (cos_w <= 0.0 || clearance <= 0.0) return o;
+    float t = cos_w * GRAZING_STRETCH >= 1.0 ? clearance / cos_w : GRAZING_STRETCH * clearance;
+    return p + w * t + n * (clearance - t * cos_w);
+}
+
 // Shadow rays to a point in free space stop this fraction of their length short of it.
 const float SHADOW_EPSILON = 1e-4;
 
