@@ -25,6 +25,7 @@ struct RayCounts {
     uint camera;
     uint bounce;
     uint shadow;
+    uint probe;
 };
 
 // What a path remembers of each vertex to estimate the incident radiance along the
@@ -225,9 +226,13 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
     float camera_tmax = FLT_MAX;  // the camera ray's extent and start (camera_ray)
     float camera_near = 0.0;
     // How far along its direction a bounce ray's origin lies from the vertex it leaves
-    // (offset_ray_along): its hit's t is made the distance from the vertex, which RIS's
+    // (bounce_origin): its hit's t is made the distance from the vertex, which RIS's
     // extra candidate, MIS and absorption take.
     float origin_t = 0.0;
+    // The bounce ray's probe (bounce_origin in inc/trace.glsl): traced before the bounce
+    // ray, as a step of its own, where the ray's origin was moved along its line.
+    bool probe_pending = false;
+    Ray probe = Ray(vec3(0.0), vec3(0.0), 0.0);
     for (uint step = 0u;; step += stay ? 0u : 1u) {
         stay = false;
         if (step == 0u) {
@@ -243,15 +248,29 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
             info.camera_rays += 1u;
         }
         bool shadow_step = step > 0u && (step & 1u) == 0u;
+        bool probe_step = probe_pending && !shadow_step;
         uint depth = (step + 1u) / 2u;  // the vertex whose rays these are (0: the camera)
-        Ray ray = shadow_step ? nee.shadow : Ray(origin, dir, step == 0u ? camera_tmax : FLT_MAX);
+        Ray ray = probe_step ? probe : shadow_step ? nee.shadow : Ray(origin, dir, step == 0u ? camera_tmax : FLT_MAX);
         Hit hit;
         hit.valid = false;
         hit.t = FLT_MAX;
-        if (shadow_step ? nee.needs_shadow_ray : ds.valid) {
-            if (shadow_step) rays.shadow += 1u;
+        if (probe_step || (shadow_step ? nee.needs_shadow_ray : ds.valid)) {
+            if (probe_step) rays.probe += 1u;
+            else if (shadow_step) rays.shadow += 1u;
             else if (depth > 0u) rays.bounce += 1u;
-            hit = trace_ray(ray.o, ray.d, ray.tmax, shadow_step);
+            hit = trace_ray(ray.o, ray.d, ray.tmax, shadow_step || probe_step);
+        }
+        if (probe_step) {
+            // Something crosses the stretch the origin skipped: the bounce ray leaves
+            // from offset_ray's origin instead, which skips nothing beside the surface.
+            probe_pending = false;
+            if (hit.valid) {
+                origin = probe.o;
+                origin_t = dot(origin - s.p, dir);
+            }
+            TRACE1("  bounce probe blocked: %u\n", uint(hit.valid));
+            stay = true;
+            continue;
         }
         if (!shadow_step) {
             next = hit;
@@ -376,9 +395,11 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
         else sample_vertex(s, d, medium, rng, ds, nee);
         info.directions += 1.0;
         if (ds.guided) info.guided += 1.0;
-        origin = offset_ray_along(s.p, surface_side_normal(s, ds.wi), ds.wi);
+        vec3 side = surface_side_normal(s, ds.wi);
+        origin = bounce_origin(s.p, side, ds.wi, probe);
         dir = ds.wi;
-        origin_t = dot(origin - s.p, dir) / dot(dir, dir);
+        origin_t = dot(origin - s.p, dir);
+        probe_pending = ds.valid && probe.tmax > 0.0;
         ray_medium = medium_toward(s, ds.wi, medium);
     }
     if (TRAINING) record_path(rec, recorded, rng);
@@ -393,7 +414,7 @@ void main() {
     if (pixel.x >= params.width || pixel.y >= params.height) return;
     uint pixel_index = pixel.y * params.width + pixel.x;
 
-    RayCounts rays = RayCounts(0u, 0u, 0u);
+    RayCounts rays = RayCounts(0u, 0u, 0u, 0u);
     uint nonfinite = 0u;
     uint clamped = 0u;
     u64vec3 sum = u64vec3(0ul);
@@ -472,6 +493,7 @@ void main() {
     atomicAdd(stats[STAT_CAMERA_RAYS], uint64_t(rays.camera));
     atomicAdd(stats[STAT_BOUNCE_RAYS], uint64_t(rays.bounce));
     atomicAdd(stats[STAT_SHADOW_RAYS], uint64_t(rays.shadow));
+    atomicAdd(stats[STAT_PROBE_RAYS], uint64_t(rays.probe));
     if (nonfinite > 0u) atomicAdd(stats[STAT_NONFINITE_SAMPLES], uint64_t(nonfinite));
     if (clamped > 0u) atomicAdd(stats[STAT_CLAMPED_SAMPLES], uint64_t(clamped));
     lane_stats_flush();

@@ -22,8 +22,8 @@ class Image(np.ndarray):
         meta: dict — ``spp``, ``sample_offset``, ``method``, ``seed``, ``max_depth``,
             ``render_seconds``, ``device``, ``scene_path``, ``scene_hash``, ``version``
             and free-form entries (a render adds ``gpu_seconds``, ``rays``,
-            ``camera_rays``, ``bounce_rays``, ``shadow_rays``, ...). ``write_exr``
-            stores all of it and ``read_exr`` gives it back.
+            ``camera_rays``, ``bounce_rays``, ``shadow_rays``, ``probe_rays``, ...).
+            ``write_exr`` stores all of it and ``read_exr`` gives it back.
         sums: ``uint64`` array ``(height, width, 3)`` of the film's exact fixed-point
             sums over ``meta["spp"]`` samples, or None. Renders of disjoint sample
             ranges merge exactly by adding them (``lanterna.merge``). Arrays derived

@@ -46,7 +46,8 @@ def test_render_equals_cli_bit_for_bit(scene, ris, cli, tmp_path):
                 "source", "ris_candidates", "strategy", "rr_depth"):
         assert img.meta[key] == ref.meta[key], key
     assert img.meta["spp"] == 6 and img.meta["sample_offset"] == 5
-    assert img.meta["rays"] == img.meta["camera_rays"] + img.meta["bounce_rays"] + img.meta["shadow_rays"]
+    assert img.meta["rays"] == (img.meta["camera_rays"] + img.meta["bounce_rays"] + img.meta["shadow_rays"]
+                                + img.meta["probe_rays"])
     # One camera ray per sample, and one more in pixels with small emitters in view.
     assert img.meta["camera_rays"] >= 6 * W * H
     plain = lanterna.Renderer(scene, W, H, method="ris", max_depth=3, seed=3, pixel_emitters=False)

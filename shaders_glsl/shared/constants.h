@@ -100,7 +100,8 @@
 #define STAT_TRAVERSAL_LANE_SLOTS 7
 #define STAT_PATH_LANE_STEPS 8
 #define STAT_PATH_LANE_SLOTS 9
-#define STAT_COUNT 10
+#define STAT_PROBE_RAYS 10
+#define STAT_COUNT 11
 
 // AOV channels (BINDING_AOV holds AOV_CHANNELS floats per pixel, summed over samples).
 #define AOV_ALBEDO 0          // 3: base colour at the first hit

@@ -29,6 +29,10 @@ pub struct MethodThroughput {
     pub camera_rays_per_sample: f64,
     pub bounce_rays_per_sample: f64,
     pub shadow_rays_per_sample: f64,
+    /// Probes of the stretch a bounce ray's origin skips (`bounce_origin` in
+    /// shaders_glsl/inc/trace.glsl); absent from results written before 2026-12-08.
+    #[serde(default)]
+    pub probe_rays_per_sample: f64,
     pub wall_seconds: Spread,
     pub gpu_seconds: Spread,
     /// GPU time / wall time.
@@ -76,6 +80,7 @@ pub fn summarise(method: Method, spp: u64, pixels: u64, runs: &[RunSample]) -> M
         camera_rays_per_sample: per_sample(|r| r.stats.camera_rays),
         bounce_rays_per_sample: per_sample(|r| r.stats.bounce_rays),
         shadow_rays_per_sample: per_sample(|r| r.stats.shadow_rays),
+        probe_rays_per_sample: per_sample(|r| r.stats.probe_rays),
         wall_seconds: Spread::over(runs, |r| r.seconds),
         gpu_seconds: Spread::over(runs, |r| r.stats.gpu_seconds),
         gpu_share: Spread::over(runs, |r| r.stats.gpu_seconds / r.seconds),

@@ -448,7 +448,7 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
     }
     let pixels = width as f64 * height as f64;
     log::info!(
-        "{} {}×{} {} spp in {:.2} s ({:.2} s setup): {:.3} M samples/s, {:.3} M rays/s (camera {}, bounce {}, shadow {}), GPU {:.2} s, host {:.2} s; {} traversal ({})",
+        "{} {}×{} {} spp in {:.2} s ({:.2} s setup): {:.3} M samples/s, {:.3} M rays/s (camera {}, bounce {}, shadow {}, probe {}), GPU {:.2} s, host {:.2} s; {} traversal ({})",
         args.method.method,
         width,
         height,
@@ -460,6 +460,7 @@ fn render_once(renderer: &mut Renderer, job: &Job<'_>, started: Instant) -> Resu
         stats.camera_rays,
         stats.bounce_rays,
         stats.shadow_rays,
+        stats.probe_rays,
         stats.gpu_seconds,
         (render_seconds - stats.gpu_seconds).max(0.0),
         renderer.traversal.kind,

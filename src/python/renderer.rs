@@ -278,6 +278,7 @@ impl PyRenderer {
         m.set_item("camera_rays", stats.camera_rays)?;
         m.set_item("bounce_rays", stats.bounce_rays)?;
         m.set_item("shadow_rays", stats.shadow_rays)?;
+        m.set_item("probe_rays", stats.probe_rays)?;
         m.set_item("nonfinite_samples", stats.nonfinite_samples)?;
         if inner.renderer.settings.method.uses_guiding() {
             m.set_item("training_seconds", outcome.training_seconds)?;

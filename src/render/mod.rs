@@ -79,6 +79,9 @@ pub struct RenderStats {
     pub camera_rays: u64,
     pub bounce_rays: u64,
     pub shadow_rays: u64,
+    /// Short segments traced before bounce rays whose origin moved along their line
+    /// (`bounce_origin` in shaders_glsl/inc/trace.glsl).
+    pub probe_rays: u64,
     pub nonfinite_samples: u64,
     /// Samples with a channel above FILM_MAX_SAMPLE, clamped to it in the film.
     pub clamped_samples: u64,
@@ -92,7 +95,7 @@ pub struct RenderStats {
 
 impl RenderStats {
     pub fn rays(&self) -> u64 {
-        self.camera_rays + self.bounce_rays + self.shadow_rays
+        self.camera_rays + self.bounce_rays + self.shadow_rays + self.probe_rays
     }
 }
 

@@ -72,6 +72,7 @@ impl Renderer {
         stats.camera_rays += counters[gpu::STAT_CAMERA_RAYS as usize];
         stats.bounce_rays += counters[gpu::STAT_BOUNCE_RAYS as usize];
         stats.shadow_rays += counters[gpu::STAT_SHADOW_RAYS as usize];
+        stats.probe_rays += counters[gpu::STAT_PROBE_RAYS as usize];
         stats.nonfinite_samples += counters[gpu::STAT_NONFINITE_SAMPLES as usize];
         stats.clamped_samples += counters[gpu::STAT_CLAMPED_SAMPLES as usize];
         stats.lanes.add(&super::LaneCounts {
