@@ -1077,7 +1077,7 @@ fn light_bounces_out_of_a_narrow_gap_as_a_random_walk_says() {
 /// white Lambertian walls (two-sided, each running 0.1 m past the ones it meets), its
 /// floor 12 m above the world's origin (where offset_ray moves a ray 0.24 mm off the
 /// floor), lit only by a lamp outside facing one wall. Nothing inside can be lit; the
-/// camera sees the corner of that wall and the floor from 14 cm, 0.4 mm a pixel. Rays
+/// camera sees the corner of that wall and the floor from 14 cm, 0.6 mm a pixel. Rays
 /// that hit the corner line itself may still meet the floor past the wall by rounding
 /// (any renderer's limit: the rows next to the corner's row may show them), so the test
 /// is that every pixel more than a row from the corner's image is black, in `pt` and

@@ -179,8 +179,8 @@ Ray ray_to_infinity(vec3 origin_p, vec3 origin_n, vec3 wi) {
 // That stretch skips whatever crosses it: where another surface meets this one (a wall
 // on a floor, a box on a table), a ray that would hit it lower than the distance started
 // past it, and light from behind leaked in along every concave corner (a closed room lit
-// from outside, seen at 0.4 mm a pixel: the floor's pixels along the wall 3× as bright
-// as the lit room's, where the truth is black; tests/core_render.rs). The probe is the
+// by a lamp of 100 outside, seen at 0.6 mm a pixel: the pixels along the corner at 0.59,
+// where the truth is black; tests/core_render.rs). The probe is the
 // segment from offset_ray's origin to the moved one, both that far off the surface,
 // traced as a shadow ray: where it is blocked the ray leaves from offset_ray's origin.
 // On lavapipe the probes cost 5–17 % of the samples per second (README, Rendering).
