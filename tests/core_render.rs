@@ -858,6 +858,22 @@ fn two_sided_closed_emitters_let_no_light_out_from_inside() {
     }
 }
 
+/// Write the glTF `doc` to `path` and load it, with the camera `lanterna render` picks.
+fn load_written(
+    path: &std::path::Path,
+    doc: &serde_json::Value,
+) -> (lanterna::render::session::LoadedScene, Camera) {
+    std::fs::write(path, serde_json::to_vec(doc).unwrap()).unwrap();
+    let loaded = lanterna::render::session::load_scene(path).expect("scene");
+    let camera = lanterna::render::session::choose_camera(
+        &loaded.scene,
+        None,
+        &lanterna::scene::CameraOverride::default(),
+    )
+    .unwrap();
+    (loaded, camera)
+}
+
 /// Light trapped in a narrow gap: a white Lambertian lamp (16 × 4 cm, emitting 10 from both
 /// faces) 1 mm in front of a wall of albedo 0.8, 4 m from the world's origin (farther,
 /// and the loader would move this small scene to the origin), where offset_ray moves a
@@ -957,15 +973,7 @@ fn light_bounces_out_of_a_narrow_gap_as_a_random_walk_says() {
             {"buffer": 0, "byteOffset": 72 * i, "byteLength": 72})).collect::<Vec<_>>(),
         "accessors": (0..4).map(accessor).collect::<Vec<_>>()
     });
-    let path = dir.path().join("gap.gltf");
-    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
-    let loaded = lanterna::render::session::load_scene(&path).expect("scene");
-    let camera = lanterna::render::session::choose_camera(
-        &loaded.scene,
-        None,
-        &lanterna::scene::CameraOverride::default(),
-    )
-    .unwrap();
+    let (loaded, camera) = load_written(&dir.path().join("gap.gltf"), &doc);
 
     // The lamp covers pixel columns 18..42 and rows 12..18 exactly; ring k is the wall
     // pixels k pixels out from it (Chebyshev distance).
@@ -1191,15 +1199,7 @@ fn no_light_leaks_into_a_closed_room_along_its_corners() {
             "min": bounds(&meshes[i], f32::min), "max": bounds(&meshes[i], f32::max)
         })).collect::<Vec<_>>()
     });
-    let path = dir.path().join("room.gltf");
-    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
-    let loaded = lanterna::render::session::load_scene(&path).expect("scene");
-    let camera = lanterna::render::session::choose_camera(
-        &loaded.scene,
-        None,
-        &lanterna::scene::CameraOverride::default(),
-    )
-    .unwrap();
+    let (loaded, camera) = load_written(&dir.path().join("room.gltf"), &doc);
 
     // The corner is seen between rows HEIGHT/2 − 1 and HEIGHT/2.
     let near_corner = |row: u32| row + 2 >= HEIGHT / 2 && row <= HEIGHT / 2 + 1;
@@ -1256,21 +1256,13 @@ fn images_do_not_depend_on_the_scene_unit() {
         let nodes = g["nodes"].as_array_mut().unwrap();
         nodes.push(serde_json::json!({"children": roots, "scale": [scale, scale, scale]}));
         g["scenes"][scene]["nodes"] = serde_json::json!([nodes.len() - 1]);
-        let path = tmp.path().join(format!("cornell-{scale}.gltf"));
-        std::fs::write(&path, serde_json::to_vec(&g).unwrap()).unwrap();
-        let loaded = lanterna::render::session::load_scene(&path).expect("scene");
+        let (loaded, camera) = load_written(&tmp.path().join(format!("cornell-{scale}.gltf")), &g);
         // The box is 2 units wide, tall and deep before the scale.
         let size = (loaded.scene.bounds_max - loaded.scene.bounds_min).as_dvec3() / scale;
         assert!(
             (size - glam::DVec3::splat(2.0)).abs().max_element() < 1e-3,
             "size {size}"
         );
-        let camera = lanterna::render::session::choose_camera(
-            &loaded.scene,
-            None,
-            &lanterna::scene::CameraOverride::default(),
-        )
-        .unwrap();
         render_batches(&loaded.scene, &camera, settings.clone(), 8, 64)
     };
     let unit = render(1.0);
