@@ -229,8 +229,11 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
     // (bounce_origin): its hit's t is made the distance from the vertex, which RIS's
     // extra candidate, MIS and absorption take.
     float origin_t = 0.0;
-    // The bounce ray's probe (bounce_origin in inc/trace.glsl): traced before the bounce
-    // ray, as a step of its own, where the ray's origin was moved along its line.
+    // The bounce ray's probe (bounce_origin in inc/trace.glsl), where the ray's origin was
+    // moved along its line: traced before the bounce ray as a step of its own (ray
+    // queries), or tested in the bounce ray's own walk of the tree (software traversal,
+    // TRACE_TESTS_PROBE), which then traces the ray again from offset_ray's origin where
+    // the probe is blocked.
     bool probe_pending = false;
     Ray probe = Ray(vec3(0.0), vec3(0.0), 0.0);
     for (uint step = 0u;; step += stay ? 0u : 1u) {
@@ -248,27 +251,33 @@ vec3 trace_path(uvec2 pixel, inout Rng rng, inout RayCounts rays, out PathInfo i
             info.camera_rays += 1u;
         }
         bool shadow_step = step > 0u && (step & 1u) == 0u;
-        bool probe_step = probe_pending && !shadow_step;
+        bool probe_step = probe_pending && !shadow_step && !TRACE_TESTS_PROBE;
+        bool probe_along = probe_pending && !shadow_step && TRACE_TESTS_PROBE;
         uint depth = (step + 1u) / 2u;  // the vertex whose rays these are (0: the camera)
         Ray ray = probe_step ? probe : shadow_step ? nee.shadow : Ray(origin, dir, step == 0u ? camera_tmax : FLT_MAX);
         Hit hit;
         hit.valid = false;
         hit.t = FLT_MAX;
+        bool probe_blocked = false;
         if (probe_step || (shadow_step ? nee.needs_shadow_ray : ds.valid)) {
-            if (probe_step) rays.probe += 1u;
-            else if (shadow_step) rays.shadow += 1u;
-            else if (depth > 0u) rays.bounce += 1u;
-            hit = trace_ray(ray.o, ray.d, ray.tmax, shadow_step || probe_step);
+            if (probe_step || probe_along) rays.probe += 1u;
+            if (shadow_step) rays.shadow += 1u;
+            else if (depth > 0u && !probe_step) rays.bounce += 1u;
+            hit = trace_ray(ray.o, ray.d, ray.tmax, shadow_step || probe_step,
+                            probe_along ? probe : Ray(ray.o, vec3(0.0), 0.0), probe_blocked);
         }
-        if (probe_step) {
+        if (probe_step) probe_blocked = hit.valid;
+        if (probe_step || probe_along) {
+            probe_pending = false;
+            TRACE1("  bounce probe blocked: %u\n", uint(probe_blocked));
+        }
+        if (probe_blocked || probe_step) {
             // Something crosses the stretch the origin skipped: the bounce ray leaves
             // from offset_ray's origin instead, which skips nothing beside the surface.
-            probe_pending = false;
-            if (hit.valid) {
+            if (probe_blocked) {
                 origin = probe.o;
                 origin_t = dot(origin - s.p, dir);
             }
-            TRACE1("  bounce probe blocked: %u\n", uint(hit.valid));
             stay = true;
             continue;
         }

@@ -12,7 +12,7 @@
 //! - an area light's geometry term taking cosθ at the light twice: the quad test (0.361
 //!   against 0.367, p = 10⁻¹²) and the furnace (1.781 against 1.875).
 
-use lanterna::render::{Method, RenderStats, Strategy};
+use lanterna::render::{Method, RenderStats, Strategy, Traversal};
 use lanterna::scene::generate::{Kind, Options};
 use lanterna::scene::Camera;
 use lanterna::testing::{self, Batches};
@@ -1089,9 +1089,12 @@ fn light_bounces_out_of_a_narrow_gap_as_a_random_walk_says() {
 /// that hit the corner line itself may still meet the floor past the wall by rounding
 /// (any renderer's limit: the rows next to the corner's row may show them), so the test
 /// is that every pixel more than a row from the corner's image is black, in `pt` and
-/// `ris` (256 spp). Seen to fail (2026-12-08) with bounce rays started on their own line
-/// without the probe of the stretch they skip (inc/trace.glsl, bounce_origin): 442
-/// pixels lit in `pt`, up to 2.0, in 43 of the 44 rows checked.
+/// `ris` (256 spp), with the software traversal and (`pt`) with ray queries. Seen to fail
+/// (2026-12-08) with bounce rays started on their own line without the probe of the
+/// stretch they skip (inc/trace.glsl, bounce_origin): 442 pixels lit in `pt`, up to 2.0,
+/// in 43 of the 44 rows checked; and then with each way of probing broken alone: the
+/// probe never blocked in the software walk (inc/bvh.glsl; 441 pixels), the ray-query
+/// probe step skipped (raygen.glsl; 442 pixels with ray queries, software passing).
 #[test]
 fn no_light_leaks_into_a_closed_room_along_its_corners() {
     const WIDTH: u32 = 64;
@@ -1203,9 +1206,16 @@ fn no_light_leaks_into_a_closed_room_along_its_corners() {
 
     // The corner is seen between rows HEIGHT/2 − 1 and HEIGHT/2.
     let near_corner = |row: u32| row + 2 >= HEIGHT / 2 && row <= HEIGHT / 2 + 1;
-    for method in [Method::Pt, Method::Ris] {
+    // The software traversal tests the probe in the bounce ray's own walk of the tree,
+    // ray queries trace it as a ray of its own (raygen.glsl): both ways.
+    for (method, traversal) in [
+        (Method::Pt, Traversal::Software),
+        (Method::Ris, Traversal::Software),
+        (Method::Pt, Traversal::RayQuery),
+    ] {
         let mut s = testing::settings(method, WIDTH, HEIGHT);
         s.max_depth = 4;
+        s.traversal = traversal;
         let image = render_batches(&loaded.scene, &camera, s, 1, 256).mean();
         let lit: Vec<(u32, u32, f64)> = (0..HEIGHT)
             .filter(|&y| !near_corner(y))
@@ -1219,8 +1229,8 @@ fn no_light_leaks_into_a_closed_room_along_its_corners() {
         let rows: std::collections::BTreeSet<u32> = lit.iter().map(|p| p.1).collect();
         assert!(
             lit.is_empty(),
-            "{method}: {} pixels away from the corner are lit (rows {rows:?}, brightest {:?}): \
-             light leaks in from outside the room",
+            "{method} ({traversal:?}): {} pixels away from the corner are lit (rows {rows:?}, \
+             brightest {:?}): light leaks in from outside the room",
             lit.len(),
             lit.iter().map(|p| p.2).fold(0.0, f64::max)
         );

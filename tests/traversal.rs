@@ -51,6 +51,11 @@ enum Agreement {
     Different,
 }
 
+/// Is this the hit of a `TRACE_PROBED` ray whose probe is blocked?
+fn probe_blocked(h: &gpu::TraceHit) -> bool {
+    h.instance == gpu::INVALID_INDEX && h.primitive == gpu::TRACE_PROBE_BLOCKED
+}
+
 /// Do two hits of the same ray agree?
 fn agree(ray: &gpu::TraceRay, a: &gpu::TraceHit, b: &gpu::TraceHit) -> Agreement {
     let verdict = |ok: bool| {
@@ -62,6 +67,9 @@ fn agree(ray: &gpu::TraceRay, a: &gpu::TraceHit, b: &gpu::TraceHit) -> Agreement
     };
     if ray.kind == gpu::TRACE_VISIBLE {
         return verdict(a.primitive == b.primitive);
+    }
+    if ray.kind == gpu::TRACE_PROBED && (probe_blocked(a) || probe_blocked(b)) {
+        return verdict(probe_blocked(a) && probe_blocked(b));
     }
     if a.instance == gpu::INVALID_INDEX || b.instance == gpu::INVALID_INDEX {
         return verdict(a.instance == b.instance);
@@ -111,6 +119,7 @@ fn compare(name: &str, scene: &Scene, camera: &Camera) {
                 }
             })
             .count();
+        let blocked = a.iter().filter(|h| probe_blocked(h)).count();
         let (mut diff, mut ties) = (0, 0);
         for (i, ((r, x), y)) in rays.iter().zip(&a).zip(&b).enumerate() {
             let verdict = agree(r, x, y);
@@ -129,7 +138,7 @@ fn compare(name: &str, scene: &Scene, camera: &Camera) {
             }
         }
         println!(
-            "{name} {set}: {} rays ({hits} hit / visible), {ties} ties, {diff} differ",
+            "{name} {set}: {} rays ({hits} hit / visible, {blocked} probes blocked), {ties} ties, {diff} differ",
             rays.len()
         );
         total += rays.len();
@@ -169,6 +178,105 @@ fn generated(kind: Kind, offset: Option<[f32; 3]>) {
         },
     );
     compare(kind.name(), &t.scene, &t.camera);
+}
+
+/// The software traversal tests a bounce ray's probe in the ray's own walk of the tree
+/// (inc/bvh.glsl). That walk must answer exactly what two walks answer: the probe's
+/// segment traced alone (`visible`), and the ray alone (`trace_closest`) where the probe
+/// is clear, with the same instance, primitive, t and barycentrics bit for bit. Returns
+/// how many probes were blocked. Seen to fail (street: 133, 385 and 364 of 10,956 rays
+/// answered differently) with the probe's flag not restored when a node is taken from
+/// the stack, with a blocked probe not reported, and with children only the probe meets
+/// left out of the walk.
+fn probe_in_the_walk_is_exact(name: &str, scene: &Scene, camera: &Camera) -> usize {
+    let lights = LightTable::build(scene).expect("light table");
+    let mut sw = renderer(scene, camera, Traversal::Software);
+    let cam = camera_rays(camera, WIDTH, HEIGHT, 5);
+    let cam_hits = sw.trace(&cam).expect("trace").hits;
+    let sets = secondary_rays(
+        scene,
+        &lights,
+        &sw.gpu_scene.instance_order,
+        cam,
+        &cam_hits,
+        13,
+    );
+    let probes: Vec<gpu::TraceRay> = sets
+        .probed
+        .iter()
+        .map(|r| gpu::TraceRay {
+            origin: r.probe_origin,
+            dir: r.probe_dir,
+            tmax: 1.0,
+            kind: gpu::TRACE_VISIBLE,
+            ..*r
+        })
+        .collect();
+    let alone: Vec<gpu::TraceRay> = sets
+        .probed
+        .iter()
+        .map(|r| gpu::TraceRay {
+            kind: gpu::TRACE_CLOSEST,
+            ..*r
+        })
+        .collect();
+    let merged = sw.trace(&sets.probed).expect("probed trace").hits;
+    let probe_hits = sw.trace(&probes).expect("probe trace").hits;
+    let ray_hits = sw.trace(&alone).expect("ray trace").hits;
+    let bits = |h: &gpu::TraceHit| {
+        (
+            h.instance,
+            h.primitive,
+            h.t.to_bits(),
+            h.bary_u.to_bits(),
+            h.bary_v.to_bits(),
+        )
+    };
+    let mut wrong = 0;
+    let mut blocked = 0;
+    for (i, ((m, p), r)) in merged.iter().zip(&probe_hits).zip(&ray_hits).enumerate() {
+        let separate_blocked = p.primitive == 0;
+        blocked += separate_blocked as usize;
+        let same = if separate_blocked {
+            probe_blocked(m)
+        } else {
+            bits(m) == bits(r)
+        };
+        if !same {
+            if wrong < 8 {
+                println!(
+                    "{name} ray {i}: one walk ({}, {}, t {}) vs two (probe blocked {separate_blocked}; ray {}, {}, t {})",
+                    m.instance, m.primitive, m.t, r.instance, r.primitive, r.t
+                );
+            }
+            wrong += 1;
+        }
+    }
+    println!(
+        "{name}: {} probed rays, {blocked} probes blocked, {wrong} answered differently by one walk",
+        merged.len()
+    );
+    assert_eq!(
+        wrong, 0,
+        "{name}: {wrong} probed rays answered differently by one walk of the tree than by two"
+    );
+    blocked
+}
+
+#[test]
+fn probe_in_the_walk_answers_what_two_walks_answer() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/street.gltf");
+    let street = Scene::load(&path, &Default::default()).expect("load street");
+    let mut blocked = probe_in_the_walk_is_exact("street", &street, &street.cameras[0]);
+    for kind in [Kind::Gap, Kind::Sconces, Kind::AlphaLights] {
+        let t = testing::generated(kind, &Options::default());
+        blocked += probe_in_the_walk_is_exact(kind.name(), &t.scene, &t.camera);
+    }
+    assert!(
+        blocked >= 200,
+        "only {blocked} probes blocked: too few to test the walk"
+    );
+    testing::assert_no_validation_errors();
 }
 
 #[test]

@@ -28,9 +28,21 @@ float bvh_box_entry(vec3 bmin, vec3 bmax, vec3 o, vec3 inv_d, float tmax) {
     return (tnear <= tfar && tnear <= tmax) ? tnear : FLT_MAX;
 }
 
+// Ray-box test of a segment for the probe below: true where the segment o → o + d
+// (t ∈ [0, 1]) meets the box.
+bool bvh_segment_meets_box(vec3 bmin, vec3 bmax, vec3 o, vec3 inv_d) {
+    return bvh_box_entry(bmin, bmax, o, inv_d, 1.0) < FLT_MAX;
+}
+
 // The closest hit (any_hit = false) or the first accepted hit (any_hit = true) on
-// [0, tmax].
-Hit trace_ray(vec3 o, vec3 d, float tmax, bool any_hit) {
+// [0, tmax], and, in the same walk of the tree, whether anything blocks the bounce
+// ray's probe (bounce_origin in inc/trace.glsl; probe.tmax 0: none). A blocked probe
+// ends the walk at once (`probe_blocked`; the hit is then void, and the path loop traces
+// the ray again from offset_ray's origin). Traced on its own, a probe walked the tree
+// from its root to the few leaves around the bounce ray's origin, which the bounce ray
+// walks through too: one walk for both loads those nodes once.
+Hit trace_ray(vec3 o, vec3 d, float tmax, bool any_hit, Ray probe, out bool probe_blocked) {
+    probe_blocked = false;
     Hit h;
     h.valid = false;
     h.instance = INVALID_INDEX;
@@ -44,6 +56,14 @@ Hit trace_ray(vec3 o, vec3 d, float tmax, bool any_hit) {
                       lessThan(abs(d), vec3(1e-30)));
     vec3 inv_d = 1.0 / safe_d;
     float best = tmax;
+    // The probe, tested only in the nodes its segment meets: `probe_in` for the node at
+    // hand, bit k of `probe_flags` for the stack's entry k.
+    vec3 safe_pd = mix(probe.d, mix(vec3(-1e-30), vec3(1e-30), greaterThanEqual(probe.d, vec3(0.0))),
+                       lessThan(abs(probe.d), vec3(1e-30)));
+    vec3 probe_inv_d = 1.0 / safe_pd;
+    uvec4 probe_key = ray_key(probe.o, probe.d);
+    bool probe_in = probe.tmax > 0.0;
+    uint64_t probe_flags = 0ul;
 
     // The stack's newest four entries live in registers (top0 the newest), older ones in
     // the array (entry k of the whole stack at stack[k]; the array holds sp − 4 of them):
@@ -61,19 +81,28 @@ Hit trace_ray(vec3 o, vec3 d, float tmax, bool any_hit) {
             BvhNode n = bvh_nodes(ref);
             float ta = bvh_box_entry(n.a_min, n.a_max, o, inv_d, best);
             float tb = bvh_box_entry(n.b_min, n.b_max, o, inv_d, best);
+            bool pa = probe_in && bvh_segment_meets_box(n.a_min, n.a_max, probe.o, probe_inv_d);
+            bool pb = probe_in && bvh_segment_meets_box(n.b_min, n.b_max, probe.o, probe_inv_d);
             bool ha = ta < FLT_MAX;
             bool hb = tb < FLT_MAX;
-            if (ha || hb) {
-                bool a_first = ha && (!hb || ta <= tb);
-                if (ha && hb) {
+            bool va = ha || pa;
+            bool vb = hb || pb;
+            if (va || vb) {
+                // The ray's nearer child first; a child only the probe meets after one
+                // the ray enters.
+                bool a_first = va && (!vb || (ha && (!hb || ta <= tb)));
+                if (va && vb) {
                     if (sp >= 4u) stack[sp - 4u] = top3;
                     top3 = top2;
                     top2 = top1;
                     top1 = top0;
                     top0 = a_first ? n.b_ref : n.a_ref;
+                    if (a_first ? pb : pa) probe_flags |= 1ul << sp;
+                    else probe_flags &= ~(1ul << sp);
                     sp++;
                 }
                 ref = a_first ? n.a_ref : n.b_ref;
+                probe_in = a_first ? pa : pb;
                 continue;
             }
         } else if (ref != BVH_EMPTY) {
@@ -102,6 +131,23 @@ Hit trace_ray(vec3 o, vec3 d, float tmax, bool any_hit) {
                         if (any_hit) return h;
                     }
                 }
+                if (probe_in) {
+                    // The same test for the probe's segment, t ∈ [0, probe.tmax).
+                    vec3 ppvec = cross(probe.d, tri.e2);
+                    float pdet = dot(tri.e1, ppvec);
+                    float pinv_det = 1.0 / pdet;
+                    vec3 ptvec = probe.o - tri.v0;
+                    float pu = dot(ptvec, ppvec) * pinv_det;
+                    vec3 pqvec = cross(ptvec, tri.e1);
+                    float pv = dot(probe.d, pqvec) * pinv_det;
+                    float pt = dot(tri.e2, pqvec) * pinv_det;
+                    if (pdet != 0.0 && pu >= 0.0 && pv >= 0.0 && pu + pv <= 1.0 && pt >= 0.0 && pt < probe.tmax &&
+                        ((tri.flags & BVH_TRIANGLE_OPAQUE) != 0u ||
+                         alpha_passes(tri.instance, tri.primitive, vec2(pu, pv), probe_key))) {
+                        probe_blocked = true;
+                        return h;
+                    }
+                }
             }
         }
         if (sp == 0u) break;
@@ -110,15 +156,10 @@ Hit trace_ray(vec3 o, vec3 d, float tmax, bool any_hit) {
         top1 = top2;
         top2 = top3;
         sp--;
+        probe_in = ((probe_flags >> sp) & 1ul) != 0ul;
         if (sp >= 4u) top3 = stack[sp - 4u];
     }
     return h;
 }
-
-Hit trace_closest(vec3 origin, vec3 dir, float tmax) { return trace_ray(origin, dir, tmax, false); }
-
-// True when nothing blocks the segment origin → origin + dir·tmax (`dir` need not be
-// unit length: t is measured in multiples of it).
-bool visible(vec3 origin, vec3 dir, float tmax) { return !trace_ray(origin, dir, tmax, true).valid; }
 
 #endif

@@ -1,8 +1,9 @@
 // Ray traversal: the closest hit and visibility, with alpha-masked (MASK) and stochastic
 // (BLEND) geometry resolved in the candidate loop, for camera, bounce and shadow rays.
 // Ray queries here, or (LANTERNA_SOFTWARE_TRAVERSAL) the software traversal of inc/bvh.glsl
-// behind the same interface: trace_ray(o, d, tmax, any_hit), which the path loop calls
-// from one place for every ray, and its two wrappers trace_closest and visible.
+// behind the same interface: trace_ray(o, d, tmax, any_hit, probe, probe_blocked), which
+// the path loop calls from one place for every ray, and its two wrappers trace_closest
+// and visible.
 #ifndef INC_TRACE_GLSL
 #define INC_TRACE_GLSL
 
@@ -17,6 +18,14 @@ struct Hit {
     uint primitive;
     vec2 bary;        // barycentrics of vertices 1 and 2
     float t;
+};
+
+// A ray to trace: from `o` along `d` over [0, tmax], t in units of `d` (which need not
+// be unit length).
+struct Ray {
+    vec3 o;
+    vec3 d;
+    float tmax;
 };
 
 #ifndef LANTERNA_SOFTWARE_TRAVERSAL
@@ -44,11 +53,18 @@ uvec4 ray_key(vec3 o, vec3 d) {
 
 #ifdef LANTERNA_SOFTWARE_TRAVERSAL
 #include "bvh.glsl"
+// Software traversal tests a bounce ray's probe in the bounce ray's own walk of the tree.
+const bool TRACE_TESTS_PROBE = true;
 #else
+// Ray queries trace the probe as a ray of its own (the path loop's probe step).
+const bool TRACE_TESTS_PROBE = false;
+
 // The closest hit (any_hit = false) or the first accepted hit (any_hit = true) on
 // [0, tmax]: one function for both, so that a kernel that traces every ray through one
-// call site holds one copy of the traversal.
-Hit trace_ray(vec3 origin, vec3 dir, float tmax, bool any_hit) {
+// call site holds one copy of the traversal. (`probe` is for software traversal, which
+// tests it in the same walk; see inc/bvh.glsl.)
+Hit trace_ray(vec3 origin, vec3 dir, float tmax, bool any_hit, Ray probe, out bool probe_blocked) {
+    probe_blocked = false;
     rayQueryEXT rq;
     uint flags = any_hit ? gl_RayFlagsTerminateOnFirstHitEXT : gl_RayFlagsNoneEXT;
     rayQueryInitializeEXT(rq, tlas, flags, 0xffu, origin, 0.0, dir, tmax);
@@ -75,13 +91,19 @@ Hit trace_ray(vec3 origin, vec3 dir, float tmax, bool any_hit) {
     }
     return h;
 }
+#endif
 
-Hit trace_closest(vec3 origin, vec3 dir, float tmax) { return trace_ray(origin, dir, tmax, false); }
+Hit trace_closest(vec3 origin, vec3 dir, float tmax) {
+    bool blocked;
+    return trace_ray(origin, dir, tmax, false, Ray(origin, vec3(0.0), 0.0), blocked);
+}
 
 // True when nothing blocks the segment origin → origin + dir·tmax (`dir` need not be
 // unit length: t is measured in multiples of it, as for every ray query).
-bool visible(vec3 origin, vec3 dir, float tmax) { return !trace_ray(origin, dir, tmax, true).valid; }
-#endif
+bool visible(vec3 origin, vec3 dir, float tmax) {
+    bool blocked;
+    return !trace_ray(origin, dir, tmax, true, Ray(origin, vec3(0.0), 0.0), blocked).valid;
+}
 
 // The length that offsets near the world's origin are fractions of: the scene's radius,
 // at most 1. Wächter & Binder's constants (below) are for scenes about a unit across; in
@@ -112,14 +134,6 @@ vec3 offset_ray(vec3 p, vec3 n) {
 
 // Shadow rays to a point in free space stop this fraction of their length short of it.
 const float SHADOW_EPSILON = 1e-4;
-
-// A ray to trace: from `o` along `d` over [0, tmax], t in units of `d` (which need not
-// be unit length).
-struct Ray {
-    vec3 o;
-    vec3 d;
-    float tmax;
-};
 
 // The shadow ray of the segment between two surface points (after pbrt-v4's SpawnRayTo).
 //

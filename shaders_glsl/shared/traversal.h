@@ -42,20 +42,29 @@ struct BvhTriangle {
     uint flags;
 };
 
-// Ray kinds of the trace kernel.
+// Ray kinds of the trace kernel. TRACE_PROBED: the closest hit of a bounce ray whose
+// origin was moved along its line, and whether its probe (the segment probe_origin →
+// probe_origin + probe_dir, t ∈ [0, 1)) is blocked; as the path loop traces it
+// (bounce_origin in inc/trace.glsl).
 #define TRACE_CLOSEST 0u
 #define TRACE_VISIBLE 1u
+#define TRACE_PROBED 2u
+// The `primitive` of a TRACE_PROBED ray's hit (instance INVALID_INDEX) whose probe is
+// blocked.
+#define TRACE_PROBE_BLOCKED 0xfffffffeu
 
 struct TraceRay {
     vec3 origin;
     float tmax;
     vec3 dir;
-    uint kind;       // TRACE_CLOSEST or TRACE_VISIBLE
+    uint kind;       // TRACE_CLOSEST, TRACE_VISIBLE or TRACE_PROBED
+    vec3 probe_origin;
+    vec3 probe_dir;  // TRACE_PROBED only; zero otherwise
 };
 
 struct TraceHit {
     uint instance;   // INVALID_INDEX: no hit (closest) / 1 visible, 0 occluded in `primitive`
-    uint primitive;
+    uint primitive;  // (TRACE_PROBE_BLOCKED: a TRACE_PROBED ray's probe is blocked)
     float t;
     float bary_u;
     float bary_v;

@@ -1,8 +1,9 @@
 //! Tracing given rays alone, through the renderer's own `trace_closest` / `visible`
 //! (kernel `tests/trace`, or `tests/trace_sw` with the software traversal), and the ray
 //! sets that the traversal tests and `lanterna bench --suite traversal` use: camera rays,
-//! diffuse bounce rays from the camera rays' hits, and shadow rays from those hits to
-//! points on emissive triangles (or, without any, on random scene triangles).
+//! diffuse bounce rays from the camera rays' hits, shadow rays from those hits to points
+//! on emissive triangles (or, without any, on random scene triangles), and the bounce
+//! rays again as the path loop traces them, from along their own line with a probe.
 
 use super::{Renderer, Result};
 use crate::gpu;
@@ -95,30 +96,40 @@ impl Renderer {
     /// Compile the trace kernel and run it once on one ray (lavapipe compiles at the
     /// first dispatch), so that a timed trace measures traversal alone.
     pub fn prepare_trace(&mut self) -> Result<()> {
-        let ray = gpu::TraceRay {
-            origin: [0.0; 3],
-            tmax: 1.0,
-            dir: [0.0, 0.0, 1.0],
-            kind: gpu::TRACE_CLOSEST,
-        };
-        self.trace(&[ray])?;
+        self.trace(&[trace_ray(Vec3::ZERO, Vec3::Z, 1.0, gpu::TRACE_CLOSEST)])?;
         Ok(())
     }
 }
 
-/// The three ray sets of one view.
+/// A ray of the trace kernel of kind `kind` (`TRACE_CLOSEST` or `TRACE_VISIBLE`).
+fn trace_ray(origin: Vec3, dir: Vec3, tmax: f32, kind: u32) -> gpu::TraceRay {
+    gpu::TraceRay {
+        origin: origin.to_array(),
+        tmax,
+        dir: dir.to_array(),
+        kind,
+        probe_origin: [0.0; 3],
+        probe_dir: [0.0; 3],
+    }
+}
+
+/// The four ray sets of one view.
 pub struct RaySets {
     pub camera: Vec<gpu::TraceRay>,
     pub bounce: Vec<gpu::TraceRay>,
     pub shadow: Vec<gpu::TraceRay>,
+    /// Bounce rays that start along their own line, each with the probe of the stretch
+    /// its origin skipped (`TRACE_PROBED`; bounce_origin in inc/trace.glsl).
+    pub probed: Vec<gpu::TraceRay>,
 }
 
 impl RaySets {
-    pub fn sets(&self) -> [(&'static str, &[gpu::TraceRay]); 3] {
+    pub fn sets(&self) -> [(&'static str, &[gpu::TraceRay]); 4] {
         [
             ("camera", &self.camera),
             ("bounce", &self.bounce),
             ("shadow", &self.shadow),
+            ("probed", &self.probed),
         ]
     }
 }
@@ -155,12 +166,7 @@ pub fn camera_rays(camera: &Camera, width: u32, height: u32, seed: u64) -> Vec<g
             let d = to_world
                 .transform_vector3(Vec3::new(sx, sy, -1.0))
                 .normalize();
-            rays.push(gpu::TraceRay {
-                origin: origin.to_array(),
-                tmax: 1e30,
-                dir: d.to_array(),
-                kind: gpu::TRACE_CLOSEST,
-            });
+            rays.push(trace_ray(origin, d, 1e30, gpu::TRACE_CLOSEST));
         }
     }
     rays
@@ -181,7 +187,10 @@ fn triangle(scene: &Scene, order: &[usize], instance: u32, primitive: u32) -> [V
 /// Camera, bounce and shadow rays of a view: `camera_hits` are the hits of `camera`
 /// (traced with either traversal). Bounce rays leave each hit point (moved off the surface
 /// by 10⁻⁴ of the scene's extent) in a cosine-distributed direction; shadow rays go from
-/// there to a uniform point on a random emissive triangle, as segments with tmax < 1.
+/// there to a uniform point on a random emissive triangle, as segments with tmax < 1;
+/// probed rays are the bounce rays with their probes (`probed_ray`, with 10⁻³ of the
+/// extent for offset_ray's distance: far more than it is, so that more probes meet
+/// geometry).
 pub fn secondary_rays(
     scene: &Scene,
     lights: &LightTable,
@@ -194,6 +203,7 @@ pub fn secondary_rays(
     let eps = 1e-4 * scene.extent().max(1e-3);
     let mut bounce = Vec::new();
     let mut shadow = Vec::new();
+    let mut probed = Vec::new();
     for (ray, hit) in camera.iter().zip(camera_hits) {
         if hit.instance == gpu::INVALID_INDEX {
             continue;
@@ -216,12 +226,8 @@ pub fn secondary_rays(
         let (t1, t2) = n.any_orthonormal_pair();
         let dir =
             (r * phi.cos() * t1 + r * phi.sin() * t2 + (1.0 - u1).max(0.0).sqrt() * n).normalize();
-        bounce.push(gpu::TraceRay {
-            origin: o.to_array(),
-            tmax: 1e30,
-            dir: dir.to_array(),
-            kind: gpu::TRACE_CLOSEST,
-        });
+        bounce.push(trace_ray(o, dir, 1e30, gpu::TRACE_CLOSEST));
+        probed.push(probed_ray(p, n, dir, 10.0 * eps));
         let target = if lights.triangles.is_empty() {
             let k = gpu_instance_order.len() as f32 * rng.next();
             let inst = (k as usize).min(gpu_instance_order.len() - 1);
@@ -241,16 +247,33 @@ pub fn secondary_rays(
             (u, v) = (1.0 - u, 1.0 - v);
         }
         let q = target[0] + u * (target[1] - target[0]) + v * (target[2] - target[0]);
-        shadow.push(gpu::TraceRay {
-            origin: o.to_array(),
-            tmax: 1.0 - 1e-3,
-            dir: (q - o).to_array(),
-            kind: gpu::TRACE_VISIBLE,
-        });
+        shadow.push(trace_ray(o, q - o, 1.0 - 1e-3, gpu::TRACE_VISIBLE));
     }
     RaySets {
         camera,
         bounce,
         shadow,
+        probed,
+    }
+}
+
+/// The bounce ray leaving surface point `p` (unit normal `n` on its side) in unit
+/// direction `w` as the path loop traces it, with `clearance` for offset_ray's distance
+/// off the surface (bounce_origin in inc/trace.glsl, GRAZING_STRETCH 64): from the point
+/// of its own line that far off the surface (at most 64 × `clearance` along it), with the
+/// probe from `p + clearance·n` to that point.
+fn probed_ray(p: Vec3, n: Vec3, w: Vec3, clearance: f32) -> gpu::TraceRay {
+    let cos_w = w.dot(n);
+    let t = if cos_w * 64.0 >= 1.0 {
+        clearance / cos_w
+    } else {
+        64.0 * clearance
+    };
+    let lifted = p + clearance * n;
+    let along = p + t * w + (clearance - t * cos_w) * n;
+    gpu::TraceRay {
+        probe_origin: lifted.to_array(),
+        probe_dir: (along - lifted).to_array(),
+        ..trace_ray(along, w, 1e30, gpu::TRACE_PROBED)
     }
 }
