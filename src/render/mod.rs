@@ -79,8 +79,11 @@ pub struct RenderStats {
     pub camera_rays: u64,
     pub bounce_rays: u64,
     pub shadow_rays: u64,
-    /// Short segments traced before bounce rays whose origin moved along their line
-    /// (`bounce_origin` in shaders_glsl/inc/trace.glsl).
+    /// Probes of bounce rays whose origin moved along their line (`bounce_origin` in
+    /// shaders_glsl/inc/trace.glsl): short segments traced before the bounce ray with
+    /// ray queries, tested in the bounce ray's own walk of the tree with the software
+    /// traversal (where a blocked probe makes its bounce ray count twice in
+    /// `bounce_rays`: it is traced again).
     pub probe_rays: u64,
     pub nonfinite_samples: u64,
     /// Samples with a channel above FILM_MAX_SAMPLE, clamped to it in the film.
