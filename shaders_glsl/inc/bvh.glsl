@@ -28,10 +28,26 @@ float bvh_box_entry(vec3 bmin, vec3 bmax, vec3 o, vec3 inv_d, float tmax) {
     return (tnear <= tfar && tnear <= tmax) ? tnear : FLT_MAX;
 }
 
-// Ray-box test of a segment for the probe below: true where the segment o → o + d
-// (t ∈ [0, 1]) meets the box.
-bool bvh_segment_meets_box(vec3 bmin, vec3 bmax, vec3 o, vec3 inv_d) {
-    return bvh_box_entry(bmin, bmax, o, inv_d, 1.0) < FLT_MAX;
+// 1/d for the slab test, with each zero component made a tiny one of the same sign:
+// 1/±0 = ±inf would make 0·inf = NaN there when the origin lies on a box's plane.
+vec3 bvh_safe_inverse(vec3 d) {
+    return 1.0 / mix(d, mix(vec3(-1e-30), vec3(1e-30), greaterThanEqual(d, vec3(0.0))), lessThan(abs(d), vec3(1e-30)));
+}
+
+// Does the ray o + t·d hit the triangle at t ∈ [0, tmax), and does the hit count
+// (alpha_passes, with the ray's `key`)? Möller–Trumbore; `uvt` is (u, v, t) of the hit.
+bool bvh_triangle_hit(BvhTriangle tri, vec3 o, vec3 d, float tmax, uvec4 key, out vec3 uvt) {
+    vec3 pvec = cross(d, tri.e2);
+    float det = dot(tri.e1, pvec);
+    float inv_det = 1.0 / det;
+    vec3 tvec = o - tri.v0;
+    float u = dot(tvec, pvec) * inv_det;
+    vec3 qvec = cross(tvec, tri.e1);
+    float v = dot(d, qvec) * inv_det;
+    float t = dot(tri.e2, qvec) * inv_det;
+    uvt = vec3(u, v, t);
+    return det != 0.0 && u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t >= 0.0 && t < tmax &&
+           ((tri.flags & BVH_TRIANGLE_OPAQUE) != 0u || alpha_passes(tri.instance, tri.primitive, vec2(u, v), key));
 }
 
 // The closest hit (any_hit = false) or the first accepted hit (any_hit = true) on
@@ -50,17 +66,11 @@ Hit trace_ray(vec3 o, vec3 d, float tmax, bool any_hit, Ray probe, out bool prob
     h.bary = vec2(0.0);
     h.t = tmax;
     uvec4 key = ray_key(o, d);
-    // A zero component becomes a tiny one of the same sign: 1/±0 = ±inf would make
-    // 0·inf = NaN in the slab test when the origin lies on a box's plane.
-    vec3 safe_d = mix(d, mix(vec3(-1e-30), vec3(1e-30), greaterThanEqual(d, vec3(0.0))),
-                      lessThan(abs(d), vec3(1e-30)));
-    vec3 inv_d = 1.0 / safe_d;
+    vec3 inv_d = bvh_safe_inverse(d);
     float best = tmax;
     // The probe, tested only in the nodes its segment meets: `probe_in` for the node at
     // hand, bit k of `probe_flags` for the stack's entry k.
-    vec3 safe_pd = mix(probe.d, mix(vec3(-1e-30), vec3(1e-30), greaterThanEqual(probe.d, vec3(0.0))),
-                       lessThan(abs(probe.d), vec3(1e-30)));
-    vec3 probe_inv_d = 1.0 / safe_pd;
+    vec3 probe_inv_d = bvh_safe_inverse(probe.d);
     uvec4 probe_key = ray_key(probe.o, probe.d);
     bool probe_in = probe.tmax > 0.0;
     uint64_t probe_flags = 0ul;
@@ -81,8 +91,8 @@ Hit trace_ray(vec3 o, vec3 d, float tmax, bool any_hit, Ray probe, out bool prob
             BvhNode n = bvh_nodes(ref);
             float ta = bvh_box_entry(n.a_min, n.a_max, o, inv_d, best);
             float tb = bvh_box_entry(n.b_min, n.b_max, o, inv_d, best);
-            bool pa = probe_in && bvh_segment_meets_box(n.a_min, n.a_max, probe.o, probe_inv_d);
-            bool pb = probe_in && bvh_segment_meets_box(n.b_min, n.b_max, probe.o, probe_inv_d);
+            bool pa = probe_in && bvh_box_entry(n.a_min, n.a_max, probe.o, probe_inv_d, probe.tmax) < FLT_MAX;
+            bool pb = probe_in && bvh_box_entry(n.b_min, n.b_max, probe.o, probe_inv_d, probe.tmax) < FLT_MAX;
             bool ha = ta < FLT_MAX;
             bool hb = tb < FLT_MAX;
             bool va = ha || pa;
@@ -110,43 +120,19 @@ Hit trace_ray(vec3 o, vec3 d, float tmax, bool any_hit, Ray probe, out bool prob
             uint end = first + ((ref >> BVH_LEAF_COUNT_SHIFT) & BVH_LEAF_COUNT_MASK) + 1u;
             for (uint i = first; i < end; ++i) {
                 BvhTriangle tri = bvh_triangles(i);
-                // Möller–Trumbore.
-                vec3 pvec = cross(d, tri.e2);
-                float det = dot(tri.e1, pvec);
-                float inv_det = 1.0 / det;
-                vec3 tvec = o - tri.v0;
-                float u = dot(tvec, pvec) * inv_det;
-                vec3 qvec = cross(tvec, tri.e1);
-                float v = dot(d, qvec) * inv_det;
-                float t = dot(tri.e2, qvec) * inv_det;
-                if (det != 0.0 && u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t >= 0.0 && t < best) {
-                    if ((tri.flags & BVH_TRIANGLE_OPAQUE) != 0u ||
-                        alpha_passes(tri.instance, tri.primitive, vec2(u, v), key)) {
-                        best = t;
-                        h.valid = true;
-                        h.instance = tri.instance;
-                        h.primitive = tri.primitive;
-                        h.bary = vec2(u, v);
-                        h.t = t;
-                        if (any_hit) return h;
-                    }
+                vec3 uvt;
+                if (bvh_triangle_hit(tri, o, d, best, key, uvt)) {
+                    best = uvt.z;
+                    h.valid = true;
+                    h.instance = tri.instance;
+                    h.primitive = tri.primitive;
+                    h.bary = uvt.xy;
+                    h.t = uvt.z;
+                    if (any_hit) return h;
                 }
-                if (probe_in) {
-                    // The same test for the probe's segment, t ∈ [0, probe.tmax).
-                    vec3 ppvec = cross(probe.d, tri.e2);
-                    float pdet = dot(tri.e1, ppvec);
-                    float pinv_det = 1.0 / pdet;
-                    vec3 ptvec = probe.o - tri.v0;
-                    float pu = dot(ptvec, ppvec) * pinv_det;
-                    vec3 pqvec = cross(ptvec, tri.e1);
-                    float pv = dot(probe.d, pqvec) * pinv_det;
-                    float pt = dot(tri.e2, pqvec) * pinv_det;
-                    if (pdet != 0.0 && pu >= 0.0 && pv >= 0.0 && pu + pv <= 1.0 && pt >= 0.0 && pt < probe.tmax &&
-                        ((tri.flags & BVH_TRIANGLE_OPAQUE) != 0u ||
-                         alpha_passes(tri.instance, tri.primitive, vec2(pu, pv), probe_key))) {
-                        probe_blocked = true;
-                        return h;
-                    }
+                if (probe_in && bvh_triangle_hit(tri, probe.o, probe.d, probe.tmax, probe_key, uvt)) {
+                    probe_blocked = true;
+                    return h;
                 }
             }
         }
