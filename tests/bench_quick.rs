@@ -101,13 +101,13 @@ fn quick_bench_writes_results() {
     assert!(!machine["device"].as_str().unwrap().is_empty());
     assert!(num(&r["total_seconds"], "total_seconds") > 0.0);
 
-    // Traversal: both shipped scenes, three ray sets each, software always timed.
+    // Traversal: both shipped scenes, four ray sets each, software always timed.
     let tscenes = r["traversal"]["scenes"].as_array().unwrap();
     assert_eq!(tscenes.len(), 2);
     for s in tscenes {
         let sets = s["sets"].as_array().unwrap();
         let names: Vec<&str> = sets.iter().map(|x| x["set"].as_str().unwrap()).collect();
-        assert_eq!(names, ["camera", "bounce", "shadow"]);
+        assert_eq!(names, ["camera", "bounce", "shadow", "probed"]);
         for x in sets {
             let what = format!("traversal {} {}", s["scene"], x["set"]);
             assert!(x["rays"].as_u64().unwrap() > 0, "{what}");
