@@ -1,8 +1,8 @@
 // Body of the trace kernels (trace.comp: ray queries, trace_sw.comp: software traversal):
 // one invocation per ray of the rays buffer, through the renderer's own trace_closest,
 // visible or (bounce rays with their probes) trace_ray, with the renderer's descriptor
-// set. Used by the traversal tests (hits of the
-// two traversals compared) and by `lanterna bench --suite traversal` (rays per second).
+// set. Used by the traversal tests (hits of the two traversals compared) and by
+// `lanterna bench --suite traversal` (rays per second).
 // The push constants' sample_begin/sample_count give the range of rays.
 #include "../inc/common.glsl"
 
