@@ -23,7 +23,7 @@
 
 use lanterna::gpu;
 use lanterna::lights::LightTable;
-use lanterna::render::trace::{camera_rays, secondary_rays};
+use lanterna::render::trace::{camera_rays, secondary_rays, RaySets};
 use lanterna::render::{Renderer, Traversal, TraversalKind};
 use lanterna::scene::generate::{Kind, Options};
 use lanterna::scene::{Camera, Scene};
@@ -88,22 +88,34 @@ fn agree(ray: &gpu::TraceRay, a: &gpu::TraceHit, b: &gpu::TraceHit) -> Agreement
     }
 }
 
-fn compare(name: &str, scene: &Scene, camera: &Camera) {
+/// The ray sets of the camera's view (camera rays from seed `camera_seed`, traced with
+/// `r`; the rest from `seed`).
+fn view_rays(
+    r: &mut Renderer,
+    scene: &Scene,
+    camera: &Camera,
+    camera_seed: u64,
+    seed: u64,
+) -> RaySets {
     let lights = LightTable::build(scene).expect("light table");
+    let cam = camera_rays(camera, WIDTH, HEIGHT, camera_seed);
+    let cam_hits = r.trace(&cam).expect("trace").hits;
+    secondary_rays(
+        scene,
+        &lights,
+        &r.gpu_scene.instance_order,
+        cam,
+        &cam_hits,
+        seed,
+    )
+}
+
+fn compare(name: &str, scene: &Scene, camera: &Camera) {
     let mut rq = renderer(scene, camera, Traversal::RayQuery);
     let mut sw = renderer(scene, camera, Traversal::Software);
     assert_eq!(rq.traversal.kind, TraversalKind::RayQuery);
     assert_eq!(sw.traversal.kind, TraversalKind::Software);
-    let cam = camera_rays(camera, WIDTH, HEIGHT, 7);
-    let cam_hits = rq.trace(&cam).expect("trace").hits;
-    let sets = secondary_rays(
-        scene,
-        &lights,
-        &rq.gpu_scene.instance_order,
-        cam,
-        &cam_hits,
-        11,
-    );
+    let sets = view_rays(&mut rq, scene, camera, 7, 11);
     let (mut total, mut different, mut tied) = (0usize, 0usize, 0usize);
     for (set, rays) in sets.sets() {
         let a = rq.trace(rays).expect("ray-query trace").hits;
@@ -189,18 +201,8 @@ fn generated(kind: Kind, offset: Option<[f32; 3]>) {
 /// the stack, with a blocked probe not reported, and with children only the probe meets
 /// left out of the walk.
 fn probe_in_the_walk_is_exact(name: &str, scene: &Scene, camera: &Camera) -> usize {
-    let lights = LightTable::build(scene).expect("light table");
     let mut sw = renderer(scene, camera, Traversal::Software);
-    let cam = camera_rays(camera, WIDTH, HEIGHT, 5);
-    let cam_hits = sw.trace(&cam).expect("trace").hits;
-    let sets = secondary_rays(
-        scene,
-        &lights,
-        &sw.gpu_scene.instance_order,
-        cam,
-        &cam_hits,
-        13,
-    );
+    let sets = view_rays(&mut sw, scene, camera, 5, 13);
     let probes: Vec<gpu::TraceRay> = sets
         .probed
         .iter()
